@@ -1,0 +1,217 @@
+//! Loads the benchmark files the project ships in `fixtures/`.
+//!
+//! Every benchmark task becomes a [`TaskFiles`]: a domain text, a problem text, where each
+//! came from (for diagnostics), and what the benchmark adds (an ALFWorld game's TextWorld
+//! grammar and expert walkthrough; an EAI gold PDDL plan). The crate knows file layouts,
+//! nothing about PDDL.
+
+use std::path::{Path, PathBuf};
+
+/// The benchmark sets in `fixtures/`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub enum Benchmark {
+    AlfworldSeen,
+    AlfworldTrain,
+    VirtualhomeEai,
+    Ipc,
+}
+
+impl Benchmark {
+    pub const ALL: [Benchmark; 4] = [Benchmark::AlfworldSeen, Benchmark::AlfworldTrain, Benchmark::VirtualhomeEai, Benchmark::Ipc];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            Benchmark::AlfworldSeen => "alfworld-seen",
+            Benchmark::AlfworldTrain => "alfworld-train",
+            Benchmark::VirtualhomeEai => "virtualhome-eai",
+            Benchmark::Ipc => "ipc",
+        }
+    }
+
+    pub fn from_name(name: &str) -> Option<Benchmark> {
+        Benchmark::ALL.into_iter().find(|b| b.name() == name)
+    }
+}
+
+#[derive(Debug, thiserror::Error)]
+pub enum DataError {
+    #[error("cannot read {path}: {source}")]
+    Io { path: PathBuf, source: std::io::Error },
+    #[error("{path}:{line}:{column}: not valid JSON: {message}")]
+    Json { path: PathBuf, line: usize, column: usize, message: String },
+    #[error("{path}: field `{field}` is missing or is not {expected}")]
+    Field { path: PathBuf, field: &'static str, expected: &'static str },
+    #[error("{path}: no problem file for gold plan `{id}`")]
+    MissingProblem { path: PathBuf, id: String },
+}
+
+fn read(path: &Path) -> Result<String, DataError> {
+    std::fs::read_to_string(path).map_err(|source| DataError::Io { path: path.to_path_buf(), source })
+}
+
+fn read_json(path: &Path) -> Result<serde_json::Value, DataError> {
+    let text = read(path)?;
+    serde_json::from_str(&text).map_err(|e| DataError::Json { path: path.to_path_buf(), line: e.line(), column: e.column(), message: e.to_string() })
+}
+
+/// One planning task's files.
+#[derive(Debug, Clone)]
+pub struct TaskFiles {
+    /// Stable id: the ALFWorld game folder (`<family>/<trial>`), the EAI problem id, or `<domain>/instance-N`.
+    pub id: String,
+    pub benchmark: Benchmark,
+    /// Where the domain text came from (for `file:line:column` diagnostics).
+    pub domain_path: PathBuf,
+    pub domain: String,
+    pub problem_path: PathBuf,
+    pub problem: String,
+    pub extra: Extra,
+}
+
+/// What a benchmark adds to the PDDL.
+#[derive(Debug, Clone)]
+pub enum Extra {
+    None,
+    Alfworld(AlfworldGame),
+    /// EAI gold PDDL plan (`"walk_towards character shower"` per step), when the task has one.
+    Virtualhome { category: String, gold_plan: Option<Vec<String>> },
+}
+
+/// The parts of an ALFWorld `game.tw-pddl` beyond its PDDL.
+#[derive(Debug, Clone)]
+pub struct AlfworldGame {
+    /// The TextWorld grammar (templates and feedback texts).
+    pub grammar: String,
+    /// The expert plan as TextWorld commands.
+    pub walkthrough: Vec<String>,
+}
+
+/// Reads one ALFWorld game (`game.tw-pddl`, or the folder holding it). Its PDDL is embedded
+/// as JSON strings, so `domain_path` and `problem_path` both name the game file and
+/// diagnostics' line numbers count inside the embedded text.
+pub fn load_alfworld_game(path: &Path, benchmark: Benchmark, id: String) -> Result<TaskFiles, DataError> {
+    let path = if path.is_dir() { path.join("game.tw-pddl") } else { path.to_path_buf() };
+    let json = read_json(&path)?;
+    let field = |field: &'static str| -> Result<String, DataError> {
+        json.get(field).and_then(|v| v.as_str()).map(str::to_string).ok_or(DataError::Field { path: path.clone(), field, expected: "a string" })
+    };
+    let walkthrough = json
+        .get("walkthrough")
+        .and_then(|v| v.as_array())
+        .and_then(|steps| steps.iter().map(|s| s.as_str().map(str::to_string)).collect::<Option<Vec<_>>>())
+        .ok_or(DataError::Field { path: path.clone(), field: "walkthrough", expected: "a list of strings" })?;
+    Ok(TaskFiles {
+        id,
+        benchmark,
+        domain: field("pddl_domain")?,
+        problem: field("pddl_problem")?,
+        domain_path: path.clone(),
+        problem_path: path.clone(),
+        extra: Extra::Alfworld(AlfworldGame { grammar: field("grammar")?, walkthrough }),
+    })
+}
+
+/// The `fixtures/` folder of this checkout.
+pub fn fixtures_dir() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../fixtures")
+}
+
+fn sorted_entries(dir: &Path) -> Result<Vec<PathBuf>, DataError> {
+    let entries = std::fs::read_dir(dir).map_err(|source| DataError::Io { path: dir.to_path_buf(), source })?;
+    let mut paths: Vec<PathBuf> = entries.filter_map(|e| e.ok().map(|e| e.path())).collect();
+    paths.sort();
+    Ok(paths)
+}
+
+/// Every task of a benchmark, in a stable order.
+pub fn load(benchmark: Benchmark) -> Result<Vec<TaskFiles>, DataError> {
+    load_from(&fixtures_dir(), benchmark)
+}
+
+/// Every task of a benchmark under `fixtures`, in a stable order.
+pub fn load_from(fixtures: &Path, benchmark: Benchmark) -> Result<Vec<TaskFiles>, DataError> {
+    match benchmark {
+        Benchmark::AlfworldSeen | Benchmark::AlfworldTrain => {
+            let split = if benchmark == Benchmark::AlfworldSeen { "valid_seen" } else { "valid_train" };
+            let mut tasks = Vec::new();
+            for family in sorted_entries(&fixtures.join("alfworld").join(split))? {
+                for trial in sorted_entries(&family)? {
+                    let id = format!(
+                        "{}/{}",
+                        family.file_name().unwrap_or_default().to_string_lossy(),
+                        trial.file_name().unwrap_or_default().to_string_lossy()
+                    );
+                    tasks.push(load_alfworld_game(&trial, benchmark, id)?);
+                }
+            }
+            Ok(tasks)
+        }
+        Benchmark::VirtualhomeEai => {
+            let root = fixtures.join("virtualhome-eai");
+            let domain_path = root.join("virtualhome.pddl");
+            let domain = read(&domain_path)?;
+            let plans_path = root.join("gold_pddl_plan.json");
+            let plans = read_json(&plans_path)?;
+            let mut tasks = Vec::new();
+            for category in sorted_entries(&root.join("problem_pddl"))? {
+                let category_name = category.file_name().unwrap_or_default().to_string_lossy().into_owned();
+                for problem_path in sorted_entries(&category)? {
+                    if problem_path.extension().is_none_or(|e| e != "pddl") {
+                        continue;
+                    }
+                    let id = problem_path.file_stem().unwrap_or_default().to_string_lossy().into_owned();
+                    let gold_plan = match plans.get(&id) {
+                        None => None,
+                        Some(value) => Some(
+                            value
+                                .as_array()
+                                .and_then(|steps| steps.iter().map(|s| s.as_str().map(str::to_string)).collect::<Option<Vec<_>>>())
+                                .ok_or(DataError::Field { path: plans_path.clone(), field: "gold plan", expected: "a list of strings" })?,
+                        ),
+                    };
+                    tasks.push(TaskFiles {
+                        id,
+                        benchmark,
+                        domain_path: domain_path.clone(),
+                        domain: domain.clone(),
+                        problem: read(&problem_path)?,
+                        problem_path,
+                        extra: Extra::Virtualhome { category: category_name.clone(), gold_plan },
+                    });
+                }
+            }
+            Ok(tasks)
+        }
+        Benchmark::Ipc => {
+            let mut tasks = Vec::new();
+            for dir in sorted_entries(&fixtures.join("ipc"))? {
+                if !dir.is_dir() {
+                    continue;
+                }
+                let domain_path = dir.join("domain.pddl");
+                let domain = read(&domain_path)?;
+                let mut instances: Vec<(u32, PathBuf)> = sorted_entries(&dir)?
+                    .into_iter()
+                    .filter_map(|p| {
+                        let stem = p.file_stem()?.to_str()?;
+                        let n = stem.strip_prefix("instance-")?.parse().ok()?;
+                        Some((n, p))
+                    })
+                    .collect();
+                instances.sort();
+                for (n, problem_path) in instances {
+                    tasks.push(TaskFiles {
+                        id: format!("{}/instance-{n}", dir.file_name().unwrap_or_default().to_string_lossy()),
+                        benchmark,
+                        domain_path: domain_path.clone(),
+                        domain: domain.clone(),
+                        problem: read(&problem_path)?,
+                        problem_path,
+                        extra: Extra::None,
+                    });
+                }
+            }
+            Ok(tasks)
+        }
+    }
+}

@@ -1,0 +1,356 @@
+//! Name resolution: every predicate, function, type, object and variable that a domain or
+//! problem uses is declared, with the right number of arguments.
+//!
+//! Argument *types* are not checked against predicate signatures, as in Fast Downward: the
+//! ALFWorld domain applies `(checked ?a)` to an agent although `checked` is declared over
+//! receptacles, and planners accept it (types only restrict what parameters range over).
+//! Constants used in a domain's actions may be declared by the problem (ALFWorld's
+//! `SinkType`), so they are checked when a problem is given.
+
+use std::collections::{BTreeMap, BTreeSet};
+
+use crate::ast::*;
+use crate::diagnostic::{Diagnostic, DiagnosticKind, Span};
+
+/// Diagnostics from [`check`], by the file they point into.
+#[derive(Debug, Default, Clone)]
+pub struct CheckReport {
+    pub domain: Vec<Diagnostic>,
+    pub problem: Vec<Diagnostic>,
+}
+
+impl CheckReport {
+    pub fn has_errors(&self) -> bool {
+        self.domain.iter().chain(&self.problem).any(Diagnostic::is_error)
+    }
+}
+
+/// Checks a domain, and a problem against it when one is given.
+pub fn check(domain: &Domain, problem: Option<&Problem>) -> CheckReport {
+    let mut report = CheckReport::default();
+    // Constants in action bodies are resolved in the problem pass, where objects are known.
+    let mut checker = Checker::new(domain, None, &mut report.domain);
+    checker.declarations();
+    for action in &domain.actions {
+        checker.action(action);
+    }
+    if let Some(problem) = problem {
+        let mut checker = Checker::new(domain, Some(problem), &mut report.problem);
+        checker.problem(problem);
+    }
+    report
+}
+
+struct Checker<'a> {
+    domain: &'a Domain,
+    /// Whether constants outside the domain's `:constants` can be resolved (a problem is known).
+    objects_known: bool,
+    types: BTreeSet<&'a str>,
+    predicates: BTreeMap<&'a str, usize>,
+    functions: BTreeMap<&'a str, usize>,
+    objects: BTreeSet<&'a str>,
+    /// Variables in scope, innermost last.
+    variables: Vec<&'a str>,
+    out: &'a mut Vec<Diagnostic>,
+}
+
+impl<'a> Checker<'a> {
+    fn new(domain: &'a Domain, problem: Option<&'a Problem>, out: &'a mut Vec<Diagnostic>) -> Checker<'a> {
+        let mut types: BTreeSet<&str> = BTreeSet::from(["object"]);
+        for declared in &domain.types {
+            types.insert(declared.name.as_str());
+            if let Some(parent) = &declared.ty {
+                types.extend(parent.names().iter().map(Name::as_str));
+            }
+        }
+        let predicates = domain.predicates.iter().map(|p| (p.name.as_str(), p.params.len())).collect();
+        let functions = domain.functions.iter().map(|f| (f.name.as_str(), f.params.len())).collect();
+        let mut objects: BTreeSet<&str> = domain.constants.iter().map(|c| c.name.as_str()).collect();
+        if let Some(problem) = problem {
+            objects.extend(problem.objects.iter().map(|o| o.name.as_str()));
+        }
+        Checker { domain, objects_known: problem.is_some(), types, predicates, functions, objects, variables: Vec::new(), out }
+    }
+
+    fn error(&mut self, kind: DiagnosticKind, span: Span, message: String) {
+        self.out.push(Diagnostic::error(kind, span, message));
+    }
+
+    fn declarations(&mut self) {
+        let domain = self.domain;
+        for declared in domain.types.iter().chain(&domain.constants) {
+            self.typed(declared);
+        }
+        let mut seen = BTreeSet::new();
+        for predicate in &domain.predicates {
+            if !seen.insert(predicate.name.as_str()) {
+                self.error(DiagnosticKind::Duplicate, predicate.name.span, format!("predicate `{}` is declared twice", predicate.name));
+            }
+            self.parameters(&predicate.params, "predicate", &predicate.name);
+        }
+        let mut seen = BTreeSet::new();
+        for function in &domain.functions {
+            if !seen.insert(function.name.as_str()) {
+                self.error(DiagnosticKind::Duplicate, function.name.span, format!("function `{}` is declared twice", function.name));
+            }
+            self.parameters(&function.params, "function", &function.name);
+        }
+        let mut seen = BTreeSet::new();
+        for action in &domain.actions {
+            if !seen.insert(action.name.as_str()) {
+                self.error(DiagnosticKind::Duplicate, action.name.span, format!("action `{}` is declared twice", action.name));
+            }
+        }
+    }
+
+    fn parameters(&mut self, params: &[TypedName], owner: &str, owner_name: &Name) {
+        let mut seen = BTreeSet::new();
+        for param in params {
+            if !seen.insert(param.name.as_str()) {
+                self.error(
+                    DiagnosticKind::Duplicate,
+                    param.name.span,
+                    format!("parameter `?{}` appears twice in {owner} `{owner_name}`", param.name),
+                );
+            }
+            self.typed(param);
+        }
+    }
+
+    fn typed(&mut self, entry: &TypedName) {
+        let Some(ty) = &entry.ty else { return };
+        for name in ty.names() {
+            if !self.types.contains(name.as_str()) {
+                let declared: Vec<&str> = self.types.iter().copied().collect();
+                self.error(
+                    DiagnosticKind::UnknownType,
+                    name.span,
+                    format!("type `{name}` is not declared in `(:types ...)`; declared types: {}", declared.join(", ")),
+                );
+            }
+        }
+    }
+
+    fn action(&mut self, action: &'a Action) {
+        self.parameters(&action.params, "action", &action.name);
+        self.variables = action.params.iter().map(|p| p.name.as_str()).collect();
+        if let Some(precondition) = &action.precondition {
+            self.condition(precondition);
+        }
+        if let Some(effect) = &action.effect {
+            self.effect(effect);
+        }
+        self.variables.clear();
+    }
+
+    fn term(&mut self, term: &Term) {
+        match term {
+            Term::Variable(name) => {
+                if !self.variables.contains(&name.as_str()) {
+                    self.error(
+                        DiagnosticKind::UnknownVariable,
+                        name.span,
+                        format!("variable `?{name}` is not a parameter of the action nor bound by an enclosing quantifier"),
+                    );
+                }
+            }
+            Term::Constant(name) => {
+                if self.objects_known && !self.objects.contains(name.as_str()) {
+                    self.error(
+                        DiagnosticKind::UnknownObject,
+                        name.span,
+                        format!("`{name}` is declared neither in the domain's `:constants` nor in the problem's `:objects`"),
+                    );
+                }
+            }
+        }
+    }
+
+    fn atom(&mut self, atom: &Atom) {
+        match self.predicates.get(atom.predicate.as_str()) {
+            None => self.error(
+                DiagnosticKind::UnknownPredicate,
+                atom.predicate.span,
+                format!("predicate `{}` is not declared in `(:predicates ...)`", atom.predicate),
+            ),
+            Some(&arity) if arity != atom.args.len() => self.error(
+                DiagnosticKind::ArityMismatch,
+                atom.span,
+                format!("predicate `{}` takes {arity} argument(s), but {} are given here", atom.predicate, atom.args.len()),
+            ),
+            Some(_) => {}
+        }
+        for arg in &atom.args {
+            self.term(arg);
+        }
+    }
+
+    fn function_term(&mut self, term: &FunctionTerm) {
+        match self.functions.get(term.function.as_str()) {
+            None => self.error(
+                DiagnosticKind::UnknownFunction,
+                term.function.span,
+                format!("function `{}` is not declared in `(:functions ...)`", term.function),
+            ),
+            Some(&arity) if arity != term.args.len() => self.error(
+                DiagnosticKind::ArityMismatch,
+                term.span,
+                format!("function `{}` takes {arity} argument(s), but {} are given here", term.function, term.args.len()),
+            ),
+            Some(_) => {}
+        }
+        for arg in &term.args {
+            self.term(arg);
+        }
+    }
+
+    fn quantified(&mut self, variables: &'a [TypedName], body: impl FnOnce(&mut Self)) {
+        for variable in variables {
+            self.typed(variable);
+        }
+        let depth = self.variables.len();
+        self.variables.extend(variables.iter().map(|v| v.name.as_str()));
+        body(self);
+        self.variables.truncate(depth);
+    }
+
+    fn condition(&mut self, condition: &'a Condition) {
+        match condition {
+            Condition::Atom(atom) => self.atom(atom),
+            Condition::Equals(a, b, _) => {
+                self.term(a);
+                self.term(b);
+            }
+            Condition::Not(inner, _) => self.condition(inner),
+            Condition::And(parts, _) | Condition::Or(parts, _) => {
+                for part in parts {
+                    self.condition(part);
+                }
+            }
+            Condition::Imply(a, b, _) => {
+                self.condition(a);
+                self.condition(b);
+            }
+            Condition::Exists(variables, body, _) | Condition::Forall(variables, body, _) => {
+                self.quantified(variables, |checker| checker.condition(body));
+            }
+        }
+    }
+
+    fn effect(&mut self, effect: &'a Effect) {
+        match effect {
+            Effect::And(parts, _) => {
+                for part in parts {
+                    self.effect(part);
+                }
+            }
+            Effect::Add(atom) | Effect::Delete(atom, _) => self.atom(atom),
+            Effect::Forall(variables, body, _) => self.quantified(variables, |checker| checker.effect(body)),
+            Effect::When(condition, body, _) => {
+                self.condition(condition);
+                self.effect(body);
+            }
+            Effect::Increase(function, value, _) => {
+                self.function_term(function);
+                if let NumericExpr::Function(term) = value {
+                    self.function_term(term);
+                }
+            }
+        }
+    }
+
+    fn problem(&mut self, problem: &'a Problem) {
+        if problem.domain.as_str() != self.domain.name.as_str() && !problem.domain.as_str().is_empty() {
+            self.out.push(Diagnostic::warning(
+                DiagnosticKind::DomainMismatch,
+                problem.domain.span,
+                format!("the problem is for domain `{}`, but the domain given is `{}`", problem.domain, self.domain.name),
+            ));
+        }
+        let mut seen: BTreeMap<&str, &Option<Type>> = self.domain.constants.iter().map(|c| (c.name.as_str(), &c.ty)).collect();
+        for object in &problem.objects {
+            self.typed(object);
+            if let Some(previous) = seen.insert(object.name.as_str(), &object.ty) {
+                if previous != &object.ty {
+                    self.error(DiagnosticKind::Duplicate, object.name.span, format!("object `{}` is declared twice, with different types", object.name));
+                } else {
+                    self.out.push(Diagnostic::warning(DiagnosticKind::Duplicate, object.name.span, format!("object `{}` is declared twice", object.name)));
+                }
+            }
+        }
+        for element in &problem.init {
+            match element {
+                InitElement::Atom(atom) => self.atom(atom),
+                InitElement::Assign(function, _, _) => self.function_term(function),
+            }
+        }
+        if let Some(goal) = &problem.goal {
+            self.condition(goal);
+        }
+        if let Some(Metric { expr: NumericExpr::Function(term), .. }) = &problem.metric {
+            self.function_term(term);
+        }
+        // The domain's action bodies may name the problem's objects: resolve them now.
+        for action in &self.domain.actions {
+            let mut constants = Vec::new();
+            collect_action_constants(action, &mut constants);
+            for name in constants {
+                if !self.objects.contains(name.as_str()) {
+                    self.error(
+                        DiagnosticKind::UnknownObject,
+                        name.span,
+                        format!("action `{}` names `{name}`, which is declared neither in the domain's `:constants` nor in the problem's `:objects`", action.name),
+                    );
+                }
+            }
+        }
+    }
+}
+
+fn collect_action_constants<'a>(action: &'a Action, out: &mut Vec<&'a Name>) {
+    fn terms<'a>(args: &'a [Term], out: &mut Vec<&'a Name>) {
+        out.extend(args.iter().filter_map(|t| match t {
+            Term::Constant(name) => Some(name),
+            Term::Variable(_) => None,
+        }));
+    }
+    fn condition<'a>(c: &'a Condition, out: &mut Vec<&'a Name>) {
+        match c {
+            Condition::Atom(atom) => terms(&atom.args, out),
+            Condition::Equals(a, b, _) => {
+                terms(std::slice::from_ref(a), out);
+                terms(std::slice::from_ref(b), out);
+            }
+            Condition::Not(inner, _) => condition(inner, out),
+            Condition::And(parts, _) | Condition::Or(parts, _) => parts.iter().for_each(|p| condition(p, out)),
+            Condition::Imply(a, b, _) => {
+                condition(a, out);
+                condition(b, out);
+            }
+            Condition::Exists(_, body, _) | Condition::Forall(_, body, _) => condition(body, out),
+        }
+    }
+    fn effect<'a>(e: &'a Effect, out: &mut Vec<&'a Name>) {
+        match e {
+            Effect::And(parts, _) => parts.iter().for_each(|p| effect(p, out)),
+            Effect::Add(atom) | Effect::Delete(atom, _) => terms(&atom.args, out),
+            Effect::Forall(_, body, _) => effect(body, out),
+            Effect::When(c, body, _) => {
+                condition(c, out);
+                effect(body, out);
+            }
+            Effect::Increase(function, value, _) => {
+                terms(&function.args, out);
+                if let NumericExpr::Function(term) = value {
+                    terms(&term.args, out);
+                }
+            }
+        }
+    }
+    if let Some(c) = &action.precondition {
+        condition(c, out);
+    }
+    if let Some(e) = &action.effect {
+        effect(e, out);
+    }
+}

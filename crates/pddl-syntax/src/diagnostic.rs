@@ -1,0 +1,189 @@
+//! Diagnostics: what went wrong, where (byte span → line:column), and how bad it is.
+
+use std::fmt;
+
+/// A byte range `start..end` in one source text.
+///
+/// Spans locate a node; they are not part of its meaning. Two spans therefore always
+/// compare equal (and hash alike), so that syntax trees compare by what they say, not by
+/// where it was written: `parse(print(tree)) == tree` is the pretty-printer's law. Compare
+/// [`Span::range`] to compare locations.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct Span {
+    pub start: u32,
+    pub end: u32,
+}
+
+impl Span {
+    pub fn new(start: usize, end: usize) -> Span {
+        Span { start: start as u32, end: end as u32 }
+    }
+
+    pub fn range(self) -> std::ops::Range<usize> {
+        self.start as usize..self.end as usize
+    }
+
+    /// The smallest span covering both.
+    pub fn to(self, other: Span) -> Span {
+        Span { start: self.start.min(other.start), end: self.end.max(other.end) }
+    }
+}
+
+impl PartialEq for Span {
+    fn eq(&self, _: &Span) -> bool {
+        true
+    }
+}
+impl Eq for Span {}
+impl std::hash::Hash for Span {
+    fn hash<H: std::hash::Hasher>(&self, _: &mut H) {}
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash)]
+pub enum Severity {
+    Warning,
+    Error,
+}
+
+/// The kind of a diagnostic: stable, so tools and tests can match on it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum DiagnosticKind {
+    /// A character sequence that is not PDDL (for example a lone `?`).
+    InvalidToken,
+    /// A `(` without its `)`: usually a truncated file.
+    UnclosedParen,
+    /// A `)` with no `(` to close.
+    UnmatchedCloseParen,
+    /// The file does not start with `(define (domain ...)` / `(define (problem ...)`.
+    ExpectedDefine,
+    /// Something other than what the grammar allows at this point.
+    UnexpectedForm,
+    /// Text after the closing parenthesis of `(define ...)`.
+    TrailingInput,
+    /// A section keyword this parser does not know (`(:foo ...)`).
+    UnknownSection,
+    /// A requirement that is not part of PDDL.
+    UnknownRequirement,
+    /// A PDDL feature outside the supported fragment (numeric fluents, durative actions, ...).
+    Unsupported,
+    /// A number that does not parse.
+    InvalidNumber,
+    /// Two declarations of one name (predicate, action, object, type, parameter).
+    Duplicate,
+    /// A predicate that is not declared in `:predicates`.
+    UnknownPredicate,
+    /// A function that is not declared in `:functions`.
+    UnknownFunction,
+    /// A type that is not declared in `:types`.
+    UnknownType,
+    /// A constant or object that is declared neither in `:constants` nor in `:objects`.
+    UnknownObject,
+    /// A variable that is not bound by the action's parameters or an enclosing quantifier.
+    UnknownVariable,
+    /// A predicate or function applied to the wrong number of arguments.
+    ArityMismatch,
+    /// A problem whose `(:domain ...)` names another domain.
+    DomainMismatch,
+    /// A literal in `:init` that is not ground or not positive.
+    InvalidInit,
+}
+
+impl DiagnosticKind {
+    /// Short stable name, as printed in brackets after `error`.
+    pub fn code(self) -> &'static str {
+        match self {
+            DiagnosticKind::InvalidToken => "invalid-token",
+            DiagnosticKind::UnclosedParen => "unclosed-paren",
+            DiagnosticKind::UnmatchedCloseParen => "unmatched-close-paren",
+            DiagnosticKind::ExpectedDefine => "expected-define",
+            DiagnosticKind::UnexpectedForm => "unexpected-form",
+            DiagnosticKind::TrailingInput => "trailing-input",
+            DiagnosticKind::UnknownSection => "unknown-section",
+            DiagnosticKind::UnknownRequirement => "unknown-requirement",
+            DiagnosticKind::Unsupported => "unsupported",
+            DiagnosticKind::InvalidNumber => "invalid-number",
+            DiagnosticKind::Duplicate => "duplicate",
+            DiagnosticKind::UnknownPredicate => "unknown-predicate",
+            DiagnosticKind::UnknownFunction => "unknown-function",
+            DiagnosticKind::UnknownType => "unknown-type",
+            DiagnosticKind::UnknownObject => "unknown-object",
+            DiagnosticKind::UnknownVariable => "unknown-variable",
+            DiagnosticKind::ArityMismatch => "arity-mismatch",
+            DiagnosticKind::DomainMismatch => "domain-mismatch",
+            DiagnosticKind::InvalidInit => "invalid-init",
+        }
+    }
+}
+
+/// One finding, located by a byte span in the source it came from.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Diagnostic {
+    pub severity: Severity,
+    pub kind: DiagnosticKind,
+    pub message: String,
+    pub span: Span,
+}
+
+impl Diagnostic {
+    pub fn error(kind: DiagnosticKind, span: Span, message: impl Into<String>) -> Diagnostic {
+        Diagnostic { severity: Severity::Error, kind, message: message.into(), span }
+    }
+
+    pub fn warning(kind: DiagnosticKind, span: Span, message: impl Into<String>) -> Diagnostic {
+        Diagnostic { severity: Severity::Warning, kind, message: message.into(), span }
+    }
+
+    pub fn is_error(&self) -> bool {
+        self.severity == Severity::Error
+    }
+
+    /// `path:line:column: error[kind]: message`, with a 1-based line and column
+    /// (columns count characters).
+    pub fn render(&self, path: &str, source: &str) -> String {
+        let (line, column) = line_column(source, self.span.start as usize);
+        let severity = match self.severity {
+            Severity::Error => "error",
+            Severity::Warning => "warning",
+        };
+        format!("{path}:{line}:{column}: {severity}[{}]: {}", self.kind.code(), self.message)
+    }
+}
+
+impl fmt::Display for Diagnostic {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{} at bytes {:?}: {}", self.kind.code(), self.span.range(), self.message)
+    }
+}
+
+/// 1-based line and column (in characters) of a byte offset.
+pub fn line_column(source: &str, offset: usize) -> (usize, usize) {
+    let offset = offset.min(source.len());
+    let before = &source.as_bytes()[..offset];
+    let line = before.iter().filter(|&&b| b == b'\n').count() + 1;
+    let line_start = before.iter().rposition(|&b| b == b'\n').map_or(0, |p| p + 1);
+    let column = String::from_utf8_lossy(&before[line_start..]).chars().count() + 1;
+    (line, column)
+}
+
+/// Strict parsing failed: every error found (there is at least one), plus the warnings.
+#[derive(Debug, Clone, thiserror::Error)]
+#[error("{} error(s) in PDDL input; first: {}", self.errors().count(), self.first_error())]
+pub struct ParseError {
+    pub diagnostics: Vec<Diagnostic>,
+}
+
+impl ParseError {
+    pub fn errors(&self) -> impl Iterator<Item = &Diagnostic> {
+        self.diagnostics.iter().filter(|d| d.is_error())
+    }
+
+    fn first_error(&self) -> String {
+        self.errors().next().map(|d| d.message.clone()).unwrap_or_default()
+    }
+
+    /// Every diagnostic rendered as `path:line:column: ...`, one a line.
+    pub fn render(&self, path: &str, source: &str) -> String {
+        let lines: Vec<String> = self.diagnostics.iter().map(|d| d.render(path, source)).collect();
+        lines.join("\n")
+    }
+}
