@@ -1,0 +1,42 @@
+//! Typed `u32` ids into the task's dense tables.
+
+macro_rules! id {
+    ($(#[$doc:meta])* $name:ident) => {
+        $(#[$doc])*
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, Default)]
+        pub struct $name(pub u32);
+
+        impl $name {
+            #[inline]
+            pub fn index(self) -> usize {
+                self.0 as usize
+            }
+
+            #[inline]
+            pub fn from_index(index: usize) -> $name {
+                $name(index as u32)
+            }
+        }
+    };
+}
+
+id!(
+    /// A fluent fact of a [`crate::Task`].
+    FactId
+);
+id!(
+    /// A grounded action of a [`crate::Task`].
+    ActionId
+);
+id!(
+    /// An object or constant.
+    ObjectId
+);
+id!(
+    /// A predicate of the domain.
+    PredicateId
+);
+id!(
+    /// An action schema of the domain.
+    SchemaId
+);

@@ -1,0 +1,110 @@
+//! Grounding: a PDDL domain and problem become a [`Task`] of interned facts and actions,
+//! the way Fast Downward's translator does it.
+//!
+//! 1. **Types are compiled away**: each parameter and quantified variable ranges over the
+//!    objects of its type (and subtypes; `either` is a union).
+//! 2. **Relaxed reachability on the lifted task**: starting from the initial atoms, action
+//!    schemas are *joined* against the atoms reached so far (never by enumerating argument
+//!    tuples), negative conditions assumed satisfiable, until nothing new is reached. Only
+//!    the instances found are grounded.
+//! 3. **Instantiation**: quantifiers are expanded over objects (an `exists` only over
+//!    bindings that can satisfy its body), atoms that no reachable action changes are
+//!    evaluated against the initial state and disappear, and each formula becomes a
+//!    disjunction of [`Condition`]s — conjunctions of literals plus clauses. A precondition
+//!    with several disjuncts becomes several actions with the same name (Fast Downward
+//!    splits disjunctions the same way); conditional effects keep their conditions.
+//! 4. **Exact relaxed reachability on the ground task** drops what is still unreachable,
+//!    facts that no remaining action changes become constants, ids are made dense.
+//!
+//! The goal may be any formula. It is represented as a [`Goal`]: a disjunction of
+//! [`Condition`]s. ALFWorld's `(exists (?o ?r ...) (and ...))` goals become one disjunct
+//! per binding that static facts and reachability allow.
+//!
+//! ```
+//! let domain = pddl_syntax::parse_domain("(define (domain d) (:predicates (at ?x) (road ?x ?y))
+//!     (:action go :parameters (?x ?y) :precondition (and (at ?x) (road ?x ?y)) :effect (and (at ?y) (not (at ?x)))))").unwrap();
+//! let problem = pddl_syntax::parse_problem("(define (problem p) (:domain d) (:objects a b c)
+//!     (:init (at a) (road a b) (road b a)) (:goal (at b)))").unwrap();
+//! let task = grounding::ground(&domain, &problem).unwrap();
+//! assert_eq!(task.actions.len(), 2); // go a b, go b a; nothing reaches c
+//! assert_eq!(task.facts.len(), 2); // (at a), (at b); `road` is static
+//! ```
+
+mod ids;
+mod instantiate;
+mod join;
+mod lifted;
+mod prune;
+mod reach;
+mod task;
+
+pub use ids::{ActionId, FactId, ObjectId, PredicateId, SchemaId};
+pub use task::{Action, Atom, Condition, ConditionalEffect, Cost, Goal, Literal, Object, Predicate, Schema, Task};
+
+use pddl_syntax::{Diagnostic, check};
+
+#[derive(Debug, thiserror::Error)]
+pub enum GroundingError {
+    /// The domain or problem does not check (unknown names, wrong arity, ...).
+    #[error("the PDDL does not check: {}", first_message(.domain, .problem))]
+    Invalid { domain: Vec<Diagnostic>, problem: Vec<Diagnostic> },
+    #[error("{0} is not declared")]
+    Unresolved(String),
+    #[error("unsupported: {0}")]
+    Unsupported(String),
+    #[error("{what} splits into more than 4096 alternatives; simplify its disjunctions")]
+    TooManyAlternatives { what: String },
+    #[error("{action}: its cost uses a function value that `:init` does not give")]
+    MissingCost { action: String },
+    #[error("{action}: cost {value} is not a non-negative integer")]
+    InvalidCost { action: String, value: f64 },
+}
+
+fn first_message(domain: &[Diagnostic], problem: &[Diagnostic]) -> String {
+    domain.iter().chain(problem).find(|d| d.is_error()).map(|d| d.message.clone()).unwrap_or_default()
+}
+
+/// Grounds `problem` over `domain`. Both are name-checked first ([`pddl_syntax::check`]).
+pub fn ground(domain: &pddl_syntax::Domain, problem: &pddl_syntax::Problem) -> Result<Task, GroundingError> {
+    let report = check(domain, Some(problem));
+    if report.has_errors() {
+        return Err(GroundingError::Invalid { domain: report.domain, problem: report.problem });
+    }
+    let lifted = lifted::lift(domain, problem)?;
+    let reachable = reach::reachable(&lifted);
+    // Fluent atoms: reached and added by a reachable instance, or deleted by one.
+    let mut fluent: Vec<(PredicateId, join::Tuple)> = reach::deleted_atoms(&lifted, &reachable);
+    {
+        let init: rustc_hash::FxHashSet<(PredicateId, &[ObjectId])> = lifted.init.iter().map(|(p, a)| (*p, a.as_slice())).collect();
+        for (index, predicate) in lifted.predicates.iter().enumerate() {
+            let predicate_id = PredicateId::from_index(index);
+            let _ = predicate;
+            for tuple in reachable.atoms.tuples(predicate_id) {
+                if !init.contains(&(predicate_id, tuple.as_slice())) {
+                    fluent.push((predicate_id, tuple.clone()));
+                }
+            }
+        }
+    }
+    let instantiator = instantiate::Instantiator::new(&lifted, &reachable, fluent);
+    let actions = instantiator.actions()?;
+    let goal = instantiator.goal()?;
+    let init = instantiator.init_facts();
+    let mut static_facts = instantiator.static_facts();
+    let pruned = prune::prune(instantiator.facts, actions, init, goal);
+    static_facts.extend(pruned.now_static);
+    static_facts.sort();
+    Ok(Task {
+        domain_name: domain.name.text.clone(),
+        problem_name: problem.name.text.clone(),
+        schemas: lifted.schemas.iter().map(|s| Schema { name: s.name.clone(), params: s.param_names.clone() }).collect(),
+        objects: lifted.objects,
+        predicates: lifted.predicates,
+        facts: pruned.facts,
+        actions: pruned.actions,
+        init: pruned.init,
+        goal: pruned.goal,
+        static_facts,
+        uses_costs: lifted.uses_costs,
+    })
+}
