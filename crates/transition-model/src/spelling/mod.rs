@@ -1,0 +1,115 @@
+//! Action spelling, both ways: an action's surface text, and the actions a text names.
+//!
+//! A [`Spelling`] is a table built once per task: every grounded action gets at most one
+//! text, and every text maps back to *all* actions spelled that way (actions split from one
+//! disjunctive precondition share a name; ALFWorld's `go to desk 1` is one text for every
+//! start location; VirtualHome's class-level names collapse instances). Texts are stored
+//! normalised (lowercase, single spaces, trimmed), and [`Spelling::parse`] normalises its
+//! input the same way, so the two directions agree by construction.
+//!
+//! Three surface languages: PDDL (`(pickupobject agent1 ...)`), ALFWorld's TextWorld
+//! commands from the game's own grammar templates, and VirtualHome's class-level script
+//! verbs from a table ([`virtualhome::VERBS`]).
+
+pub mod alfworld;
+pub mod virtualhome;
+
+use grounding::{ActionId, Task};
+use rustc_hash::FxHashMap;
+
+/// Which surface language a [`Spelling`] writes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum SurfaceLanguage {
+    Pddl,
+    Alfworld,
+    Virtualhome,
+}
+
+impl SurfaceLanguage {
+    pub fn name(self) -> &'static str {
+        match self {
+            SurfaceLanguage::Pddl => "pddl",
+            SurfaceLanguage::Alfworld => "alfworld",
+            SurfaceLanguage::Virtualhome => "virtualhome",
+        }
+    }
+
+    pub fn from_name(name: &str) -> Option<SurfaceLanguage> {
+        [SurfaceLanguage::Pddl, SurfaceLanguage::Alfworld, SurfaceLanguage::Virtualhome].into_iter().find(|l| l.name() == name)
+    }
+}
+
+#[derive(Debug, thiserror::Error)]
+pub enum SpellingError {
+    #[error("the ALFWorld grammar has no template for action `{0}`")]
+    MissingTemplate(String),
+    #[error("the ALFWorld template for `{action}` names `{{{placeholder}}}`, which is not a parameter of the action")]
+    UnknownPlaceholder { action: String, placeholder: String },
+    #[error("the ALFWorld grammar is malformed near byte {offset}: {message}")]
+    MalformedGrammar { offset: usize, message: String },
+}
+
+/// The spelling table of one task in one surface language.
+#[derive(Debug, Clone)]
+pub struct Spelling {
+    language: SurfaceLanguage,
+    texts: Vec<Option<Box<str>>>,
+    by_text: FxHashMap<Box<str>, Vec<ActionId>>,
+}
+
+/// Lowercase, trimmed, with runs of white space as one space.
+pub fn normalize(text: &str) -> String {
+    let mut out = String::with_capacity(text.len());
+    for word in text.split_whitespace() {
+        if !out.is_empty() {
+            out.push(' ');
+        }
+        out.extend(word.chars().flat_map(char::to_lowercase));
+    }
+    out
+}
+
+impl Spelling {
+    /// Builds the table from a function giving each action's text (`None`: not expressible).
+    pub fn from_fn(task: &Task, language: SurfaceLanguage, mut spell: impl FnMut(ActionId) -> Option<String>) -> Spelling {
+        let mut texts = Vec::with_capacity(task.actions.len());
+        let mut by_text: FxHashMap<Box<str>, Vec<ActionId>> = FxHashMap::default();
+        for action in task.action_ids() {
+            let text = spell(action).map(|t| normalize(&t).into_boxed_str());
+            if let Some(text) = &text {
+                by_text.entry(text.clone()).or_default().push(action);
+            }
+            texts.push(text);
+        }
+        Spelling { language, texts, by_text }
+    }
+
+    /// PDDL: `(schema arg1 ... argn)`, as Fast Downward names operators.
+    pub fn pddl(task: &Task) -> Spelling {
+        Spelling::from_fn(task, SurfaceLanguage::Pddl, |a| Some(task.action_name(a)))
+    }
+
+    pub fn language(&self) -> SurfaceLanguage {
+        self.language
+    }
+
+    /// The action's text, if the language can express it.
+    pub fn spell(&self, action: ActionId) -> Option<&str> {
+        self.texts.get(action.index()).and_then(|t| t.as_deref())
+    }
+
+    /// Every action spelled `text` (after normalising it; PDDL texts may omit the
+    /// parentheses). Empty if none.
+    pub fn parse(&self, text: &str) -> &[ActionId] {
+        let mut key = normalize(text);
+        if self.language == SurfaceLanguage::Pddl && !key.starts_with('(') {
+            key = format!("({key})");
+        }
+        self.by_text.get(key.as_str()).map_or(&[], Vec::as_slice)
+    }
+
+    /// Every distinct text, with its actions, in no particular order.
+    pub fn texts(&self) -> impl Iterator<Item = (&str, &[ActionId])> {
+        self.by_text.iter().map(|(t, a)| (&**t, a.as_slice()))
+    }
+}

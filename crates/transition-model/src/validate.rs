@@ -1,0 +1,145 @@
+//! Plan validation: replays a plan and reports the first step that fails, with each unmet
+//! precondition, or the unmet part of the goal.
+
+use std::fmt;
+
+use grounding::{ActionId, Cost, Literal, Task};
+
+use crate::TransitionModel;
+use crate::spelling::Spelling;
+use crate::state::State;
+
+/// A precondition or goal part that does not hold.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum Unmet {
+    Literal(Literal),
+    /// None of these holds.
+    Clause(Vec<Literal>),
+}
+
+impl Unmet {
+    pub fn describe(&self, task: &Task) -> String {
+        match self {
+            Unmet::Literal(literal) => task.literal_name(*literal),
+            Unmet::Clause(literals) => {
+                let names: Vec<String> = literals.iter().map(|l| task.literal_name(*l)).collect();
+                format!("(or {})", names.join(" "))
+            }
+        }
+    }
+}
+
+/// The unmet parts of a condition in a state.
+pub fn unmet(condition: &grounding::Condition, state: &State) -> Vec<Unmet> {
+    let mut out: Vec<Unmet> = condition.literals().filter(|l| state.contains(l.fact()) == l.is_negated()).map(Unmet::Literal).collect();
+    for clause in &condition.clauses {
+        if !clause.iter().any(|l| state.contains(l.fact()) != l.is_negated()) {
+            out.push(Unmet::Clause(clause.clone()));
+        }
+    }
+    out
+}
+
+/// A plan that reaches the goal.
+#[derive(Debug, Clone)]
+pub struct ValidPlan {
+    pub actions: Vec<ActionId>,
+    pub cost: u64,
+    pub final_state: State,
+}
+
+/// Why a plan is not valid. Steps are 1-based.
+#[derive(Debug, Clone)]
+pub enum PlanError {
+    /// The text of step `step` names no action of the task.
+    UnknownAction { step: usize, text: String },
+    /// Step `step` names actions, none of them applicable; `unmet` is for the one closest
+    /// to applicable.
+    Inapplicable { step: usize, text: String, action: ActionId, unmet: Vec<Unmet> },
+    /// Every step applied, but the goal does not hold; `unmet` is for the goal disjunct
+    /// closest to holding (empty when the goal can never hold).
+    GoalNotReached { steps: usize, unmet: Vec<Unmet> },
+}
+
+impl PlanError {
+    /// One line, starting `invalid: step K` (or `invalid: goal`), naming what failed.
+    pub fn describe(&self, task: &Task) -> String {
+        match self {
+            PlanError::UnknownAction { step, text } => format!("invalid: step {step}: `{text}` is not an action of this task"),
+            PlanError::Inapplicable { step, text, action, unmet: parts } => {
+                let parts: Vec<String> = parts.iter().map(|u| u.describe(task)).collect();
+                format!("invalid: step {step}: `{text}` ({}) is not applicable: unmet {}", task.action_name(*action), parts.join(", "))
+            }
+            PlanError::GoalNotReached { steps, unmet: parts } if parts.is_empty() => {
+                format!("invalid: goal: after {steps} steps the goal does not hold, and no reachable state satisfies it")
+            }
+            PlanError::GoalNotReached { steps, unmet: parts } => {
+                let parts: Vec<String> = parts.iter().map(|u| u.describe(task)).collect();
+                format!("invalid: goal: after {steps} steps the goal does not hold: unmet {}", parts.join(", "))
+            }
+        }
+    }
+}
+
+impl fmt::Display for PlanError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            PlanError::UnknownAction { step, text } => write!(f, "step {step}: unknown action `{text}`"),
+            PlanError::Inapplicable { step, text, .. } => write!(f, "step {step}: `{text}` is not applicable"),
+            PlanError::GoalNotReached { steps, .. } => write!(f, "the goal does not hold after {steps} steps"),
+        }
+    }
+}
+
+impl std::error::Error for PlanError {}
+
+impl TransitionModel {
+    /// Replays `plan` from the initial state.
+    pub fn validate(&self, plan: &[ActionId]) -> Result<ValidPlan, PlanError> {
+        let steps = plan.iter().map(|&a| (self.task().action_name(a), vec![a]));
+        self.replay(steps)
+    }
+
+    /// Replays a plan written in a surface language, one action per entry. A text that
+    /// names several actions applies the first of them (in id order) that is applicable.
+    pub fn validate_text<S: AsRef<str>>(&self, spelling: &Spelling, plan: &[S]) -> Result<ValidPlan, PlanError> {
+        let steps = plan.iter().map(|text| (text.as_ref().trim().to_string(), spelling.parse(text.as_ref()).to_vec()));
+        self.replay(steps)
+    }
+
+    fn replay(&self, steps: impl Iterator<Item = (String, Vec<ActionId>)>) -> Result<ValidPlan, PlanError> {
+        let task = self.task();
+        let mut state = self.initial_state();
+        let mut actions = Vec::new();
+        let mut cost: u64 = 0;
+        let mut count = 0;
+        for (index, (text, candidates)) in steps.enumerate() {
+            let step = index + 1;
+            count = step;
+            if candidates.is_empty() {
+                return Err(PlanError::UnknownAction { step, text });
+            }
+            let Some(&action) = candidates.iter().find(|&&a| self.is_applicable(&state, a)) else {
+                let (action, parts) = candidates
+                    .iter()
+                    .map(|&a| (a, unmet(&task.action(a).pre, &state)))
+                    .min_by_key(|(_, parts)| parts.len())
+                    .unwrap_or_else(|| (candidates[0], Vec::new()));
+                return Err(PlanError::Inapplicable { step, text, action, unmet: parts });
+            };
+            state = self.apply(&state, action);
+            cost += u64::from(task.action(action).cost);
+            actions.push(action);
+        }
+        if !self.is_goal(&state) {
+            let closest = task.goal.disjuncts.iter().map(|d| unmet(d, &state)).min_by_key(Vec::len).unwrap_or_default();
+            return Err(PlanError::GoalNotReached { steps: count, unmet: closest });
+        }
+        Ok(ValidPlan { actions, cost, final_state: state })
+    }
+}
+
+/// Cost of a plan (sum of action costs).
+pub fn plan_cost(task: &Task, plan: &[ActionId]) -> u64 {
+    plan.iter().map(|&a| u64::from(task.action(a).cost as Cost)).sum()
+}
