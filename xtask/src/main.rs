@@ -1,1 +1,134 @@
-fn main() {}
+//! `cargo xtask`: the project's command line.
+//!
+//! Exit codes: 0 success; 1 a negative verdict (an invalid plan); 2 bad input (unreadable
+//! or malformed files, named with file, line and column) or usage errors.
+
+mod bench;
+mod eval;
+mod input;
+
+use std::path::PathBuf;
+use std::process::ExitCode;
+use std::time::Instant;
+
+use anyhow::Context;
+use clap::{Parser, Subcommand};
+use serde_json::json;
+use transition_model::{Spelling, SurfaceLanguage, TransitionModel};
+
+use input::{InputError, TaskArgs};
+
+#[derive(Debug, Parser)]
+#[command(name = "cargo xtask", about = "Neurosymbolic embodied agents: grounding, validation, evaluation and benchmarks")]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Debug, Subcommand)]
+enum Command {
+    /// Ground a task and print its size.
+    Ground {
+        #[command(flatten)]
+        task: TaskArgs,
+        /// Print one JSON object.
+        #[arg(long)]
+        json: bool,
+    },
+    /// Validate a plan: exit 0 and `valid ...`, or exit 1 and `invalid: step K ...`.
+    Validate {
+        #[command(flatten)]
+        task: TaskArgs,
+        /// The plan: one action a line; blank lines and `;` comments are skipped.
+        #[arg(long)]
+        plan: PathBuf,
+        /// Surface language of the plan [default: alfworld with --game, else pddl].
+        #[arg(long, value_parser = ["pddl", "alfworld", "virtualhome"])]
+        spelling: Option<String>,
+    },
+    /// Evaluate an agent on the benchmarks in fixtures/ (the project's main job).
+    Eval(eval::EvalArgs),
+    /// Benchmarks that compare with the reference systems.
+    Bench(bench::BenchArgs),
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    match run(cli.command) {
+        Ok(code) => code,
+        Err(error) => {
+            if let Some(input) = error.downcast_ref::<InputError>() {
+                eprintln!("error: {input}");
+            } else {
+                eprintln!("error: {error:#}");
+            }
+            ExitCode::from(2)
+        }
+    }
+}
+
+fn run(command: Command) -> anyhow::Result<ExitCode> {
+    match command {
+        Command::Ground { task, json } => {
+            let files = task.load()?;
+            let start = Instant::now();
+            let grounded = input::ground(&files)?;
+            let millis = start.elapsed().as_secs_f64() * 1e3;
+            let summary = json!({
+                "task": files.id,
+                "facts": grounded.facts.len(),
+                "actions": grounded.actions.len(),
+                "objects": grounded.objects.len(),
+                "schemas": grounded.schemas.len(),
+                "static_facts": grounded.static_facts.len(),
+                "init_facts": grounded.init.len(),
+                "goal_disjuncts": grounded.goal.disjuncts.len(),
+                "uses_costs": grounded.uses_costs,
+                "millis": millis,
+            });
+            if json {
+                println!("{summary}");
+            } else {
+                println!(
+                    "{}: {} facts, {} actions, {} goal disjunct(s), grounded in {millis:.1} ms",
+                    files.id,
+                    grounded.facts.len(),
+                    grounded.actions.len(),
+                    grounded.goal.disjuncts.len()
+                );
+            }
+            Ok(ExitCode::SUCCESS)
+        }
+        Command::Validate { task, plan, spelling } => {
+            let files = task.load()?;
+            let text = std::fs::read_to_string(&plan).map_err(|e| InputError(format!("{}: cannot read: {e}", plan.display())))?;
+            let steps: Vec<&str> = text.lines().map(str::trim).filter(|l| !l.is_empty() && !l.starts_with(';')).collect();
+            let model = TransitionModel::new(input::ground(&files)?);
+            let language = match spelling.as_deref() {
+                Some(name) => SurfaceLanguage::from_name(name).context("unknown spelling")?,
+                None if task.is_game() => SurfaceLanguage::Alfworld,
+                None => SurfaceLanguage::Pddl,
+            };
+            let spelling = match language {
+                SurfaceLanguage::Pddl => Spelling::pddl(model.task()),
+                SurfaceLanguage::Virtualhome => Spelling::virtualhome(model.task()),
+                SurfaceLanguage::Alfworld => {
+                    let game = input::alfworld_game(&files).ok_or_else(|| InputError("--spelling alfworld needs --game (the grammar is in the game file)".into()))?;
+                    Spelling::alfworld(model.task(), &game.grammar).map_err(|e| InputError(format!("{}: {e}", files.problem_path.display())))?
+                }
+            };
+            match model.validate_text(&spelling, &steps) {
+                Ok(valid) => {
+                    println!("valid: {} steps, cost {}", valid.actions.len(), valid.cost);
+                    Ok(ExitCode::SUCCESS)
+                }
+                Err(error) => {
+                    println!("{}", error.describe(model.task()));
+                    Ok(ExitCode::from(1))
+                }
+            }
+        }
+        Command::Eval(args) => eval::run(args),
+        Command::Bench(args) => bench::run(args),
+    }
+}

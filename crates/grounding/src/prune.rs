@@ -155,6 +155,13 @@ pub(crate) fn prune(facts: Vec<Atom>, actions: Vec<Action>, init: Vec<FactId>, g
         add.dedup();
         del.sort();
         del.dedup();
+        // Effects that change nothing: a delete of a fact the precondition says is false or
+        // that the action also adds (adds win), an add of a fact the precondition says is
+        // true and that is not deleted.
+        del.retain(|f| pre.neg.binary_search(f).is_err() && add.binary_search(f).is_err());
+        add.retain(|f| pre.pos.binary_search(f).is_err() || conditional.iter().any(|e| e.del.contains(f)));
+        // Actions without any effect stay (unlike in Fast Downward): VirtualHome's `watch`,
+        // `read` or `find` change nothing in PDDL, yet the real executor's goals need them.
         actions.push(Action { pre, add, del, conditional, ..action });
     }
     actions.sort_by(|a, b| (a.schema, &a.args, &a.pre.pos, &a.pre.neg, &a.pre.clauses).cmp(&(b.schema, &b.args, &b.pre.pos, &b.pre.neg, &b.pre.clauses)));

@@ -1,0 +1,225 @@
+//! `cargo xtask bench`: figures beside the reference systems, measured in one run.
+//!
+//! `bench ground` grounds every fixture problem with our pipeline (parse + check + ground,
+//! median of `--runs`) and with Fast Downward 26.6's translator on the same files, one
+//! after the other, so both see the same machine load. Fast Downward's time is its own
+//! `Done! [... wall-clock]` figure, which leaves out Python's start-up. It comes from the
+//! anchor venv (`../shared/anchors/install.sh planning`; `$ANCHOR_VENV` overrides the path).
+//! The ALFWorld domain names problem objects (`SinkType`, ...) as constants without
+//! declaring them, which Fast Downward 26.6 rejects; for it, those objects are moved into the
+//! domain's `:constants` and both files are written by our pretty-printer.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, ExitCode};
+use std::time::Instant;
+
+use anyhow::{Context, bail};
+use benchmark_data::{Benchmark, Extra, TaskFiles};
+use serde_json::json;
+
+#[derive(Debug, clap::Args)]
+pub struct BenchArgs {
+    #[command(subcommand)]
+    which: Which,
+}
+
+#[derive(Debug, clap::Subcommand)]
+enum Which {
+    /// Grounding time and size, ours beside Fast Downward's translator.
+    Ground {
+        /// Benchmarks: ipc, alfworld-seen, alfworld-train, virtualhome-eai, or all.
+        #[arg(long, default_value = "all")]
+        benchmark: String,
+        /// At most this many tasks per benchmark (evenly spaced).
+        #[arg(long)]
+        limit: Option<usize>,
+        /// Timed runs of ours per task (the median is reported).
+        #[arg(long, default_value_t = 5)]
+        runs: usize,
+        /// Skip Fast Downward.
+        #[arg(long)]
+        no_reference: bool,
+        /// Print one JSON object.
+        #[arg(long)]
+        json: bool,
+    },
+}
+
+pub fn run(args: BenchArgs) -> anyhow::Result<ExitCode> {
+    match args.which {
+        Which::Ground { benchmark, limit, runs, no_reference, json } => ground(&benchmark, limit, runs.max(1), no_reference, json),
+    }
+}
+
+fn anchor_venv() -> PathBuf {
+    std::env::var_os("ANCHOR_VENV")
+        .map(PathBuf::from)
+        .unwrap_or_else(|| PathBuf::from(std::env::var_os("HOME").unwrap_or_default()).join(".cache/nsea-anchors/venv"))
+}
+
+/// The pristine Fast Downward 26.6 translator: `python -S` keeps site-packages (where the
+/// ALFWorld install puts TextWorld's older translator under the same package name) off the path.
+fn fd_translator() -> Option<(PathBuf, PathBuf)> {
+    let venv = anchor_venv();
+    let python = venv.join("bin/python");
+    let lib = std::fs::read_dir(venv.join("lib")).ok()?.filter_map(|e| e.ok()).map(|e| e.path()).find(|p| p.join("site-packages").is_dir())?;
+    let bin = lib.join("site-packages/up_fast_downward/downward/builds/release/bin");
+    (python.exists() && bin.join("fast_downward/translate").is_dir()).then_some((python, bin))
+}
+
+struct FdResult {
+    wall_s: f64,
+    facts: u64,
+    operators: u64,
+}
+
+fn number_after(text: &str, prefix: &str) -> Option<f64> {
+    let line = text.lines().find(|l| l.starts_with(prefix))?;
+    line[prefix.len()..].trim().split(|c: char| c.is_whitespace() || c == 's').next()?.parse().ok()
+}
+
+fn run_fd(python: &Path, bin: &Path, domain: &Path, problem: &Path, scratch: &Path) -> anyhow::Result<FdResult> {
+    let output = Command::new(python)
+        .args(["-S", "-m", "fast_downward.translate"])
+        .arg(domain)
+        .arg(problem)
+        .arg("--sas-file")
+        .arg(scratch.join("output.sas"))
+        .env("PYTHONPATH", bin)
+        .env("PYTHONHASHSEED", "0")
+        .current_dir(scratch)
+        .output()
+        .context("cannot run Fast Downward's translator")?;
+    let stdout = String::from_utf8_lossy(&output.stdout);
+    if !output.status.success() {
+        bail!("translator failed ({}): {}", output.status, stdout.lines().rev().take(3).collect::<Vec<_>>().join(" | "));
+    }
+    let done = stdout.lines().find(|l| l.starts_with("Done! [")).context("no `Done!` line")?;
+    let wall_s = done.split(',').nth(1).and_then(|p| p.trim().split('s').next()).and_then(|n| n.parse().ok()).context("unreadable `Done!` line")?;
+    Ok(FdResult {
+        wall_s,
+        facts: number_after(&stdout, "Translator facts:").unwrap_or(f64::NAN) as u64,
+        operators: number_after(&stdout, "Translator operators:").unwrap_or(f64::NAN) as u64,
+    })
+}
+
+/// Domain and problem text Fast Downward 26.6 accepts: constants the domain uses but does not
+/// declare are moved there from the problem's objects.
+fn fd_compatible(files: &TaskFiles) -> anyhow::Result<(String, String)> {
+    let mut domain = pddl_syntax::parse_domain(&files.domain)?;
+    let mut problem = pddl_syntax::parse_problem(&files.problem)?;
+    let declared: Vec<String> = domain.constants.iter().map(|c| c.name.text.clone()).collect();
+    let mut used = Vec::new();
+    let text = domain.to_string();
+    problem.objects.retain(|object| {
+        let name = &object.name.text;
+        let in_domain = !declared.contains(name)
+            && text.split(|c: char| c.is_whitespace() || c == '(' || c == ')').any(|word| word == name.as_str());
+        if in_domain {
+            used.push(object.clone());
+        }
+        !in_domain
+    });
+    domain.constants.extend(used);
+    Ok((domain.to_string(), problem.to_string()))
+}
+
+fn time_ours(files: &TaskFiles, runs: usize) -> anyhow::Result<(f64, grounding::Task)> {
+    let mut times = Vec::with_capacity(runs);
+    let mut task = None;
+    for _ in 0..runs {
+        let start = Instant::now();
+        let grounded = crate::input::ground(files)?;
+        times.push(start.elapsed().as_secs_f64());
+        task = Some(grounded);
+    }
+    times.sort_by(f64::total_cmp);
+    Ok((times[times.len() / 2], task.context("no run")?))
+}
+
+fn ground(benchmarks: &str, limit: Option<usize>, runs: usize, no_reference: bool, json: bool) -> anyhow::Result<ExitCode> {
+    let benchmarks: Vec<Benchmark> = if benchmarks == "all" {
+        vec![Benchmark::Ipc, Benchmark::AlfworldSeen, Benchmark::AlfworldTrain, Benchmark::VirtualhomeEai]
+    } else {
+        benchmarks.split(',').map(|n| Benchmark::from_name(n.trim()).with_context(|| format!("unknown benchmark `{n}`"))).collect::<anyhow::Result<_>>()?
+    };
+    let reference = if no_reference { None } else { fd_translator() };
+    if !no_reference && reference.is_none() {
+        eprintln!("Fast Downward's translator not found under {}; run ../shared/anchors/install.sh planning (or pass --no-reference)", anchor_venv().display());
+    }
+    let scratch = std::env::temp_dir().join(format!("xtask-bench-ground-{}", std::process::id()));
+    std::fs::create_dir_all(&scratch)?;
+    let mut sets = serde_json::Map::new();
+    let mut rows = Vec::new();
+    for benchmark in benchmarks {
+        let all = benchmark_data::load(benchmark)?;
+        let tasks: Vec<&TaskFiles> = match limit {
+            Some(n) if n < all.len() => (0..n).map(|i| &all[i * all.len() / n]).collect(),
+            _ => all.iter().collect(),
+        };
+        let (mut ours_total, mut fd_total, mut ratios) = (0.0, 0.0, Vec::new());
+        let (mut our_facts, mut our_actions, mut fd_facts, mut fd_operators, mut fd_failed) = (0usize, 0usize, 0u64, 0u64, 0usize);
+        for files in &tasks {
+            let (ours_s, task) = time_ours(files, runs)?;
+            ours_total += ours_s;
+            our_facts += task.facts.len();
+            our_actions += task.actions.len();
+            let mut row = json!({
+                "benchmark": benchmark.name(), "task": files.id,
+                "ours_ms": ours_s * 1e3, "facts": task.facts.len(), "actions": task.actions.len(),
+            });
+            if let Some((python, bin)) = &reference {
+                let (domain_path, problem_path) = if matches!(files.extra, Extra::Alfworld(_)) {
+                    let (domain, problem) = fd_compatible(files)?;
+                    let (d, p) = (scratch.join("domain.pddl"), scratch.join("problem.pddl"));
+                    std::fs::write(&d, domain)?;
+                    std::fs::write(&p, problem)?;
+                    (d, p)
+                } else {
+                    (files.domain_path.clone(), files.problem_path.clone())
+                };
+                match run_fd(python, bin, &domain_path, &problem_path, &scratch) {
+                    Ok(fd) => {
+                        fd_total += fd.wall_s;
+                        fd_facts += fd.facts;
+                        fd_operators += fd.operators;
+                        ratios.push(fd.wall_s / ours_s);
+                        row["fd_ms"] = json!(fd.wall_s * 1e3);
+                        row["fd_facts"] = json!(fd.facts);
+                        row["fd_operators"] = json!(fd.operators);
+                        row["speedup"] = json!(fd.wall_s / ours_s);
+                    }
+                    Err(error) => {
+                        fd_failed += 1;
+                        row["fd_error"] = json!(error.to_string());
+                    }
+                }
+            }
+            if !json {
+                println!("{row}");
+            }
+            rows.push(row);
+        }
+        ratios.sort_by(f64::total_cmp);
+        let median_ratio = ratios.get(ratios.len() / 2).copied();
+        let summary = json!({
+            "tasks": tasks.len(),
+            "ours_total_ms": ours_total * 1e3,
+            "fd_total_ms": (reference.is_some()).then_some(fd_total * 1e3),
+            "speedup_total": (reference.is_some() && ours_total > 0.0).then(|| fd_total / ours_total),
+            "speedup_median": median_ratio,
+            "speedup_min": ratios.first(),
+            "facts": our_facts, "actions": our_actions,
+            "fd_facts": fd_facts, "fd_operators": fd_operators, "fd_failed": fd_failed,
+        });
+        if !json {
+            eprintln!("{}: {summary}", benchmark.name());
+        }
+        sets.insert(benchmark.name().to_string(), summary);
+    }
+    let _ = std::fs::remove_dir_all(&scratch);
+    if json {
+        println!("{}", json!({ "sets": sets, "tasks": rows }));
+    }
+    Ok(ExitCode::SUCCESS)
+}

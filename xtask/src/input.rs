@@ -1,0 +1,84 @@
+//! Loading a task from the command line: `--domain D --problem P` or `--game G`.
+
+use std::path::{Path, PathBuf};
+
+use anyhow::bail;
+use benchmark_data::{AlfworldGame, Benchmark, Extra, TaskFiles};
+use grounding::Task;
+
+#[derive(Debug, Clone, clap::Args)]
+pub struct TaskArgs {
+    /// PDDL domain file.
+    #[arg(long, requires = "problem", conflicts_with = "game")]
+    pub domain: Option<PathBuf>,
+    /// PDDL problem file.
+    #[arg(long, requires = "domain")]
+    pub problem: Option<PathBuf>,
+    /// ALFWorld game (`game.tw-pddl`, or the folder holding it).
+    #[arg(long)]
+    pub game: Option<PathBuf>,
+}
+
+/// A user error: bad input, reported with exit code 2.
+#[derive(Debug)]
+pub struct InputError(pub String);
+
+impl std::fmt::Display for InputError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.0)
+    }
+}
+
+impl std::error::Error for InputError {}
+
+fn read(path: &Path) -> anyhow::Result<String> {
+    std::fs::read_to_string(path).map_err(|e| InputError(format!("{}: cannot read: {e}", path.display())).into())
+}
+
+impl TaskArgs {
+    pub fn load(&self) -> anyhow::Result<TaskFiles> {
+        match (&self.domain, &self.problem, &self.game) {
+            (Some(domain), Some(problem), None) => Ok(TaskFiles {
+                id: problem.display().to_string(),
+                benchmark: Benchmark::Ipc,
+                domain: read(domain)?,
+                problem: read(problem)?,
+                domain_path: domain.clone(),
+                problem_path: problem.clone(),
+                extra: Extra::None,
+            }),
+            (None, None, Some(game)) => benchmark_data::load_alfworld_game(game, Benchmark::AlfworldSeen, game.display().to_string())
+                .map_err(|e| InputError(e.to_string()).into()),
+            _ => bail!(InputError("give either --domain D --problem P, or --game G".into())),
+        }
+    }
+
+    pub fn is_game(&self) -> bool {
+        self.game.is_some()
+    }
+}
+
+/// Parses and grounds, turning diagnostics into `file:line:column` errors (exit code 2).
+pub fn ground(files: &TaskFiles) -> anyhow::Result<Task> {
+    let where_ = |path: &Path, embedded: &str| {
+        if matches!(files.extra, Extra::Alfworld(_)) { format!("{} (embedded {embedded})", path.display()) } else { path.display().to_string() }
+    };
+    let domain = pddl_syntax::parse_domain(&files.domain).map_err(|e| InputError(e.render(&where_(&files.domain_path, "pddl_domain"), &files.domain)))?;
+    let problem =
+        pddl_syntax::parse_problem(&files.problem).map_err(|e| InputError(e.render(&where_(&files.problem_path, "pddl_problem"), &files.problem)))?;
+    let report = pddl_syntax::check(&domain, Some(&problem));
+    if report.has_errors() {
+        let mut lines: Vec<String> = report.domain.iter().filter(|d| d.is_error()).map(|d| d.render(&where_(&files.domain_path, "pddl_domain"), &files.domain)).collect();
+        lines.extend(report.problem.iter().filter(|d| d.is_error()).map(|d| d.render(&where_(&files.problem_path, "pddl_problem"), &files.problem)));
+        bail!(InputError(lines.join("\n")));
+    }
+    grounding::ground(&domain, &problem).map_err(|e| InputError(format!("{}: {e}", files.problem_path.display())).into())
+}
+
+/// The game's grammar, for ALFWorld spelling.
+pub fn alfworld_game(files: &TaskFiles) -> Option<&AlfworldGame> {
+    match &files.extra {
+        Extra::Alfworld(game) => Some(game),
+        _ => None,
+    }
+}
