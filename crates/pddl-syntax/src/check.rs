@@ -190,7 +190,11 @@ impl<'a> Checker<'a> {
             None => self.error(
                 DiagnosticKind::UnknownFunction,
                 term.function.span,
-                format!("function `{}` is not declared in `(:functions ...)`", term.function),
+                if term.function.as_str() == "total-cost" {
+                    "function `total-cost` is not declared: add `(:functions (total-cost) - number)` to the domain".to_string()
+                } else {
+                    format!("function `{}` is not declared in `(:functions ...)`", term.function)
+                },
             ),
             Some(&arity) if arity != term.args.len() => self.error(
                 DiagnosticKind::ArityMismatch,

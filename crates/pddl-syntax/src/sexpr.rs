@@ -111,14 +111,14 @@ pub(crate) fn read(source: &str, diagnostics: &mut Vec<Diagnostic>) -> Vec<SExpr
     }
     // Close what the input left open, innermost first, reporting each.
     while let Some((items, start)) = stack.pop() {
-        let head = match items.first() {
-            Some(SExpr::Word(word, _)) => format!(" `({word} ...`"),
-            _ => String::new(),
+        let opened = match items.first() {
+            Some(SExpr::Word(word, _)) => format!("`({word} ...`"),
+            _ => "`(`".to_string(),
         };
         diagnostics.push(Diagnostic::error(
             DiagnosticKind::UnclosedParen,
             Span::new(start, start + 1),
-            format!("this `(`{head} is never closed: the input ends first (is the file truncated?)"),
+            format!("{opened} opened here is never closed: the input ends first (is the file truncated?)"),
         ));
         let list = SExpr::List(items, Span::new(start, bytes.len()));
         match stack.last_mut() {

@@ -1,0 +1,66 @@
+//! Each file in `fixtures/pddl-invalid/` shows one kind of error (its name starts with the
+//! kind's code). The parser and checker must report that kind, at the right place, with a
+//! message a person can act on: the full output is an insta snapshot.
+//! Problems (`*.problem.pddl`) are checked against `fixtures/pddl-valid/household/domain.pddl`.
+
+use std::path::Path;
+
+use pddl_syntax::{Diagnostic, check, parse_domain, parse_domain_recovering, parse_problem_recovering};
+
+fn fixtures() -> &'static Path {
+    Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/../../fixtures"))
+}
+
+/// Every diagnostic for one file, rendered as `name:line:column: severity[kind]: message`.
+fn diagnose(path: &Path) -> (Vec<Diagnostic>, String) {
+    let source = std::fs::read_to_string(path).expect("fixture readable");
+    let name = path.file_name().unwrap_or_default().to_string_lossy().into_owned();
+    let household = std::fs::read_to_string(fixtures().join("pddl-valid/household/domain.pddl")).expect("household domain");
+    let household = parse_domain(&household).expect("household domain parses");
+    let diagnostics = if name.ends_with(".problem.pddl") {
+        let (problem, mut diagnostics) = parse_problem_recovering(&source);
+        if let Some(problem) = problem {
+            diagnostics.extend(check(&household, Some(&problem)).problem);
+        }
+        diagnostics
+    } else {
+        let (domain, mut diagnostics) = parse_domain_recovering(&source);
+        if let Some(domain) = domain {
+            diagnostics.extend(check(&domain, None).domain);
+        }
+        diagnostics
+    };
+    let rendered: Vec<String> = diagnostics.iter().map(|d| d.render(&name, &source)).collect();
+    (diagnostics, rendered.join("\n"))
+}
+
+#[test]
+fn invalid_fixtures_report_their_kind() {
+    let mut paths: Vec<_> = std::fs::read_dir(fixtures().join("pddl-invalid")).expect("folder").map(|e| e.expect("entry").path()).collect();
+    paths.sort();
+    assert!(paths.len() >= 19);
+    for path in paths {
+        let name = path.file_name().unwrap_or_default().to_string_lossy().into_owned();
+        let (diagnostics, rendered) = diagnose(&path);
+        assert!(!diagnostics.is_empty(), "{name}: no diagnostic");
+        let code = name.split('.').next().unwrap_or_default();
+        if code != "many-errors" {
+            assert!(diagnostics.iter().any(|d| d.kind.code() == code), "{name}: no `{code}` diagnostic in\n{rendered}");
+        } else {
+            assert!(diagnostics.len() >= 4, "{name}: the checker stops early:\n{rendered}");
+        }
+        insta::assert_snapshot!(code.to_string(), rendered);
+    }
+}
+
+#[test]
+fn the_household_world_is_clean() {
+    let domain = std::fs::read_to_string(fixtures().join("pddl-valid/household/domain.pddl")).expect("domain");
+    let problem = std::fs::read_to_string(fixtures().join("pddl-valid/household/problem.pddl")).expect("problem");
+    let (domain, diagnostics) = parse_domain_recovering(&domain);
+    assert_eq!(diagnostics, vec![]);
+    let (problem, diagnostics) = parse_problem_recovering(&problem);
+    assert_eq!(diagnostics, vec![]);
+    let report = check(&domain.expect("domain"), problem.as_ref());
+    assert!(report.domain.is_empty() && report.problem.is_empty(), "{report:?}");
+}
