@@ -62,7 +62,8 @@ fn anchor_venv() -> PathBuf {
 fn fd_translator() -> Option<(PathBuf, PathBuf)> {
     let venv = anchor_venv();
     let python = venv.join("bin/python");
-    let lib = std::fs::read_dir(venv.join("lib")).ok()?.filter_map(|e| e.ok()).map(|e| e.path()).find(|p| p.join("site-packages").is_dir())?;
+    let lib =
+        std::fs::read_dir(venv.join("lib")).ok()?.filter_map(|e| e.ok()).map(|e| e.path()).find(|p| p.join("site-packages").is_dir())?;
     let bin = lib.join("site-packages/up_fast_downward/downward/builds/release/bin");
     (python.exists() && bin.join("fast_downward/translate").is_dir()).then_some((python, bin))
 }
@@ -95,7 +96,8 @@ fn run_fd(python: &Path, bin: &Path, domain: &Path, problem: &Path, scratch: &Pa
         bail!("translator failed ({}): {}", output.status, stdout.lines().rev().take(3).collect::<Vec<_>>().join(" | "));
     }
     let done = stdout.lines().find(|l| l.starts_with("Done! [")).context("no `Done!` line")?;
-    let wall_s = done.split(',').nth(1).and_then(|p| p.trim().split('s').next()).and_then(|n| n.parse().ok()).context("unreadable `Done!` line")?;
+    let wall_s =
+        done.split(',').nth(1).and_then(|p| p.trim().split('s').next()).and_then(|n| n.parse().ok()).context("unreadable `Done!` line")?;
     Ok(FdResult {
         wall_s,
         facts: number_after(&stdout, "Translator facts:").unwrap_or(f64::NAN) as u64,
@@ -113,8 +115,8 @@ fn fd_compatible(files: &TaskFiles) -> anyhow::Result<(String, String)> {
     let text = domain.to_string();
     problem.objects.retain(|object| {
         let name = &object.name.text;
-        let in_domain = !declared.contains(name)
-            && text.split(|c: char| c.is_whitespace() || c == '(' || c == ')').any(|word| word == name.as_str());
+        let in_domain =
+            !declared.contains(name) && text.split(|c: char| c.is_whitespace() || c == '(' || c == ')').any(|word| word == name.as_str());
         if in_domain {
             used.push(object.clone());
         }
@@ -141,11 +143,17 @@ fn ground(benchmarks: &str, limit: Option<usize>, runs: usize, no_reference: boo
     let benchmarks: Vec<Benchmark> = if benchmarks == "all" {
         vec![Benchmark::Ipc, Benchmark::AlfworldSeen, Benchmark::AlfworldTrain, Benchmark::VirtualhomeEai]
     } else {
-        benchmarks.split(',').map(|n| Benchmark::from_name(n.trim()).with_context(|| format!("unknown benchmark `{n}`"))).collect::<anyhow::Result<_>>()?
+        benchmarks
+            .split(',')
+            .map(|n| Benchmark::from_name(n.trim()).with_context(|| format!("unknown benchmark `{n}`")))
+            .collect::<anyhow::Result<_>>()?
     };
     let reference = if no_reference { None } else { fd_translator() };
     if !no_reference && reference.is_none() {
-        eprintln!("Fast Downward's translator not found under {}; run ../shared/anchors/install.sh planning (or pass --no-reference)", anchor_venv().display());
+        eprintln!(
+            "Fast Downward's translator not found under {}; run ../shared/anchors/install.sh planning (or pass --no-reference)",
+            anchor_venv().display()
+        );
     }
     let scratch = std::env::temp_dir().join(format!("xtask-bench-ground-{}", std::process::id()));
     std::fs::create_dir_all(&scratch)?;

@@ -122,14 +122,22 @@ pub fn run(args: EvalArgs) -> anyhow::Result<ExitCode> {
                 if let Ok(record) = serde_json::from_str::<Record>(&line) {
                     records.push(record);
                 } else {
-                    eprintln!("{}:{}: unreadable record (a run was killed while writing?); its task will run again", path.display(), number + 1);
+                    eprintln!(
+                        "{}:{}: unreadable record (a run was killed while writing?); its task will run again",
+                        path.display(),
+                        number + 1
+                    );
                 }
             }
         }
         let done: BTreeSet<String> = records.iter().map(|r| r.task.clone()).collect();
         let tasks = benchmark_data::load(benchmark)?;
         let tasks: Vec<&TaskFiles> = tasks.iter().take(args.limit.unwrap_or(usize::MAX)).collect();
-        let mut out = std::fs::OpenOptions::new().create(true).append(true).open(&path).with_context(|| format!("cannot write {}", path.display()))?;
+        let mut out = std::fs::OpenOptions::new()
+            .create(true)
+            .append(true)
+            .open(&path)
+            .with_context(|| format!("cannot write {}", path.display()))?;
         let total = tasks.len();
         for (i, files) in tasks.into_iter().enumerate() {
             if done.contains(&files.id) {
@@ -143,12 +151,14 @@ pub fn run(args: EvalArgs) -> anyhow::Result<ExitCode> {
                 eprintln!("{}: {}/{total}", benchmark.name(), i + 1);
             }
         }
-        let keep: BTreeSet<String> = benchmark_data::load(benchmark)?.iter().take(args.limit.unwrap_or(usize::MAX)).map(|t| t.id.clone()).collect();
+        let keep: BTreeSet<String> =
+            benchmark_data::load(benchmark)?.iter().take(args.limit.unwrap_or(usize::MAX)).map(|t| t.id.clone()).collect();
         records.retain(|r| keep.contains(&r.task));
         let with_plan: Vec<&Record> = records.iter().filter(|r| r.outcome != "no-plan").collect();
         let successes = with_plan.iter().filter(|r| r.outcome == "success").count();
         let rate = if with_plan.is_empty() { 0.0 } else { successes as f64 / with_plan.len() as f64 };
-        let mean_steps = if with_plan.is_empty() { 0.0 } else { with_plan.iter().map(|r| r.steps as f64).sum::<f64>() / with_plan.len() as f64 };
+        let mean_steps =
+            if with_plan.is_empty() { 0.0 } else { with_plan.iter().map(|r| r.steps as f64).sum::<f64>() / with_plan.len() as f64 };
         let mean_millis = if records.is_empty() { 0.0 } else { records.iter().map(|r| r.millis).sum::<f64>() / records.len() as f64 };
         if !args.json {
             println!(

@@ -61,15 +61,27 @@ impl TaskArgs {
 /// Parses and grounds, turning diagnostics into `file:line:column` errors (exit code 2).
 pub fn ground(files: &TaskFiles) -> anyhow::Result<Task> {
     let where_ = |path: &Path, embedded: &str| {
-        if matches!(files.extra, Extra::Alfworld(_)) { format!("{} (embedded {embedded})", path.display()) } else { path.display().to_string() }
+        if matches!(files.extra, Extra::Alfworld(_)) {
+            format!("{} (embedded {embedded})", path.display())
+        } else {
+            path.display().to_string()
+        }
     };
-    let domain = pddl_syntax::parse_domain(&files.domain).map_err(|e| InputError(e.render(&where_(&files.domain_path, "pddl_domain"), &files.domain)))?;
-    let problem =
-        pddl_syntax::parse_problem(&files.problem).map_err(|e| InputError(e.render(&where_(&files.problem_path, "pddl_problem"), &files.problem)))?;
+    let domain = pddl_syntax::parse_domain(&files.domain)
+        .map_err(|e| InputError(e.render(&where_(&files.domain_path, "pddl_domain"), &files.domain)))?;
+    let problem = pddl_syntax::parse_problem(&files.problem)
+        .map_err(|e| InputError(e.render(&where_(&files.problem_path, "pddl_problem"), &files.problem)))?;
     let report = pddl_syntax::check(&domain, Some(&problem));
     if report.has_errors() {
-        let mut lines: Vec<String> = report.domain.iter().filter(|d| d.is_error()).map(|d| d.render(&where_(&files.domain_path, "pddl_domain"), &files.domain)).collect();
-        lines.extend(report.problem.iter().filter(|d| d.is_error()).map(|d| d.render(&where_(&files.problem_path, "pddl_problem"), &files.problem)));
+        let mut lines: Vec<String> = report
+            .domain
+            .iter()
+            .filter(|d| d.is_error())
+            .map(|d| d.render(&where_(&files.domain_path, "pddl_domain"), &files.domain))
+            .collect();
+        lines.extend(
+            report.problem.iter().filter(|d| d.is_error()).map(|d| d.render(&where_(&files.problem_path, "pddl_problem"), &files.problem)),
+        );
         bail!(InputError(lines.join("\n")));
     }
     grounding::ground(&domain, &problem).map_err(|e| InputError(format!("{}: {e}", files.problem_path.display())).into())

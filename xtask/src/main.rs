@@ -113,8 +113,10 @@ fn run(command: Command) -> anyhow::Result<ExitCode> {
                 SurfaceLanguage::Pddl => Spelling::pddl(model.task()),
                 SurfaceLanguage::Virtualhome => Spelling::virtualhome(model.task()),
                 SurfaceLanguage::Alfworld => {
-                    let game = input::alfworld_game(&files).ok_or_else(|| InputError("--spelling alfworld needs --game (the grammar is in the game file)".into()))?;
-                    Spelling::alfworld(model.task(), &game.grammar).map_err(|e| InputError(format!("{}: {e}", files.problem_path.display())))?
+                    let game = input::alfworld_game(&files)
+                        .ok_or_else(|| InputError("--spelling alfworld needs --game (the grammar is in the game file)".into()))?;
+                    Spelling::alfworld(model.task(), &game.grammar)
+                        .map_err(|e| InputError(format!("{}: {e}", files.problem_path.display())))?
                 }
             };
             match model.validate_text(&spelling, &steps) {

@@ -51,7 +51,12 @@ fn read(path: &Path) -> Result<String, DataError> {
 
 fn read_json(path: &Path) -> Result<serde_json::Value, DataError> {
     let text = read(path)?;
-    serde_json::from_str(&text).map_err(|e| DataError::Json { path: path.to_path_buf(), line: e.line(), column: e.column(), message: e.to_string() })
+    serde_json::from_str(&text).map_err(|e| DataError::Json {
+        path: path.to_path_buf(),
+        line: e.line(),
+        column: e.column(),
+        message: e.to_string(),
+    })
 }
 
 /// One planning task's files.
@@ -74,7 +79,10 @@ pub enum Extra {
     None,
     Alfworld(AlfworldGame),
     /// EAI gold PDDL plan (`"walk_towards character shower"` per step), when the task has one.
-    Virtualhome { category: String, gold_plan: Option<Vec<String>> },
+    Virtualhome {
+        category: String,
+        gold_plan: Option<Vec<String>>,
+    },
 }
 
 /// The parts of an ALFWorld `game.tw-pddl` beyond its PDDL.
@@ -93,7 +101,11 @@ pub fn load_alfworld_game(path: &Path, benchmark: Benchmark, id: String) -> Resu
     let path = if path.is_dir() { path.join("game.tw-pddl") } else { path.to_path_buf() };
     let json = read_json(&path)?;
     let field = |field: &'static str| -> Result<String, DataError> {
-        json.get(field).and_then(|v| v.as_str()).map(str::to_string).ok_or(DataError::Field { path: path.clone(), field, expected: "a string" })
+        json.get(field).and_then(|v| v.as_str()).map(str::to_string).ok_or(DataError::Field {
+            path: path.clone(),
+            field,
+            expected: "a string",
+        })
     };
     let walkthrough = json
         .get("walkthrough")

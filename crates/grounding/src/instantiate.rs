@@ -181,7 +181,15 @@ impl<'a> Instantiator<'a> {
     }
 
     /// Conjoins `body` over every binding of `vars[from..]`; true if some part was false.
-    fn forall(&self, schema: &LiftedSchema, vars: &[u32], from: usize, body: &Formula, binding: &mut Binding, parts: &mut Vec<Ground>) -> bool {
+    fn forall(
+        &self,
+        schema: &LiftedSchema,
+        vars: &[u32],
+        from: usize,
+        body: &Formula,
+        binding: &mut Binding,
+        parts: &mut Vec<Ground>,
+    ) -> bool {
         let Some(&var) = vars.get(from) else {
             let part = self.ground(schema, body, binding);
             if part == Ground::False {
@@ -255,9 +263,11 @@ impl<'a> Instantiator<'a> {
                 CostTerm::Number(value) => *value,
                 CostTerm::Function(function, term_args) => {
                     let objects: Vec<ObjectId> = instantiate_args(term_args, binding).into_iter().collect();
-                    *self.lifted.function_values.get(&(*function, objects)).ok_or_else(|| GroundingError::MissingCost {
-                        action: self.describe(schema, args),
-                    })?
+                    *self
+                        .lifted
+                        .function_values
+                        .get(&(*function, objects))
+                        .ok_or_else(|| GroundingError::MissingCost { action: self.describe(schema, args) })?
                 }
             };
         }
@@ -283,10 +293,15 @@ impl<'a> Instantiator<'a> {
             let mut instances: Vec<(FactId, Ground)> = Vec::new();
             self.effect_instances(schema, effect, 0, binding, &mut instances);
             for (fact, condition) in instances {
-                let variants = split(&condition).ok_or_else(|| GroundingError::TooManyAlternatives { what: self.describe(schema, args) })?;
+                let variants =
+                    split(&condition).ok_or_else(|| GroundingError::TooManyAlternatives { what: self.describe(schema, args) })?;
                 for variant in variants {
                     if variant.is_empty() {
-                        if effect.delete { del.push(fact) } else { add.push(fact) }
+                        if effect.delete {
+                            del.push(fact)
+                        } else {
+                            add.push(fact)
+                        }
                         continue;
                     }
                     let at = *by_condition.entry(variant.clone()).or_insert_with(|| {
@@ -312,7 +327,14 @@ impl<'a> Instantiator<'a> {
 
     /// Every binding of the effect's `forall` variables whose atom is fluent and whose
     /// condition is not always false.
-    fn effect_instances(&self, schema: &LiftedSchema, effect: &crate::lifted::LiftedEffect, from: usize, binding: &mut Binding, out: &mut Vec<(FactId, Ground)>) {
+    fn effect_instances(
+        &self,
+        schema: &LiftedSchema,
+        effect: &crate::lifted::LiftedEffect,
+        from: usize,
+        binding: &mut Binding,
+        out: &mut Vec<(FactId, Ground)>,
+    ) {
         let Some(&var) = effect.forall.get(from) else {
             let tuple = instantiate_args(&effect.atom.args, binding);
             let Status::Fluent(fact) = self.status(effect.atom.predicate, tuple) else { return };
@@ -410,9 +432,8 @@ pub(crate) fn make_condition(mut pos: Vec<FactId>, mut neg: Vec<FactId>, clauses
     for clause in clauses {
         // A clause with a literal the unit part guarantees is satisfied; literals the unit
         // part falsifies are dropped.
-        let satisfied = clause.iter().any(|l| {
-            if l.is_negated() { neg.binary_search(&l.fact()).is_ok() } else { pos.binary_search(&l.fact()).is_ok() }
-        });
+        let satisfied =
+            clause.iter().any(|l| if l.is_negated() { neg.binary_search(&l.fact()).is_ok() } else { pos.binary_search(&l.fact()).is_ok() });
         if satisfied {
             continue;
         }

@@ -28,8 +28,15 @@ pub(crate) struct LiftedAtom {
 #[derive(Debug, Clone)]
 pub(crate) enum Formula {
     True,
-    Atom { negated: bool, atom: LiftedAtom },
-    Eq { negated: bool, a: Arg, b: Arg },
+    Atom {
+        negated: bool,
+        atom: LiftedAtom,
+    },
+    Eq {
+        negated: bool,
+        a: Arg,
+        b: Arg,
+    },
     And(Vec<Formula>),
     Or(Vec<Formula>),
     /// The relaxed conjunctions of the body ([`relaxed_dnf`]) are kept to enumerate only
@@ -137,14 +144,16 @@ pub(crate) fn lift(domain: &ast::Domain, problem: &ast::Problem) -> Result<Lifte
         },
     };
     for declared in &domain.types {
-        let parents = declared.ty.as_ref().map_or_else(|| vec!["object".to_string()], |ty| ty.names().iter().map(|n| n.text.clone()).collect());
+        let parents =
+            declared.ty.as_ref().map_or_else(|| vec!["object".to_string()], |ty| ty.names().iter().map(|n| n.text.clone()).collect());
         builder.parents.entry(declared.name.text.clone()).or_default().extend(parents);
     }
     for object in domain.constants.iter().chain(&problem.objects) {
         if builder.lifted.object_ids.contains_key(object.name.as_str()) {
             continue;
         }
-        let declared: Vec<String> = object.ty.as_ref().map_or_else(|| vec!["object".to_string()], |ty| ty.names().iter().map(|n| n.text.clone()).collect());
+        let declared: Vec<String> =
+            object.ty.as_ref().map_or_else(|| vec!["object".to_string()], |ty| ty.names().iter().map(|n| n.text.clone()).collect());
         let types = builder.ancestors(&declared);
         let id = ObjectId::from_index(builder.lifted.objects.len());
         builder.lifted.object_ids.insert(object.name.text.clone(), id);

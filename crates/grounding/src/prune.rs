@@ -68,7 +68,8 @@ pub(crate) fn prune(facts: Vec<Atom>, actions: Vec<Action>, init: Vec<FactId>, g
     }
     let mut changes = vec![false; facts.len()];
     for action in &kept {
-        let effects = std::iter::once((&action.add, &action.del, None)).chain(action.conditional.iter().map(|e| (&e.add, &e.del, Some(&e.condition))));
+        let effects = std::iter::once((&action.add, &action.del, None))
+            .chain(action.conditional.iter().map(|e| (&e.add, &e.del, Some(&e.condition))));
         for (add, del, condition) in effects {
             if condition.is_some_and(|c| !relaxed_holds(c, &reached)) {
                 continue;
@@ -104,7 +105,11 @@ pub(crate) fn prune(facts: Vec<Atom>, actions: Vec<Action>, init: Vec<FactId>, g
             let fact = literal.fact();
             match remap[fact.index()] {
                 Some(new) => {
-                    if literal.is_negated() { neg.push(new) } else { pos.push(new) }
+                    if literal.is_negated() {
+                        neg.push(new)
+                    } else {
+                        pos.push(new)
+                    }
                 }
                 None => {
                     if initially[fact.index()] == literal.is_negated() {
@@ -164,7 +169,9 @@ pub(crate) fn prune(facts: Vec<Atom>, actions: Vec<Action>, init: Vec<FactId>, g
         // `read` or `find` change nothing in PDDL, yet the real executor's goals need them.
         actions.push(Action { pre, add, del, conditional, ..action });
     }
-    actions.sort_by(|a, b| (a.schema, &a.args, &a.pre.pos, &a.pre.neg, &a.pre.clauses).cmp(&(b.schema, &b.args, &b.pre.pos, &b.pre.neg, &b.pre.clauses)));
+    actions.sort_by(|a, b| {
+        (a.schema, &a.args, &a.pre.pos, &a.pre.neg, &a.pre.clauses).cmp(&(b.schema, &b.args, &b.pre.pos, &b.pre.neg, &b.pre.clauses))
+    });
     actions.dedup();
     let init = init.iter().filter_map(|f| remap[f.index()]).collect();
     // Disjuncts needing a fact that is never reached simplify to false and are dropped.

@@ -46,7 +46,10 @@ pub(crate) fn reachable(lifted: &Lifted) -> Reachable {
         let instances_before = instances.len();
         for (index, schema) in lifted.schemas.iter().enumerate() {
             let has_atoms = schema.relaxed_pre.iter().any(|c| !c.atoms.is_empty());
-            if !first_round && !(has_atoms && reads(&schema.relaxed_pre, &changed)) {
+            // After the first round, only schemas reading a predicate that gained atoms can
+            // gain instances.
+            let may_grow = first_round || (has_atoms && reads(&schema.relaxed_pre, &changed));
+            if !may_grow {
                 continue;
             }
             let params: Vec<u32> = (0..schema.arity() as u32).collect();
@@ -137,4 +140,3 @@ pub(crate) fn deleted_atoms(lifted: &Lifted, reachable: &Reachable) -> Vec<(Pred
     }
     out
 }
-

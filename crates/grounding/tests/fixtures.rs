@@ -45,6 +45,9 @@ fn every_fixture_grounds() {
             facts += task.facts.len();
             actions += task.actions.len();
         }
-        println!("{benchmark:?}: {} tasks, {facts} facts, {actions} actions; relaxed-unreachable goals: {unreachable_goals:?}", tasks.len());
+        println!(
+            "{benchmark:?}: {} tasks, {facts} facts, {actions} actions; relaxed-unreachable goals: {unreachable_goals:?}",
+            tasks.len()
+        );
     }
 }

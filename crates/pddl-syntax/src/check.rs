@@ -276,9 +276,17 @@ impl<'a> Checker<'a> {
             self.typed(object);
             if let Some(previous) = seen.insert(object.name.as_str(), &object.ty) {
                 if previous != &object.ty {
-                    self.error(DiagnosticKind::Duplicate, object.name.span, format!("object `{}` is declared twice, with different types", object.name));
+                    self.error(
+                        DiagnosticKind::Duplicate,
+                        object.name.span,
+                        format!("object `{}` is declared twice, with different types", object.name),
+                    );
                 } else {
-                    self.out.push(Diagnostic::warning(DiagnosticKind::Duplicate, object.name.span, format!("object `{}` is declared twice", object.name)));
+                    self.out.push(Diagnostic::warning(
+                        DiagnosticKind::Duplicate,
+                        object.name.span,
+                        format!("object `{}` is declared twice", object.name),
+                    ));
                 }
             }
         }

@@ -30,8 +30,8 @@ mod print;
 mod sexpr;
 
 pub use ast::{
-    Action, Atom, Condition, Domain, Effect, FunctionDecl, FunctionTerm, InitElement, Metric, Name, Number, NumericExpr,
-    Optimization, PredicateDecl, Problem, Requirement, Term, Type, TypedName,
+    Action, Atom, Condition, Domain, Effect, FunctionDecl, FunctionTerm, InitElement, Metric, Name, Number, NumericExpr, Optimization,
+    PredicateDecl, Problem, Requirement, Term, Type, TypedName,
 };
 pub use check::{CheckReport, check};
 pub use diagnostic::{Diagnostic, DiagnosticKind, ParseError, Severity, Span, line_column};

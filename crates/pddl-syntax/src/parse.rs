@@ -198,7 +198,9 @@ impl Reader {
                     _ => self.error(DiagnosticKind::UnexpectedForm, section.span(), "expected `(:goal CONDITION)` with one condition"),
                 },
                 ":metric" => problem.metric = self.metric(section, body),
-                ":constraints" => self.error(DiagnosticKind::Unsupported, section.span(), "`:constraints` is outside the supported PDDL fragment"),
+                ":constraints" => {
+                    self.error(DiagnosticKind::Unsupported, section.span(), "`:constraints` is outside the supported PDDL fragment")
+                }
                 _ => self.error(
                     DiagnosticKind::UnknownSection,
                     section.span(),
@@ -358,7 +360,9 @@ impl Reader {
                             declaration.ty = Some(ty.clone());
                         }
                     }
-                    None if body.get(i + 1).is_none() => self.error(DiagnosticKind::UnexpectedForm, body[i].span(), "`-` must be followed by a type"),
+                    None if body.get(i + 1).is_none() => {
+                        self.error(DiagnosticKind::UnexpectedForm, body[i].span(), "`-` must be followed by a type")
+                    }
                     None => {}
                 }
                 untyped_from = out.len();
@@ -458,12 +462,20 @@ impl Reader {
                 let variables = self.quantifier_variables(items.get(1), span, quantifier)?;
                 let [_, body] = self.arguments(items, span, 2, &format!("({quantifier} (?x - type ...) BODY)"))? else { unreachable!() };
                 let body = Box::new(self.condition(body)?);
-                Some(if quantifier == "exists" { Condition::Exists(variables, body, span) } else { Condition::Forall(variables, body, span) })
+                Some(if quantifier == "exists" {
+                    Condition::Exists(variables, body, span)
+                } else {
+                    Condition::Forall(variables, body, span)
+                })
             }
             Some("=") => {
                 let [a, b] = self.arguments(items, span, 2, "(= TERM TERM)")? else { unreachable!() };
                 if a.as_list().is_some() || b.as_list().is_some() {
-                    self.error(DiagnosticKind::Unsupported, span, "numeric comparisons are outside the supported fragment (only `(= ?x ?y)` between objects)");
+                    self.error(
+                        DiagnosticKind::Unsupported,
+                        span,
+                        "numeric comparisons are outside the supported fragment (only `(= ?x ?y)` between objects)",
+                    );
                     return None;
                 }
                 let (a, b) = (self.term(a), self.term(b));
@@ -520,7 +532,11 @@ impl Reader {
             SExpr::Word(..) => self.number(form).map(NumericExpr::Number),
             SExpr::List(items, span) => match items.first().and_then(SExpr::as_word) {
                 Some("+" | "-" | "*" | "/") => {
-                    self.error(DiagnosticKind::Unsupported, *span, "arithmetic expressions are outside the supported fragment: use a number or a function term");
+                    self.error(
+                        DiagnosticKind::Unsupported,
+                        *span,
+                        "arithmetic expressions are outside the supported fragment: use a number or a function term",
+                    );
                     None
                 }
                 _ => self.function_term(form).map(NumericExpr::Function),
@@ -567,7 +583,11 @@ impl Reader {
                 Some(Effect::Increase(function?, value?, span))
             }
             Some(op @ ("decrease" | "assign" | "scale-up" | "scale-down")) => {
-                self.error(DiagnosticKind::Unsupported, span, format!("`{op}` is outside the supported fragment (only `increase` of `total-cost`)"));
+                self.error(
+                    DiagnosticKind::Unsupported,
+                    span,
+                    format!("`{op}` is outside the supported fragment (only `increase` of `total-cost`)"),
+                );
                 None
             }
             Some(word) if word.starts_with(':') || word.starts_with('?') || word == "-" || word == "or" || word == "exists" => {
@@ -594,13 +614,21 @@ impl Reader {
                 let (function, value) = (self.function_term(function), self.number(value));
                 let function = function?;
                 if let Some(variable) = function.args.iter().find(|t| matches!(t, Term::Variable(_))) {
-                    self.error(DiagnosticKind::InvalidInit, variable.name().span, "`:init` holds ground facts only: replace the variable by an object");
+                    self.error(
+                        DiagnosticKind::InvalidInit,
+                        variable.name().span,
+                        "`:init` holds ground facts only: replace the variable by an object",
+                    );
                     return None;
                 }
                 Some(InitElement::Assign(function, value?, span))
             }
             Some("not") => {
-                self.warning(DiagnosticKind::InvalidInit, span, "negative literals in `:init` are redundant (what is not listed is false) and are ignored");
+                self.warning(
+                    DiagnosticKind::InvalidInit,
+                    span,
+                    "negative literals in `:init` are redundant (what is not listed is false) and are ignored",
+                );
                 None
             }
             Some("at") if items.len() == 3 && items[1].as_word().is_some_and(|w| w.parse::<f64>().is_ok()) => {
@@ -610,7 +638,11 @@ impl Reader {
             Some(_) => {
                 let atom = self.atom(items, span)?;
                 if let Some(variable) = atom.args.iter().find(|t| matches!(t, Term::Variable(_))) {
-                    self.error(DiagnosticKind::InvalidInit, variable.name().span, "`:init` holds ground facts only: replace the variable by an object");
+                    self.error(
+                        DiagnosticKind::InvalidInit,
+                        variable.name().span,
+                        "`:init` holds ground facts only: replace the variable by an object",
+                    );
                     return None;
                 }
                 Some(InitElement::Atom(atom))

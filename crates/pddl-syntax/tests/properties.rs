@@ -5,8 +5,25 @@ use pddl_syntax::*;
 use proptest::prelude::*;
 
 const KEYWORDS: &[&str] = &[
-    "and", "or", "not", "imply", "exists", "forall", "when", "increase", "decrease", "assign", "scale-up", "scale-down", "either", "define",
-    "domain", "problem", "at", "minimize", "maximize",
+    "and",
+    "or",
+    "not",
+    "imply",
+    "exists",
+    "forall",
+    "when",
+    "increase",
+    "decrease",
+    "assign",
+    "scale-up",
+    "scale-down",
+    "either",
+    "define",
+    "domain",
+    "problem",
+    "at",
+    "minimize",
+    "maximize",
 ];
 
 fn name() -> impl Strategy<Value = Name> {
@@ -37,7 +54,11 @@ fn atom() -> impl Strategy<Value = Atom> {
 }
 
 fn ground_atom() -> impl Strategy<Value = Atom> {
-    (name(), prop::collection::vec(name().prop_map(Term::Constant), 0..3)).prop_map(|(predicate, args)| Atom { predicate, args, span: Span::default() })
+    (name(), prop::collection::vec(name().prop_map(Term::Constant), 0..3)).prop_map(|(predicate, args)| Atom {
+        predicate,
+        args,
+        span: Span::default(),
+    })
 }
 
 fn condition() -> impl Strategy<Value = Condition> {
@@ -79,17 +100,22 @@ fn effect() -> impl Strategy<Value = Effect> {
 }
 
 fn requirements() -> impl Strategy<Value = Vec<Name>> {
-    prop::collection::vec(prop::sample::select(vec!["strips", "typing", "adl", "equality", "action-costs", "conditional-effects"]).prop_map(Name::new), 0..3)
+    prop::collection::vec(
+        prop::sample::select(vec!["strips", "typing", "adl", "equality", "action-costs", "conditional-effects"]).prop_map(Name::new),
+        0..3,
+    )
 }
 
 fn domain() -> impl Strategy<Value = Domain> {
-    let action = (name(), typed_list(), prop::option::of(condition()), prop::option::of(effect())).prop_map(|(name, params, precondition, effect)| Action {
-        name,
-        params: params.into_iter().collect(),
-        precondition,
-        effect,
-        span: Span::default(),
-    });
+    let action = (name(), typed_list(), prop::option::of(condition()), prop::option::of(effect())).prop_map(
+        |(name, params, precondition, effect)| Action {
+            name,
+            params: params.into_iter().collect(),
+            precondition,
+            effect,
+            span: Span::default(),
+        },
+    );
     let function = (name(), typed_list(), prop::option::of(ty()));
     (
         name(),
@@ -102,7 +128,8 @@ fn domain() -> impl Strategy<Value = Domain> {
     )
         .prop_map(|(name, requirements, types, constants, predicates, functions, actions)| {
             // Like typed lists, untyped functions may only come last.
-            let mut functions: Vec<FunctionDecl> = functions.into_iter().map(|(name, params, ty)| FunctionDecl { name, params, ty }).collect();
+            let mut functions: Vec<FunctionDecl> =
+                functions.into_iter().map(|(name, params, ty)| FunctionDecl { name, params, ty }).collect();
             functions.sort_by_key(|f| f.ty.is_none());
             Domain { name, requirements, types, constants, predicates, functions, actions, span: Span::default() }
         })
@@ -111,11 +138,20 @@ fn domain() -> impl Strategy<Value = Domain> {
 fn problem() -> impl Strategy<Value = Problem> {
     let init = prop_oneof![
         ground_atom().prop_map(InitElement::Atom),
-        (name(), prop::collection::vec(name().prop_map(Term::Constant), 0..2), number())
-            .prop_map(|(function, args, value)| InitElement::Assign(FunctionTerm { function, args, span: Span::default() }, value, Span::default())),
+        (name(), prop::collection::vec(name().prop_map(Term::Constant), 0..2), number()).prop_map(|(function, args, value)| {
+            InitElement::Assign(FunctionTerm { function, args, span: Span::default() }, value, Span::default())
+        }),
     ];
-    (name(), name(), requirements(), typed_list(), prop::collection::vec(init, 0..6), prop::option::of(condition()), prop::option::of(function_term())).prop_map(
-        |(name, domain, requirements, objects, init, goal, metric)| Problem {
+    (
+        name(),
+        name(),
+        requirements(),
+        typed_list(),
+        prop::collection::vec(init, 0..6),
+        prop::option::of(condition()),
+        prop::option::of(function_term()),
+    )
+        .prop_map(|(name, domain, requirements, objects, init, goal, metric)| Problem {
             name,
             domain,
             requirements,
@@ -124,8 +160,7 @@ fn problem() -> impl Strategy<Value = Problem> {
             goal: Some(goal.unwrap_or(Condition::And(Vec::new(), Span::default()))),
             metric: metric.map(|f| Metric { optimization: Optimization::Minimize, expr: NumericExpr::Function(f), span: Span::default() }),
             span: Span::default(),
-        },
-    )
+        })
 }
 
 proptest! {
@@ -161,7 +196,11 @@ fn read_seeds() -> Vec<String> {
     for dir in ["blocks", "gripper", "logistics00", "miconic", "elevators-opt08", "driverlog", "visitall-opt11"] {
         out.push(std::fs::read_to_string(root.join("ipc").join(dir).join("domain.pddl")).expect("seed"));
         let dir = root.join("ipc").join(dir);
-        let mut instances: Vec<_> = std::fs::read_dir(&dir).expect("ipc dir").map(|e| e.expect("entry").path()).filter(|p| p.to_string_lossy().contains("instance-")).collect();
+        let mut instances: Vec<_> = std::fs::read_dir(&dir)
+            .expect("ipc dir")
+            .map(|e| e.expect("entry").path())
+            .filter(|p| p.to_string_lossy().contains("instance-"))
+            .collect();
         instances.sort();
         out.push(std::fs::read_to_string(&instances[0]).expect("seed"));
     }
@@ -180,7 +219,12 @@ fn mutation() -> impl Strategy<Value = Mutation> {
     prop_oneof![
         any::<usize>().prop_map(Mutation::Truncate),
         (any::<usize>(), 1usize..40).prop_map(|(at, len)| Mutation::Delete(at, len)),
-        (any::<usize>(), prop::sample::select(vec!["(", ")", "?", "-", ":action", "(and", "(not", " - ", "(either", "(= ?x", "1e999", ";", "é", "(:types"]))
+        (
+            any::<usize>(),
+            prop::sample::select(vec![
+                "(", ")", "?", "-", ":action", "(and", "(not", " - ", "(either", "(= ?x", "1e999", ";", "é", "(:types"
+            ])
+        )
             .prop_map(|(at, text)| Mutation::Insert(at, text)),
         (any::<usize>(), 1usize..60).prop_map(|(at, len)| Mutation::Duplicate(at, len)),
     ]

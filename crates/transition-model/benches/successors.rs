@@ -69,11 +69,14 @@ fn bench(c: &mut Criterion) {
     }
     let mut group = c.benchmark_group("successors");
     for (name, tasks) in &sets {
-        let prepared: Vec<(TransitionModel, Vec<State>)> = tasks.iter().map(|t| {
-            let m = model(t);
-            let s = states(&m, t);
-            (m, s)
-        }).collect();
+        let prepared: Vec<(TransitionModel, Vec<State>)> = tasks
+            .iter()
+            .map(|t| {
+                let m = model(t);
+                let s = states(&m, t);
+                (m, s)
+            })
+            .collect();
         let mut out = Vec::new();
         group.bench_function(format!("{name}/decision-tree"), |b| {
             b.iter(|| {

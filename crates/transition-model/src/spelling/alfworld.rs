@@ -34,13 +34,20 @@ pub fn templates(grammar: &str) -> Result<FxHashMap<String, String>, SpellingErr
     let mut offset = 0;
     while let Some(at) = find_action_block(rest) {
         let block = &rest[at..];
-        let header_end = block.find('{').ok_or(SpellingError::MalformedGrammar { offset: offset + at, message: "`action` without `{`".into() })?;
+        let header_end =
+            block.find('{').ok_or(SpellingError::MalformedGrammar { offset: offset + at, message: "`action` without `{`".into() })?;
         let name = block["action".len()..header_end].trim().to_lowercase();
         let body = &block[header_end..];
         if let Some(t) = body.find("template") {
             let after = &body[t..];
-            let open = after.find('"').ok_or(SpellingError::MalformedGrammar { offset: offset + at + header_end + t, message: "template without a quoted text".into() })?;
-            let close = after[open + 1..].find('"').ok_or(SpellingError::MalformedGrammar { offset: offset + at + header_end + t, message: "unterminated template text".into() })?;
+            let open = after.find('"').ok_or(SpellingError::MalformedGrammar {
+                offset: offset + at + header_end + t,
+                message: "template without a quoted text".into(),
+            })?;
+            let close = after[open + 1..].find('"').ok_or(SpellingError::MalformedGrammar {
+                offset: offset + at + header_end + t,
+                message: "unterminated template text".into(),
+            })?;
             out.insert(name, after[open + 1..open + 1 + close].to_string());
         }
         let consumed = at + header_end + 1;
@@ -72,9 +79,13 @@ fn compile(action: &str, template: &str, params: &[String]) -> Result<Vec<Piece>
         match c {
             '[' | ']' => {}
             '{' => {
-                let end = template[i..].find('}').map(|e| i + e).ok_or(SpellingError::MalformedGrammar { offset: i, message: format!("unclosed `{{` in the template of `{action}`") })?;
+                let end = template[i..].find('}').map(|e| i + e).ok_or(SpellingError::MalformedGrammar {
+                    offset: i,
+                    message: format!("unclosed `{{` in the template of `{action}`"),
+                })?;
                 let inner = &template[i + 1..end];
-                let placeholder: String = inner.trim().chars().take_while(|c| c.is_alphanumeric() || *c == '_').collect::<String>().to_lowercase();
+                let placeholder: String =
+                    inner.trim().chars().take_while(|c| c.is_alphanumeric() || *c == '_').collect::<String>().to_lowercase();
                 let index = params
                     .iter()
                     .position(|p| *p == placeholder)

@@ -1,0 +1,107 @@
+//! House rules, checked on every `cargo test`: file headers, no ignored or should-panic
+//! tests, workspace-wide crate settings, and the dependency boundaries of
+//! `docs/ARCHITECTURE.md`.
+
+use std::path::{Path, PathBuf};
+
+fn root() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
+}
+
+fn rust_files(dir: &Path, out: &mut Vec<PathBuf>) {
+    let Ok(entries) = std::fs::read_dir(dir) else { return };
+    for entry in entries.flatten() {
+        let path = entry.path();
+        if path.is_dir() {
+            if path.file_name().is_some_and(|n| n == "target" || n == "snapshots") {
+                continue;
+            }
+            rust_files(&path, out);
+        } else if path.extension().is_some_and(|e| e == "rs") {
+            out.push(path);
+        }
+    }
+}
+
+fn crates() -> Vec<PathBuf> {
+    let mut dirs: Vec<PathBuf> = std::fs::read_dir(root().join("crates")).expect("crates/").flatten().map(|e| e.path()).collect();
+    dirs.push(root().join("xtask"));
+    dirs.sort();
+    dirs
+}
+
+#[test]
+fn every_source_file_opens_with_a_module_comment() {
+    let mut files = Vec::new();
+    for dir in crates() {
+        rust_files(&dir, &mut files);
+    }
+    assert!(files.len() > 20);
+    for file in files {
+        let text = std::fs::read_to_string(&file).expect("readable");
+        assert!(text.starts_with("//!"), "{} does not open with a `//!` line saying what it is for", file.display());
+    }
+}
+
+#[test]
+fn no_ignored_or_should_panic_tests() {
+    let mut files = Vec::new();
+    for dir in crates() {
+        rust_files(&dir, &mut files);
+    }
+    let banned = [concat!("#[", "ignore"), concat!("#[", "should_panic")];
+    for file in files {
+        let text = std::fs::read_to_string(&file).expect("readable");
+        for pattern in banned {
+            assert!(!text.contains(pattern), "{} contains `{pattern}`", file.display());
+        }
+    }
+}
+
+/// The `[dependencies]` of a crate that are workspace crates.
+fn internal_dependencies(manifest: &str, workspace_crates: &[String]) -> Vec<String> {
+    let mut out = Vec::new();
+    let mut in_dependencies = false;
+    for line in manifest.lines() {
+        let line = line.trim();
+        if line.starts_with('[') {
+            in_dependencies = line == "[dependencies]";
+            continue;
+        }
+        if in_dependencies && let Some((name, _)) = line.split_once(['.', '=']) {
+            let name = name.trim().to_string();
+            if workspace_crates.contains(&name) {
+                out.push(name);
+            }
+        }
+    }
+    out.sort();
+    out
+}
+
+#[test]
+fn crates_share_settings_and_respect_their_boundaries() {
+    let names: Vec<String> = crates().iter().map(|d| d.file_name().unwrap_or_default().to_string_lossy().into_owned()).collect();
+    // What each library crate may depend on inside the workspace (docs/ARCHITECTURE.md).
+    let allowed: &[(&str, &[&str])] =
+        &[("pddl-syntax", &[]), ("benchmark-data", &[]), ("grounding", &["pddl-syntax"]), ("transition-model", &["grounding"])];
+    let architecture = std::fs::read_to_string(root().join("docs/ARCHITECTURE.md")).expect("docs/ARCHITECTURE.md");
+    for (dir, name) in crates().iter().zip(&names) {
+        let manifest = std::fs::read_to_string(dir.join("Cargo.toml")).expect("Cargo.toml");
+        assert!(manifest.contains(&format!("name = \"{name}\"")), "{name}: directory name == crate name");
+        assert!(manifest.contains("version = \"0.0.0\""), "{name}: internal crates are version 0.0.0");
+        assert!(manifest.contains("publish.workspace = true"), "{name}: publish = false via the workspace");
+        assert!(manifest.contains("[lints]\nworkspace = true"), "{name}: uses the workspace lint table");
+        assert!(architecture.contains(&format!("`{name}`")), "{name} is missing from docs/ARCHITECTURE.md");
+        if name == "xtask" {
+            continue;
+        }
+        let rule = allowed
+            .iter()
+            .find(|(crate_name, _)| crate_name == name)
+            .unwrap_or_else(|| panic!("{name}: add its dependency rule to tidy.rs"));
+        for dependency in internal_dependencies(&manifest, &names) {
+            assert!(rule.1.contains(&dependency.as_str()), "{name} must not depend on {dependency}");
+        }
+    }
+}
