@@ -149,3 +149,44 @@ fn successor_generator_agrees_with_a_full_scan() {
     }
     assert!(checked > 5000, "{checked}");
 }
+
+/// Spelling both ways: every spelled action parses back to a set holding it, in all three
+/// surface languages; and the EAI gold plans, rewritten in VirtualHome's class-level verbs,
+/// still validate.
+#[test]
+fn spellings_round_trip_and_gold_plans_validate_in_virtualhome_verbs() {
+    let mut spelled = 0;
+    let mut rewritten = 0;
+    for files in load(Benchmark::VirtualhomeEai).expect("fixtures load") {
+        let model = model(&files);
+        let pddl = Spelling::pddl(model.task());
+        let verbs = Spelling::virtualhome(model.task());
+        for spelling in [&pddl, &verbs] {
+            for action in model.task().action_ids() {
+                if let Some(text) = spelling.spell(action) {
+                    assert!(spelling.parse(text).contains(&action), "{}: `{text}`", files.id);
+                    spelled += 1;
+                }
+            }
+        }
+        let Extra::Virtualhome { gold_plan: Some(plan), .. } = &files.extra else { continue };
+        let valid = model.validate_text(&pddl, plan).expect("gold plan validates");
+        let in_verbs: Vec<&str> = valid.actions.iter().map(|&a| verbs.spell(a).expect("every gold step has a VirtualHome verb")).collect();
+        let again =
+            model.validate_text(&verbs, &in_verbs).unwrap_or_else(|e| panic!("{}: {in_verbs:?}: {}", files.id, e.describe(model.task())));
+        assert_eq!(again.final_state, valid.final_state, "{}", files.id);
+        rewritten += 1;
+    }
+    for files in load(Benchmark::AlfworldSeen).expect("fixtures load").into_iter().step_by(7) {
+        let model = model(&files);
+        let Extra::Alfworld(game) = &files.extra else { unreachable!() };
+        let commands = Spelling::alfworld(model.task(), &game.grammar).expect("grammar");
+        for action in model.task().action_ids() {
+            let text = commands.spell(action).expect("every ALFWorld action has a command");
+            assert!(commands.parse(text).contains(&action), "{}: `{text}`", files.id);
+            spelled += 1;
+        }
+    }
+    assert_eq!(rewritten, 296);
+    println!("{spelled} spelled actions parse back; {rewritten} gold plans validate in VirtualHome verbs");
+}
