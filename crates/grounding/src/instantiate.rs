@@ -62,6 +62,8 @@ fn or(parts: Vec<Ground>) -> Ground {
 /// How many alternatives one formula may split into before grounding gives up on it.
 const MAX_SPLIT: usize = 4096;
 
+const ALWAYS_TRUE: u32 = u32::MAX;
+
 /// What an atom is in every reachable state.
 enum Status {
     Fluent(FactId),
@@ -74,6 +76,9 @@ pub(crate) struct Instantiator<'a> {
     reachable: &'a Reachable,
     fluent: FxHashMap<(PredicateId, Tuple), FactId>,
     init: FxHashSet<(PredicateId, Tuple)>,
+    /// Every atom that is fluent or initially true: fluent facts map to their id, static
+    /// true atoms to [`ALWAYS_TRUE`]. One lookup decides an atom's [`Status`].
+    statuses: FxHashMap<(PredicateId, Tuple), u32>,
     pub facts: Vec<Atom>,
 }
 
@@ -88,18 +93,19 @@ impl<'a> Instantiator<'a> {
             fluent.insert((predicate, tuple.clone()), FactId::from_index(facts.len()));
             facts.push(Atom { predicate, args: tuple });
         }
-        let init = lifted.init.iter().map(|(p, args)| (*p, args.iter().copied().collect())).collect();
-        Instantiator { lifted, reachable, fluent, init, facts }
+        let init: FxHashSet<(PredicateId, Tuple)> = lifted.init.iter().map(|(p, args)| (*p, args.iter().copied().collect())).collect();
+        let mut statuses: FxHashMap<(PredicateId, Tuple), u32> = init.iter().map(|key| (key.clone(), ALWAYS_TRUE)).collect();
+        for (key, fact) in &fluent {
+            statuses.insert(key.clone(), fact.0);
+        }
+        Instantiator { lifted, reachable, fluent, init, statuses, facts }
     }
 
     fn status(&self, predicate: PredicateId, tuple: Tuple) -> Status {
-        let key = (predicate, tuple);
-        if let Some(&fact) = self.fluent.get(&key) {
-            Status::Fluent(fact)
-        } else if self.init.contains(&key) {
-            Status::AlwaysTrue
-        } else {
-            Status::AlwaysFalse
+        match self.statuses.get(&(predicate, tuple)) {
+            Some(&ALWAYS_TRUE) => Status::AlwaysTrue,
+            Some(&fact) => Status::Fluent(FactId(fact)),
+            None => Status::AlwaysFalse,
         }
     }
 
@@ -357,13 +363,28 @@ impl<'a> Instantiator<'a> {
 /// clause; any other disjunction is split. `None` if it would split into more than
 /// [`MAX_SPLIT`] alternatives.
 fn split(formula: &Ground) -> Option<Vec<Condition>> {
+    // Most formulas are a literal or a conjunction of literals: one condition, no product.
+    let literals: Option<&[Ground]> = match formula {
+        Ground::And(parts) => Some(parts),
+        Ground::Lit(_) => Some(std::slice::from_ref(formula)),
+        _ => None,
+    };
+    if let Some(parts) = literals.filter(|parts| parts.iter().all(|p| matches!(p, Ground::Lit(_)))) {
+        let (mut pos, mut neg) = (Vec::new(), Vec::new());
+        for part in parts {
+            if let Ground::Lit(l) = part {
+                if l.is_negated() { neg.push(l.fact()) } else { pos.push(l.fact()) }
+            }
+        }
+        return Some(make_condition(pos, neg, Vec::new()).into_iter().collect());
+    }
     let mut out = Vec::new();
     for (pos, neg, clauses) in split_raw(formula)? {
         if let Some(condition) = make_condition(pos, neg, clauses) {
             out.push(condition);
         }
     }
-    out.sort_by(|a, b| (&a.pos, &a.neg, &a.clauses).cmp(&(&b.pos, &b.neg, &b.clauses)));
+    out.sort_unstable_by(|a, b| (&a.pos, &a.neg, &a.clauses).cmp(&(&b.pos, &b.neg, &b.clauses)));
     out.dedup();
     Some(out)
 }
