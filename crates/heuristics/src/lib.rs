@@ -1,0 +1,89 @@
+//! Planning heuristics and classical search on [`transition_model`] states.
+//!
+//! Heuristics: [`Blind`], [`GoalCount`], [`HMax`], [`HAdd`], [`HFF`] (with its relaxed plan
+//! and preferred operators), [`LmCut`], [`RemainingPlanCost`], and a [`WeightedMix`] of any of
+//! them, as the paper's MCTS value uses. All honour action costs and every goal the grounder
+//! produces: the delete relaxation ([`relaxed`]) compiles the goal — a disjunction of
+//! conditions — into one auxiliary goal fact reached by zero-cost operators, one per
+//! disjunct, as Fast Downward compiles complex goals. A [`Heuristic`] keeps its buffers
+//! between calls: evaluating allocates nothing. `None` is a dead end (h = ∞).
+//!
+//! Search ([`search`]): A*, eager and lazy greedy best-first search with optional
+//! preferred operators, over a compact [`search::StateRegistry`].
+//!
+//! ```
+//! use heuristics::{Heuristic, LmCut, search::{search, Algorithm, SearchConfig, SearchStatus}};
+//! let domain = pddl_syntax::parse_domain("(define (domain d) (:predicates (at ?x) (road ?x ?y))
+//!     (:action go :parameters (?x ?y) :precondition (and (at ?x) (road ?x ?y)) :effect (and (at ?y) (not (at ?x)))))").unwrap();
+//! let problem = pddl_syntax::parse_problem("(define (problem p) (:domain d) (:objects a b c)
+//!     (:init (at a) (road a b) (road b c)) (:goal (at c)))").unwrap();
+//! let model = transition_model::TransitionModel::new(grounding::ground(&domain, &problem).unwrap());
+//! let mut lmcut = LmCut::new(&model);
+//! assert_eq!(lmcut.evaluate(&model.initial_state()), Some(2));
+//! let result = search(&model, &mut lmcut, &SearchConfig::new(Algorithm::AStar), None);
+//! assert_eq!((result.status, result.cost), (SearchStatus::Solved, 2));
+//! ```
+
+mod lmcut;
+mod mix;
+pub mod relaxation;
+pub mod relaxed;
+mod remaining;
+pub mod search;
+mod simple;
+
+pub use lmcut::LmCut;
+pub use mix::WeightedMix;
+pub use relaxation::{HAdd, HFF, HMax};
+pub use remaining::RemainingPlanCost;
+pub use simple::{Blind, GoalCount};
+
+use grounding::ActionId;
+use transition_model::State;
+
+/// The value of an unreachable fact inside the explorations; never returned (dead ends are `None`).
+pub const INFINITE: u32 = u32::MAX;
+
+/// A state evaluator. Implementations keep their buffers between calls.
+pub trait Heuristic {
+    /// Short name, as on the command line (`hmax`, `ff`, `lmcut`, ...).
+    fn name(&self) -> &'static str;
+
+    /// The estimated cost to the goal from `state`, or `None` for a dead end.
+    fn evaluate(&mut self, state: &State) -> Option<u32>;
+
+    /// Actions the last evaluation recommends (applicable in the evaluated state).
+    fn preferred_operators(&self) -> &[ActionId] {
+        &[]
+    }
+}
+
+impl<H: Heuristic + ?Sized> Heuristic for Box<H> {
+    fn name(&self) -> &'static str {
+        (**self).name()
+    }
+
+    fn evaluate(&mut self, state: &State) -> Option<u32> {
+        (**self).evaluate(state)
+    }
+
+    fn preferred_operators(&self) -> &[ActionId] {
+        (**self).preferred_operators()
+    }
+}
+
+/// The heuristics by command-line name.
+pub const NAMES: [&str; 6] = ["blind", "goalcount", "hmax", "hadd", "ff", "lmcut"];
+
+/// A heuristic by its command-line name.
+pub fn by_name<'m>(name: &str, model: &'m transition_model::TransitionModel) -> Option<Box<dyn Heuristic + 'm>> {
+    Some(match name {
+        "blind" => Box::new(Blind::new(model)),
+        "goalcount" => Box::new(GoalCount::new(model)),
+        "hmax" => Box::new(HMax::new(model)),
+        "hadd" => Box::new(HAdd::new(model)),
+        "ff" => Box::new(HFF::new(model)),
+        "lmcut" => Box::new(LmCut::new(model)),
+        _ => return None,
+    })
+}

@@ -1,0 +1,299 @@
+//! h_max, h_add and h_FF: a generalized Dijkstra over the relaxed task, with buffers kept
+//! between evaluations (no allocation per call).
+//!
+//! Tie-breaking, which decides h_FF's relaxed plan: facts leave the queue in order of cost,
+//! last in first out among equal costs (Fast Downward's bucket queue); a fact's best supporter is the first operator that reached it at its
+//! final cost (a later operator replaces it only when strictly cheaper). Fast Downward uses
+//! the same rule, but its queue and operator order differ, so relaxed plans (and h_FF) can
+//! differ where several supporters tie; h_max and h_add do not depend on ties.
+
+use std::cmp::Reverse;
+use std::collections::BinaryHeap;
+
+/// A monotone priority queue of facts: buckets by cost, last in first out within a bucket
+/// (as Fast Downward's bucket queue), with a heap for costs too large for buckets.
+#[derive(Debug, Clone, Default)]
+struct FactQueue {
+    buckets: Vec<Vec<u32>>,
+    current: usize,
+    len: usize,
+    heap: BinaryHeap<Reverse<(u32, u32)>>,
+}
+
+const MAX_BUCKETS: u32 = 1 << 16;
+
+impl FactQueue {
+    fn clear(&mut self) {
+        let from = self.current.min(self.buckets.len());
+        for bucket in &mut self.buckets[from..] {
+            bucket.clear();
+        }
+        self.current = 0;
+        self.len = 0;
+        self.heap.clear();
+    }
+
+    #[inline]
+    fn push(&mut self, cost: u32, fact: u32) {
+        if cost >= MAX_BUCKETS {
+            self.heap.push(Reverse((cost, fact)));
+            return;
+        }
+        let cost = cost as usize;
+        if cost >= self.buckets.len() {
+            self.buckets.resize_with(cost + 1, Vec::new);
+        }
+        self.buckets[cost].push(fact);
+        self.len += 1;
+        self.current = self.current.min(cost);
+    }
+
+    #[inline]
+    fn pop(&mut self) -> Option<(u32, u32)> {
+        if self.len > 0 {
+            while self.buckets[self.current].is_empty() {
+                self.current += 1;
+            }
+            self.len -= 1;
+            let fact = self.buckets[self.current].pop()?;
+            return Some((self.current as u32, fact));
+        }
+        self.heap.pop().map(|Reverse(entry)| entry)
+    }
+}
+
+use grounding::{ActionId, Task};
+use transition_model::{State, TransitionModel};
+
+use crate::relaxed::RelaxedTask;
+use crate::{Heuristic, INFINITE};
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Combine {
+    Max,
+    Add,
+}
+
+/// The shared exploration state.
+#[derive(Debug, Clone)]
+pub struct Exploration {
+    pub relaxed: RelaxedTask,
+    pub fact_cost: Vec<u32>,
+    /// Best supporter of each fact (an operator index), `u32::MAX` for state facts.
+    pub supporter: Vec<u32>,
+    op_cost: Vec<u32>,
+    /// Per operator: the precondition whose arrival made it applicable (the last one
+    /// popped, so one of maximal cost), `u32::MAX` if none.
+    pub op_supporter: Vec<u32>,
+    unsatisfied: Vec<u32>,
+    queue: FactQueue,
+}
+
+impl Exploration {
+    pub fn new(task: &Task) -> Exploration {
+        let relaxed = RelaxedTask::new(task);
+        let facts = relaxed.num_facts;
+        let ops = relaxed.ops.len();
+        Exploration {
+            relaxed,
+            fact_cost: vec![INFINITE; facts],
+            supporter: vec![u32::MAX; facts],
+            op_cost: vec![0; ops],
+            op_supporter: vec![u32::MAX; ops],
+            unsatisfied: vec![0; ops],
+            queue: FactQueue::default(),
+        }
+    }
+
+    /// Cost of the goal fact from `state` (INFINITE if unreachable), leaving per-fact costs
+    /// and best supporters behind. `costs` overrides operator costs and makes the
+    /// exploration run to the end (LM-cut needs every operator's supporter); without it the
+    /// exploration stops once the goal's cost is final.
+    pub fn run(&mut self, state: &State, combine: Combine, costs: Option<&[u32]>) -> u32 {
+        let relaxed = &self.relaxed;
+        self.fact_cost.fill(INFINITE);
+        self.supporter.fill(u32::MAX);
+        for (i, op) in relaxed.ops.iter().enumerate() {
+            self.unsatisfied[i] = op.pre_end - op.pre_start;
+            self.op_cost[i] = 0;
+            self.op_supporter[i] = u32::MAX;
+        }
+        self.queue.clear();
+        for fact in state.facts() {
+            self.fact_cost[fact.index()] = 0;
+            self.queue.push(0, fact.0);
+        }
+        let op_base = |i: usize| costs.map_or(relaxed.ops[i].cost, |c| c[i]);
+        for &op in &relaxed.no_pre {
+            let cost = op_base(op as usize);
+            for &fact in relaxed.ops[op as usize].add(relaxed) {
+                if cost < self.fact_cost[fact as usize] {
+                    self.fact_cost[fact as usize] = cost;
+                    self.supporter[fact as usize] = op;
+                    self.queue.push(cost, fact);
+                }
+            }
+        }
+        let goal = relaxed.goal;
+        while let Some((cost, fact)) = self.queue.pop() {
+            if cost > self.fact_cost[fact as usize] {
+                continue;
+            }
+            if fact == goal && costs.is_none() {
+                break;
+            }
+            for &op in relaxed.pre_of(fact) {
+                let i = op as usize;
+                self.op_cost[i] = match combine {
+                    Combine::Max => self.op_cost[i].max(cost),
+                    Combine::Add => self.op_cost[i].saturating_add(cost),
+                };
+                self.unsatisfied[i] -= 1;
+                if self.unsatisfied[i] == 0 {
+                    self.op_supporter[i] = fact;
+                    let reached = self.op_cost[i].saturating_add(op_base(i)).min(INFINITE - 1);
+                    for &added in relaxed.ops[i].add(relaxed) {
+                        if reached < self.fact_cost[added as usize] {
+                            self.fact_cost[added as usize] = reached;
+                            self.supporter[added as usize] = op;
+                            self.queue.push(reached, added);
+                        }
+                    }
+                }
+            }
+        }
+        self.fact_cost[goal as usize]
+    }
+}
+
+/// h_max (Bonet and Geffner): the costliest precondition decides.
+#[derive(Debug, Clone)]
+pub struct HMax {
+    exploration: Exploration,
+}
+
+impl HMax {
+    pub fn new(model: &TransitionModel) -> HMax {
+        HMax { exploration: Exploration::new(model.task()) }
+    }
+}
+
+impl Heuristic for HMax {
+    fn name(&self) -> &'static str {
+        "hmax"
+    }
+
+    fn evaluate(&mut self, state: &State) -> Option<u32> {
+        let h = self.exploration.run(state, Combine::Max, None);
+        (h != INFINITE).then_some(h)
+    }
+}
+
+/// h_add: preconditions' costs are summed.
+#[derive(Debug, Clone)]
+pub struct HAdd {
+    exploration: Exploration,
+}
+
+impl HAdd {
+    pub fn new(model: &TransitionModel) -> HAdd {
+        HAdd { exploration: Exploration::new(model.task()) }
+    }
+}
+
+impl Heuristic for HAdd {
+    fn name(&self) -> &'static str {
+        "hadd"
+    }
+
+    fn evaluate(&mut self, state: &State) -> Option<u32> {
+        let h = self.exploration.run(state, Combine::Add, None);
+        (h != INFINITE).then_some(h)
+    }
+}
+
+/// h_FF (Hoffmann and Nebel): the cost of a relaxed plan extracted from h_add's best
+/// supporters, each action counted once. Its preferred operators are the relaxed plan's
+/// actions that are applicable in the evaluated state.
+#[derive(Debug)]
+pub struct HFF<'m> {
+    model: &'m TransitionModel,
+    exploration: Exploration,
+    in_plan: Vec<bool>,
+    marked_fact: Vec<bool>,
+    stack: Vec<u32>,
+    plan_actions: Vec<u32>,
+    preferred: Vec<ActionId>,
+}
+
+impl<'m> HFF<'m> {
+    pub fn new(model: &'m TransitionModel) -> HFF<'m> {
+        let exploration = Exploration::new(model.task());
+        let facts = exploration.relaxed.num_facts;
+        HFF {
+            model,
+            exploration,
+            in_plan: vec![false; model.task().actions.len()],
+            marked_fact: vec![false; facts],
+            stack: Vec::new(),
+            plan_actions: Vec::new(),
+            preferred: Vec::new(),
+        }
+    }
+
+    /// The actions of the last relaxed plan.
+    pub fn relaxed_plan(&self) -> impl Iterator<Item = ActionId> + '_ {
+        self.plan_actions.iter().map(|&a| ActionId(a))
+    }
+}
+
+impl Heuristic for HFF<'_> {
+    fn name(&self) -> &'static str {
+        "ff"
+    }
+
+    fn evaluate(&mut self, state: &State) -> Option<u32> {
+        self.preferred.clear();
+        for &a in &self.plan_actions {
+            self.in_plan[a as usize] = false;
+        }
+        self.plan_actions.clear();
+        let goal_cost = self.exploration.run(state, Combine::Add, None);
+        if goal_cost == INFINITE {
+            return None;
+        }
+        let relaxed = &self.exploration.relaxed;
+        self.marked_fact.fill(false);
+        self.stack.clear();
+        self.stack.push(relaxed.goal);
+        self.marked_fact[relaxed.goal as usize] = true;
+        let mut h: u32 = 0;
+        while let Some(fact) = self.stack.pop() {
+            let op = self.exploration.supporter[fact as usize];
+            if op == u32::MAX {
+                continue; // true in the state
+            }
+            let relaxed_op = relaxed.ops[op as usize];
+            for &pre in relaxed_op.pre(relaxed) {
+                if !self.marked_fact[pre as usize] {
+                    self.marked_fact[pre as usize] = true;
+                    self.stack.push(pre);
+                }
+            }
+            let action = relaxed_op.action;
+            if action != crate::relaxed::NO_ACTION && !self.in_plan[action as usize] {
+                self.in_plan[action as usize] = true;
+                self.plan_actions.push(action);
+                h = h.saturating_add(self.model.task().actions[action as usize].cost);
+                if self.model.is_applicable(state, ActionId(action)) {
+                    self.preferred.push(ActionId(action));
+                }
+            }
+        }
+        Some(h)
+    }
+
+    fn preferred_operators(&self) -> &[ActionId] {
+        &self.preferred
+    }
+}

@@ -1,0 +1,187 @@
+//! The delete relaxation of a task as unary-style operators over facts, shared by h_max,
+//! h_add, h_FF and LM-cut.
+//!
+//! What the relaxation keeps of a grounded task:
+//! - an action becomes one operator (its positive preconditions, its unconditional adds)
+//!   plus one operator per conditional effect (preconditions and effect condition, the
+//!   effect's adds), each with the action's cost, as Fast Downward does;
+//! - negative preconditions are dropped (they are free in the delete relaxation), and so is
+//!   any clause with a negative literal; a clause of positive literals becomes an auxiliary
+//!   fact, achieved at zero cost by any of its literals;
+//! - the goal becomes one auxiliary goal fact, achieved at zero cost by one operator per goal
+//!   disjunct. Fast Downward compiles complex goals the same way (an artificial goal reached
+//!   by zero-cost actions); for a conjunctive goal every heuristic value is unchanged by it.
+
+use grounding::{ActionId, Condition, FactId, Literal, Task};
+use rustc_hash::FxHashMap;
+
+/// `action` of operators that stand for no action (clause and goal achievers).
+pub const NO_ACTION: u32 = u32::MAX;
+
+#[derive(Debug, Clone, Copy)]
+pub struct RelaxedOp {
+    pub pre_start: u32,
+    pub pre_end: u32,
+    pub add_start: u32,
+    pub add_end: u32,
+    pub cost: u32,
+    /// The action it comes from, or [`NO_ACTION`].
+    pub action: u32,
+}
+
+#[derive(Debug, Clone)]
+pub struct RelaxedTask {
+    /// Task facts, then auxiliary clause facts, then the goal fact.
+    pub num_facts: usize,
+    pub ops: Vec<RelaxedOp>,
+    pub pre: Vec<u32>,
+    pub add: Vec<u32>,
+    /// Operators that have `f` as a precondition: `pre_of[pre_of_start[f]..pre_of_start[f+1]]`.
+    pub pre_of_start: Vec<u32>,
+    pub pre_of: Vec<u32>,
+    /// Operators without preconditions.
+    pub no_pre: Vec<u32>,
+    pub goal: u32,
+    /// Number of real task facts (state facts have ids below this).
+    pub task_facts: usize,
+}
+
+impl RelaxedOp {
+    #[inline]
+    pub fn pre<'a>(&self, task: &'a RelaxedTask) -> &'a [u32] {
+        &task.pre[self.pre_start as usize..self.pre_end as usize]
+    }
+
+    #[inline]
+    pub fn add<'a>(&self, task: &'a RelaxedTask) -> &'a [u32] {
+        &task.add[self.add_start as usize..self.add_end as usize]
+    }
+}
+
+impl RelaxedTask {
+    pub fn new(task: &Task) -> RelaxedTask {
+        let mut builder = Builder {
+            relaxed: RelaxedTask {
+                num_facts: task.facts.len(),
+                ops: Vec::new(),
+                pre: Vec::new(),
+                add: Vec::new(),
+                pre_of_start: Vec::new(),
+                pre_of: Vec::new(),
+                no_pre: Vec::new(),
+                goal: 0,
+                task_facts: task.facts.len(),
+            },
+            clause_facts: FxHashMap::default(),
+            pending_clauses: Vec::new(),
+        };
+        for (index, action) in task.actions.iter().enumerate() {
+            let pre = builder.condition_facts(&action.pre);
+            builder.push(pre.clone(), action.add.iter().map(|f| f.0).collect(), action.cost, index as u32);
+            for effect in &action.conditional {
+                if effect.add.is_empty() {
+                    continue;
+                }
+                let mut pre = pre.clone();
+                pre.extend(builder.condition_facts(&effect.condition));
+                builder.push(pre, effect.add.iter().map(|f| f.0).collect(), action.cost, index as u32);
+            }
+        }
+        let goal = builder.relaxed.num_facts as u32;
+        builder.relaxed.num_facts += 1;
+        builder.relaxed.goal = goal;
+        for disjunct in &task.goal.disjuncts {
+            let pre = builder.condition_facts(disjunct);
+            builder.push(pre, vec![goal], 0, NO_ACTION);
+        }
+        // Clause achievers: any literal of the clause reaches its auxiliary fact.
+        for (fact, clause) in std::mem::take(&mut builder.pending_clauses) {
+            for literal in clause {
+                builder.push(vec![literal.fact().0], vec![fact], 0, NO_ACTION);
+            }
+        }
+        builder.finish()
+    }
+
+    #[inline]
+    pub fn pre_of(&self, fact: u32) -> &[u32] {
+        &self.pre_of[self.pre_of_start[fact as usize] as usize..self.pre_of_start[fact as usize + 1] as usize]
+    }
+
+    pub fn action_of(&self, op: u32) -> Option<ActionId> {
+        let action = self.ops[op as usize].action;
+        (action != NO_ACTION).then_some(ActionId(action))
+    }
+}
+
+struct Builder {
+    relaxed: RelaxedTask,
+    clause_facts: FxHashMap<Vec<Literal>, u32>,
+    pending_clauses: Vec<(u32, Vec<Literal>)>,
+}
+
+impl Builder {
+    /// Relaxed preconditions of a condition: its positive facts and one auxiliary fact per
+    /// all-positive clause.
+    fn condition_facts(&mut self, condition: &Condition) -> Vec<u32> {
+        let mut out: Vec<u32> = condition.pos.iter().map(|f: &FactId| f.0).collect();
+        for clause in &condition.clauses {
+            if clause.iter().any(|l| l.is_negated()) {
+                continue;
+            }
+            let next = self.relaxed.num_facts as u32;
+            let fact = *self.clause_facts.entry(clause.clone()).or_insert_with(|| {
+                self.pending_clauses.push((next, clause.clone()));
+                next
+            });
+            if fact == next {
+                self.relaxed.num_facts += 1;
+            }
+            out.push(fact);
+        }
+        out.sort_unstable();
+        out.dedup();
+        out
+    }
+
+    fn push(&mut self, pre: Vec<u32>, mut add: Vec<u32>, cost: u32, action: u32) {
+        add.sort_unstable();
+        add.dedup();
+        if add.is_empty() {
+            return;
+        }
+        let relaxed = &mut self.relaxed;
+        let pre_start = relaxed.pre.len() as u32;
+        relaxed.pre.extend_from_slice(&pre);
+        let add_start = relaxed.add.len() as u32;
+        relaxed.add.extend_from_slice(&add);
+        relaxed.ops.push(RelaxedOp { pre_start, pre_end: relaxed.pre.len() as u32, add_start, add_end: relaxed.add.len() as u32, cost, action });
+    }
+
+    fn finish(mut self) -> RelaxedTask {
+        let relaxed = &mut self.relaxed;
+        let mut counts = vec![0u32; relaxed.num_facts + 1];
+        for op in &relaxed.ops {
+            for &f in &relaxed.pre[op.pre_start as usize..op.pre_end as usize] {
+                counts[f as usize + 1] += 1;
+            }
+        }
+        for i in 1..counts.len() {
+            counts[i] += counts[i - 1];
+        }
+        let mut fill = counts.clone();
+        let mut pre_of = vec![0u32; relaxed.pre.len()];
+        for (index, op) in relaxed.ops.iter().enumerate() {
+            if op.pre_start == op.pre_end {
+                relaxed.no_pre.push(index as u32);
+            }
+            for &f in &relaxed.pre[op.pre_start as usize..op.pre_end as usize] {
+                pre_of[fill[f as usize] as usize] = index as u32;
+                fill[f as usize] += 1;
+            }
+        }
+        relaxed.pre_of_start = counts;
+        relaxed.pre_of = pre_of;
+        self.relaxed
+    }
+}

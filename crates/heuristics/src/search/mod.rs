@@ -1,0 +1,389 @@
+//! Classical search over the transition model: A* and greedy best-first search (eager and
+//! lazy, optionally with preferred operators), with budgets on expansions and time.
+//!
+//! Used for "remaining plan cost" from a state, and as a symbolic planner in its own right.
+//! Open lists break ties like Fast Downward's: A* orders by (f, h) then insertion order;
+//! GBFS by h then insertion order. Dead ends (h = ∞) are never inserted.
+
+mod registry;
+
+use std::cmp::Reverse;
+use std::collections::BinaryHeap;
+use std::time::{Duration, Instant};
+
+use grounding::ActionId;
+use transition_model::{State, TransitionModel};
+
+use crate::Heuristic;
+pub use registry::{StateId, StateRegistry};
+
+/// Which search.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Algorithm {
+    AStar,
+    /// Eager greedy best-first search: successors are evaluated when generated.
+    Gbfs,
+    /// Lazy greedy best-first search: successors inherit their parent's value and are
+    /// evaluated when expanded.
+    LazyGbfs,
+}
+
+/// Limits and options of one search.
+#[derive(Debug, Clone)]
+pub struct SearchConfig {
+    pub algorithm: Algorithm,
+    /// Use the heuristic's preferred operators (GBFS only): a second open list holding
+    /// only successors reached by preferred operators, alternated with the first, with
+    /// Fast Downward's boost of 1000 priority on progress for the lazy variant.
+    pub preferred_operators: bool,
+    pub max_expansions: Option<u64>,
+    pub time_limit: Option<Duration>,
+}
+
+impl SearchConfig {
+    pub fn new(algorithm: Algorithm) -> SearchConfig {
+        SearchConfig { algorithm, preferred_operators: false, max_expansions: None, time_limit: None }
+    }
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum SearchStatus {
+    Solved,
+    /// The whole reachable space (under the heuristic's dead-end pruning) was searched.
+    Unsolvable,
+    /// A budget ran out.
+    OutOfBudget,
+}
+
+#[derive(Debug, Clone)]
+pub struct SearchResult {
+    pub status: SearchStatus,
+    pub plan: Vec<ActionId>,
+    pub cost: u64,
+    pub expanded: u64,
+    pub evaluated: u64,
+    pub generated: u64,
+    pub elapsed: Duration,
+}
+
+#[derive(Debug, Clone, Copy)]
+struct Node {
+    g: u64,
+    parent: StateId,
+    action: u32,
+    closed: bool,
+    h: u32,
+}
+
+const NO_PARENT: StateId = StateId::MAX;
+const UNEVALUATED: u32 = u32::MAX;
+
+struct Space {
+    registry: StateRegistry,
+    nodes: Vec<Node>,
+}
+
+impl Space {
+    fn new(facts: usize) -> Space {
+        Space { registry: StateRegistry::new(facts), nodes: Vec::new() }
+    }
+
+    fn insert(&mut self, state: &State) -> (StateId, bool) {
+        let (id, new) = self.registry.insert(state);
+        if new {
+            self.nodes.push(Node { g: u64::MAX, parent: NO_PARENT, action: 0, closed: false, h: UNEVALUATED });
+        }
+        (id, new)
+    }
+
+    fn plan(&self, mut id: StateId) -> Vec<ActionId> {
+        let mut plan = Vec::new();
+        while self.nodes[id as usize].parent != NO_PARENT {
+            plan.push(ActionId(self.nodes[id as usize].action));
+            id = self.nodes[id as usize].parent;
+        }
+        plan.reverse();
+        plan
+    }
+}
+
+struct Budget {
+    start: Instant,
+    config: SearchConfig,
+}
+
+impl Budget {
+    fn exhausted(&self, expanded: u64) -> bool {
+        self.config.max_expansions.is_some_and(|m| expanded >= m)
+            || (expanded % 256 == 0 && self.config.time_limit.is_some_and(|t| self.start.elapsed() >= t))
+    }
+}
+
+/// Runs a search from `start` (the task's initial state when `None`).
+pub fn search(model: &TransitionModel, heuristic: &mut dyn Heuristic, config: &SearchConfig, start: Option<&State>) -> SearchResult {
+    let budget = Budget { start: Instant::now(), config: config.clone() };
+    let initial = start.cloned().unwrap_or_else(|| model.initial_state());
+    match config.algorithm {
+        Algorithm::AStar => astar(model, heuristic, &budget, initial),
+        Algorithm::Gbfs => eager_greedy(model, heuristic, &budget, initial),
+        Algorithm::LazyGbfs => lazy_greedy(model, heuristic, &budget, initial),
+    }
+}
+
+fn finish(
+    status: SearchStatus,
+    space: &Space,
+    goal: Option<StateId>,
+    model: &TransitionModel,
+    counts: (u64, u64, u64),
+    budget: &Budget,
+) -> SearchResult {
+    let plan = goal.map(|g| space.plan(g)).unwrap_or_default();
+    let cost = transition_model::plan_cost(model.task(), &plan);
+    SearchResult { status, plan, cost, expanded: counts.0, evaluated: counts.1, generated: counts.2, elapsed: budget.start.elapsed() }
+}
+
+fn astar(model: &TransitionModel, heuristic: &mut dyn Heuristic, budget: &Budget, initial: State) -> SearchResult {
+    let task = model.task();
+    let mut space = Space::new(task.facts.len());
+    let (mut expanded, mut evaluated, mut generated) = (0u64, 0u64, 0u64);
+    let mut open: BinaryHeap<Reverse<(u64, u32, u64, StateId)>> = BinaryHeap::new();
+    let mut sequence = 0u64;
+    let (root, _) = space.insert(&initial);
+    evaluated += 1;
+    let Some(h) = heuristic.evaluate(&initial) else {
+        return finish(SearchStatus::Unsolvable, &space, None, model, (0, evaluated, 0), budget);
+    };
+    space.nodes[root as usize].g = 0;
+    space.nodes[root as usize].h = h;
+    open.push(Reverse((u64::from(h), h, sequence, root)));
+    let mut applicable = Vec::new();
+    while let Some(Reverse((f, _, _, id))) = open.pop() {
+        let node = space.nodes[id as usize];
+        if node.closed || node.g + u64::from(node.h) < f {
+            continue; // stale entry
+        }
+        let state = space.registry.get(id);
+        if model.is_goal(&state) {
+            return finish(SearchStatus::Solved, &space, Some(id), model, (expanded, evaluated, generated), budget);
+        }
+        if budget.exhausted(expanded) {
+            return finish(SearchStatus::OutOfBudget, &space, None, model, (expanded, evaluated, generated), budget);
+        }
+        space.nodes[id as usize].closed = true;
+        expanded += 1;
+        model.applicable(&state, &mut applicable);
+        for &action in &applicable {
+            generated += 1;
+            let next = model.apply(&state, action);
+            let g = node.g + u64::from(task.action(action).cost);
+            let (child, new) = space.insert(&next);
+            let child_node = &mut space.nodes[child as usize];
+            if !new && g >= child_node.g {
+                continue;
+            }
+            if child_node.h == UNEVALUATED {
+                evaluated += 1;
+                match heuristic.evaluate(&next) {
+                    Some(h) => space.nodes[child as usize].h = h,
+                    None => {
+                        space.nodes[child as usize].h = crate::INFINITE;
+                        continue;
+                    }
+                }
+            }
+            let child_node = &mut space.nodes[child as usize];
+            if child_node.h == crate::INFINITE {
+                continue;
+            }
+            // A cheaper path reopens a closed state (LM-cut is admissible, not consistent).
+            child_node.g = g;
+            child_node.parent = id;
+            child_node.action = action.0;
+            child_node.closed = false;
+            sequence += 1;
+            open.push(Reverse((g + u64::from(child_node.h), child_node.h, sequence, child)));
+        }
+    }
+    finish(SearchStatus::Unsolvable, &space, None, model, (expanded, evaluated, generated), budget)
+}
+
+/// Two open lists (all successors; preferred successors only), alternated; `boost` extra
+/// turns for the preferred list each time the best h improves.
+struct Alternation<T: Ord> {
+    lists: [BinaryHeap<Reverse<T>>; 2],
+    priority: [i64; 2],
+    use_preferred: bool,
+}
+
+impl<T: Ord> Alternation<T> {
+    fn new(use_preferred: bool) -> Self {
+        Alternation { lists: [BinaryHeap::new(), BinaryHeap::new()], priority: [0, 0], use_preferred }
+    }
+
+    fn push(&mut self, entry: T, preferred: bool)
+    where
+        T: Clone,
+    {
+        if self.use_preferred && preferred {
+            self.lists[1].push(Reverse(entry.clone()));
+        }
+        self.lists[0].push(Reverse(entry));
+    }
+
+    fn boost(&mut self, amount: i64) {
+        if self.use_preferred {
+            self.priority[1] -= amount;
+        }
+    }
+
+    fn pop(&mut self) -> Option<T> {
+        let candidates = if self.use_preferred { 2 } else { 1 };
+        let mut best: Option<usize> = None;
+        for i in 0..candidates {
+            if self.lists[i].is_empty() {
+                continue;
+            }
+            if best.is_none_or(|b| self.priority[i] < self.priority[b]) {
+                best = Some(i);
+            }
+        }
+        let i = best?;
+        self.priority[i] += 1;
+        self.lists[i].pop().map(|Reverse(e)| e)
+    }
+}
+
+fn eager_greedy(model: &TransitionModel, heuristic: &mut dyn Heuristic, budget: &Budget, initial: State) -> SearchResult {
+    let task = model.task();
+    let mut space = Space::new(task.facts.len());
+    let (mut expanded, mut evaluated, mut generated) = (0u64, 0u64, 0u64);
+    let mut open: Alternation<(u32, u64, StateId)> = Alternation::new(budget.config.preferred_operators);
+    let mut sequence = 0u64;
+    let (root, _) = space.insert(&initial);
+    evaluated += 1;
+    let Some(h) = heuristic.evaluate(&initial) else {
+        return finish(SearchStatus::Unsolvable, &space, None, model, (0, evaluated, 0), budget);
+    };
+    space.nodes[root as usize].g = 0;
+    space.nodes[root as usize].h = h;
+    // Preferred operators of evaluated, not yet expanded states.
+    let mut preferred_of: rustc_hash::FxHashMap<StateId, Box<[ActionId]>> = rustc_hash::FxHashMap::default();
+    if budget.config.preferred_operators {
+        preferred_of.insert(root, heuristic.preferred_operators().into());
+    }
+    open.push((h, sequence, root), false);
+    let mut applicable = Vec::new();
+    let mut best_h = h;
+    while let Some((_, _, id)) = open.pop() {
+        if space.nodes[id as usize].closed {
+            continue;
+        }
+        let state = space.registry.get(id);
+        if model.is_goal(&state) {
+            return finish(SearchStatus::Solved, &space, Some(id), model, (expanded, evaluated, generated), budget);
+        }
+        if budget.exhausted(expanded) {
+            return finish(SearchStatus::OutOfBudget, &space, None, model, (expanded, evaluated, generated), budget);
+        }
+        space.nodes[id as usize].closed = true;
+        expanded += 1;
+        let parent_preferred = preferred_of.remove(&id).unwrap_or_default();
+        model.applicable(&state, &mut applicable);
+        let g_parent = space.nodes[id as usize].g;
+        for &action in &applicable {
+            generated += 1;
+            let next = model.apply(&state, action);
+            let (child, new) = space.insert(&next);
+            if !new {
+                continue;
+            }
+            evaluated += 1;
+            let Some(h) = heuristic.evaluate(&next) else {
+                space.nodes[child as usize].h = crate::INFINITE;
+                continue;
+            };
+            let node = &mut space.nodes[child as usize];
+            node.h = h;
+            node.g = g_parent + u64::from(task.action(action).cost);
+            node.parent = id;
+            node.action = action.0;
+            if budget.config.preferred_operators {
+                preferred_of.insert(child, heuristic.preferred_operators().into());
+            }
+            if h < best_h {
+                best_h = h;
+            }
+            sequence += 1;
+            open.push((h, sequence, child), parent_preferred.contains(&action));
+        }
+    }
+    finish(SearchStatus::Unsolvable, &space, None, model, (expanded, evaluated, generated), budget)
+}
+
+fn lazy_greedy(model: &TransitionModel, heuristic: &mut dyn Heuristic, budget: &Budget, initial: State) -> SearchResult {
+    let task = model.task();
+    let mut space = Space::new(task.facts.len());
+    let (mut expanded, mut evaluated, mut generated) = (0u64, 0u64, 0u64);
+    // Entries: (parent's h, insertion order, parent, action).
+    let mut open: Alternation<(u32, u64, StateId, u32)> = Alternation::new(budget.config.preferred_operators);
+    let mut sequence = 0u64;
+    let (root, _) = space.insert(&initial);
+    space.nodes[root as usize].g = 0;
+    let mut current = Some((root, NO_PARENT, 0u32));
+    let mut applicable = Vec::new();
+    let mut best_h = u32::MAX;
+    while let Some((id, parent, action)) = current.take() {
+        let state = space.registry.get(id);
+        if space.nodes[id as usize].closed {
+            // Already expanded through another path.
+        } else {
+            if parent != NO_PARENT {
+                let node = &mut space.nodes[id as usize];
+                node.parent = parent;
+                node.action = action;
+            }
+            evaluated += 1;
+            if let Some(h) = heuristic.evaluate(&state) {
+                space.nodes[id as usize].h = h;
+                if model.is_goal(&state) {
+                    return finish(SearchStatus::Solved, &space, Some(id), model, (expanded, evaluated, generated), budget);
+                }
+                if budget.exhausted(expanded) {
+                    return finish(SearchStatus::OutOfBudget, &space, None, model, (expanded, evaluated, generated), budget);
+                }
+                if h < best_h {
+                    best_h = h;
+                    open.boost(1000);
+                }
+                space.nodes[id as usize].closed = true;
+                expanded += 1;
+                let preferred = heuristic.preferred_operators();
+                model.applicable(&state, &mut applicable);
+                for &successor_action in &applicable {
+                    generated += 1;
+                    sequence += 1;
+                    open.push((h, sequence, id, successor_action.0), preferred.contains(&successor_action));
+                }
+            } else {
+                space.nodes[id as usize].closed = true;
+            }
+        }
+        // Next: generate the successor of the best entry whose state is new.
+        while let Some((_, _, from, via)) = open.pop() {
+            let from_state = space.registry.get(from);
+            let next = model.apply(&from_state, ActionId(via));
+            let (child, _) = space.insert(&next);
+            if space.nodes[child as usize].closed {
+                continue;
+            }
+            let g = space.nodes[from as usize].g + u64::from(task.action(ActionId(via)).cost);
+            if g < space.nodes[child as usize].g {
+                space.nodes[child as usize].g = g;
+            }
+            current = Some((child, from, via));
+            break;
+        }
+    }
+    finish(SearchStatus::Unsolvable, &space, None, model, (expanded, evaluated, generated), budget)
+}
