@@ -22,8 +22,6 @@ use crate::{Heuristic, INFINITE};
 pub struct LmCut {
     exploration: Exploration,
     costs: Vec<u32>,
-    /// Per operator: its precondition of maximal h_max (or NONE for operators without one).
-    supporter: Vec<u32>,
     /// Operators achieving each fact (reverse of adds).
     achievers_start: Vec<u32>,
     achievers: Vec<u32>,
@@ -56,11 +54,9 @@ impl LmCut {
                 fill[f as usize] += 1;
             }
         }
-        let ops = relaxed.ops.len();
         let facts = relaxed.num_facts;
         LmCut {
             costs: relaxed.ops.iter().map(|o| o.cost).collect(),
-            supporter: vec![NONE; ops],
             achievers_start: counts,
             achievers,
             goal_zone: vec![false; facts],
@@ -95,7 +91,7 @@ impl Heuristic for LmCut {
             // Precondition choice function: the precondition whose arrival made the
             // operator applicable in this round's exploration, so one of maximal h_max and,
             // among ties, the one reached last (the bucket queue is last-in-first-out).
-            self.supporter.copy_from_slice(&self.exploration.op_supporter);
+            let supporters = &self.exploration.op_supporter;
             // Goal zone: facts from which the goal is reached through zero-cost operators.
             self.goal_zone.fill(false);
             self.goal_zone[relaxed.goal as usize] = true;
@@ -104,7 +100,7 @@ impl Heuristic for LmCut {
             while let Some(fact) = self.queue.pop_front() {
                 for i in self.achievers_start[fact as usize]..self.achievers_start[fact as usize + 1] {
                     let op = self.achievers[i as usize];
-                    let supporter = self.supporter[op as usize];
+                    let supporter = supporters[op as usize];
                     if self.costs[op as usize] == 0 && supporter != NONE && !self.goal_zone[supporter as usize] {
                         self.goal_zone[supporter as usize] = true;
                         self.queue.push_back(supporter);
@@ -141,7 +137,7 @@ impl Heuristic for LmCut {
             }
             while let Some(fact) = self.queue.pop_front() {
                 for &op in relaxed.pre_of(fact) {
-                    if self.supporter[op as usize] == fact && fact_cost[fact as usize] != INFINITE {
+                    if supporters[op as usize] == fact && fact_cost[fact as usize] != INFINITE {
                         triggered(op, &mut self.reached, &mut self.queue, &mut self.cut);
                     }
                 }

@@ -79,13 +79,16 @@ pub enum Combine {
 pub struct Exploration {
     pub relaxed: RelaxedTask,
     pub fact_cost: Vec<u32>,
-    /// Best supporter of each fact (an operator index), `u32::MAX` for state facts.
+    /// Best supporter of each fact (an operator index), `u32::MAX` for state facts; kept by
+    /// `Combine::Add` explorations only.
     pub supporter: Vec<u32>,
     op_cost: Vec<u32>,
     /// Per operator: the precondition whose arrival made it applicable (the last one
     /// popped, so one of maximal cost), `u32::MAX` if none.
     pub op_supporter: Vec<u32>,
     unsatisfied: Vec<u32>,
+    /// Precondition count of each operator, copied into `unsatisfied` per run.
+    pre_count: Vec<u32>,
     queue: FactQueue,
 }
 
@@ -94,7 +97,9 @@ impl Exploration {
         let relaxed = RelaxedTask::new(task);
         let facts = relaxed.num_facts;
         let ops = relaxed.ops.len();
+        let pre_count = relaxed.ops.iter().map(|op| op.pre_end - op.pre_start).collect();
         Exploration {
+            pre_count,
             relaxed,
             fact_cost: vec![INFINITE; facts],
             supporter: vec![u32::MAX; facts],
@@ -111,12 +116,15 @@ impl Exploration {
     /// exploration stops once the goal's cost is final.
     pub fn run(&mut self, state: &State, combine: Combine, costs: Option<&[u32]>) -> u32 {
         let relaxed = &self.relaxed;
+        let additive = combine == Combine::Add;
         self.fact_cost.fill(INFINITE);
-        self.supporter.fill(u32::MAX);
-        for (i, op) in relaxed.ops.iter().enumerate() {
-            self.unsatisfied[i] = op.pre_end - op.pre_start;
-            self.op_cost[i] = 0;
-            self.op_supporter[i] = u32::MAX;
+        self.unsatisfied.copy_from_slice(&self.pre_count);
+        self.op_supporter.fill(u32::MAX);
+        if additive {
+            // Only h_add needs operator costs (for h_max an operator costs what its last
+            // precondition popped at) and fact supporters (for h_FF's relaxed plan).
+            self.supporter.fill(u32::MAX);
+            self.op_cost.fill(0);
         }
         self.queue.clear();
         for fact in state.facts() {
@@ -129,7 +137,9 @@ impl Exploration {
             for &fact in relaxed.ops[op as usize].add(relaxed) {
                 if cost < self.fact_cost[fact as usize] {
                     self.fact_cost[fact as usize] = cost;
-                    self.supporter[fact as usize] = op;
+                    if additive {
+                        self.supporter[fact as usize] = op;
+                    }
                     self.queue.push(cost, fact);
                 }
             }
@@ -144,18 +154,22 @@ impl Exploration {
             }
             for &op in relaxed.pre_of(fact) {
                 let i = op as usize;
-                self.op_cost[i] = match combine {
-                    Combine::Max => self.op_cost[i].max(cost),
-                    Combine::Add => self.op_cost[i].saturating_add(cost),
-                };
+                if additive {
+                    self.op_cost[i] = self.op_cost[i].saturating_add(cost);
+                }
                 self.unsatisfied[i] -= 1;
                 if self.unsatisfied[i] == 0 {
                     self.op_supporter[i] = fact;
-                    let reached = self.op_cost[i].saturating_add(op_base(i)).min(INFINITE - 1);
+                    // Facts leave the queue in cost order, so for h_max the operator costs
+                    // what its last precondition cost.
+                    let pre_cost = if additive { self.op_cost[i] } else { cost };
+                    let reached = pre_cost.saturating_add(op_base(i)).min(INFINITE - 1);
                     for &added in relaxed.ops[i].add(relaxed) {
                         if reached < self.fact_cost[added as usize] {
                             self.fact_cost[added as usize] = reached;
-                            self.supporter[added as usize] = op;
+                            if additive {
+                                self.supporter[added as usize] = op;
+                            }
                             self.queue.push(reached, added);
                         }
                     }
