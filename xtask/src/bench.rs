@@ -43,11 +43,27 @@ enum Which {
         #[arg(long)]
         json: bool,
     },
+    /// Search speed and coverage on the IPC fixtures, ours beside Fast Downward's search.
+    Plan {
+        /// Configurations: astar-lmcut, lazy-ff (lazy GBFS with h_FF), lazy-ff-po (with preferred operators).
+        #[arg(long, default_value = "lazy-ff,astar-lmcut")]
+        configs: String,
+        /// Seconds per search, for both planners.
+        #[arg(long, default_value_t = 60.0)]
+        time_limit: f64,
+        /// Only instances whose id contains this.
+        #[arg(long)]
+        filter: Option<String>,
+        /// Print one JSON object.
+        #[arg(long)]
+        json: bool,
+    },
 }
 
 pub fn run(args: BenchArgs) -> anyhow::Result<ExitCode> {
     match args.which {
         Which::Ground { benchmark, limit, runs, no_reference, json } => ground(&benchmark, limit, runs.max(1), no_reference, json),
+        Which::Plan { configs, time_limit, filter, json } => plan(&configs, time_limit, filter.as_deref(), json),
     }
 }
 
@@ -228,6 +244,168 @@ fn ground(benchmarks: &str, limit: Option<usize>, runs: usize, no_reference: boo
     let _ = std::fs::remove_dir_all(&scratch);
     if json {
         println!("{}", json!({ "sets": sets, "tasks": rows }));
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+/// One search configuration, in both planners.
+struct PlanConfig {
+    name: &'static str,
+    algorithm: heuristics::search::Algorithm,
+    heuristic: &'static str,
+    preferred: bool,
+    fast_downward: &'static str,
+}
+
+const PLAN_CONFIGS: &[PlanConfig] = &[
+    PlanConfig {
+        name: "astar-lmcut",
+        algorithm: heuristics::search::Algorithm::AStar,
+        heuristic: "lmcut",
+        preferred: false,
+        fast_downward: "astar(lmcut())",
+    },
+    PlanConfig {
+        name: "lazy-ff",
+        algorithm: heuristics::search::Algorithm::LazyGbfs,
+        heuristic: "ff",
+        preferred: false,
+        fast_downward: "lazy_greedy([ff()])",
+    },
+    PlanConfig {
+        name: "lazy-ff-po",
+        algorithm: heuristics::search::Algorithm::LazyGbfs,
+        heuristic: "ff",
+        preferred: true,
+        fast_downward: "let(hff, ff(), lazy_greedy([hff], preferred=[hff]))",
+    },
+];
+
+struct FdSearch {
+    solved: bool,
+    cost: Option<u64>,
+    expanded: u64,
+    search_s: f64,
+}
+
+/// The number right after the last `marker` that is followed by one.
+fn number_in(text: &str, marker: &str) -> Option<f64> {
+    text.lines().rev().find_map(|line| {
+        let after = &line[line.find(marker)? + marker.len()..];
+        after.trim_start().split(|c: char| !(c.is_ascii_digit() || c == '.')).next()?.parse().ok()
+    })
+}
+
+/// Expansions so far: the final count, or the last progress line's (`..., N expanded`) if
+/// the search was stopped.
+fn expansions_in(text: &str) -> u64 {
+    if let Some(n) = number_in(text, "] Expanded ") {
+        return n as u64;
+    }
+    text.lines()
+        .rev()
+        .find_map(|line| {
+            let end = line.find(" expanded")?;
+            line[..end].rsplit(|c: char| !c.is_ascii_digit()).next()?.parse().ok()
+        })
+        .unwrap_or(0)
+}
+
+fn run_fd_search(downward: &Path, sas: &Path, search: &str, time_limit: f64) -> anyhow::Result<FdSearch> {
+    let input = std::fs::File::open(sas).context("output.sas")?;
+    let start = Instant::now();
+    let output = Command::new("timeout")
+        .arg(format!("{time_limit}"))
+        .arg(downward)
+        .args(["--search", search])
+        .stdin(input)
+        .output()
+        .context("cannot run Fast Downward's search")?;
+    let stdout = String::from_utf8_lossy(&output.stdout);
+    let solved = stdout.contains("Solution found!");
+    Ok(FdSearch {
+        solved,
+        cost: solved.then(|| number_in(&stdout, "Plan cost:").map(|c| c as u64)).flatten(),
+        expanded: expansions_in(&stdout),
+        search_s: number_in(&stdout, "Search time:").unwrap_or_else(|| start.elapsed().as_secs_f64()),
+    })
+}
+
+fn plan(configs: &str, time_limit: f64, filter: Option<&str>, json: bool) -> anyhow::Result<ExitCode> {
+    let chosen: Vec<&PlanConfig> = configs
+        .split(',')
+        .map(|name| PLAN_CONFIGS.iter().find(|c| c.name == name.trim()).with_context(|| format!("unknown config `{name}`")))
+        .collect::<anyhow::Result<_>>()?;
+    let reference = fd_translator();
+    let downward = reference.as_ref().map(|(_, bin)| bin.join("downward")).filter(|p| p.exists());
+    if downward.is_none() {
+        eprintln!("Fast Downward not found under {}; reporting ours only", anchor_venv().display());
+    }
+    let scratch = std::env::temp_dir().join(format!("xtask-bench-plan-{}", std::process::id()));
+    std::fs::create_dir_all(&scratch)?;
+    let mut rows = Vec::new();
+    let mut summary = serde_json::Map::new();
+    for config in &chosen {
+        let mut per_domain: std::collections::BTreeMap<String, [f64; 6]> = std::collections::BTreeMap::new();
+        for files in benchmark_data::load(Benchmark::Ipc)? {
+            if filter.is_some_and(|f| !files.id.contains(f)) {
+                continue;
+            }
+            let domain = files.id.split('/').next().unwrap_or_default().to_string();
+            let model = transition_model::TransitionModel::new(crate::input::ground(&files)?);
+            let mut heuristic = heuristics::by_name(config.heuristic, &model).context("heuristic")?;
+            let mut search_config = heuristics::search::SearchConfig::new(config.algorithm);
+            search_config.preferred_operators = config.preferred;
+            search_config.time_limit = Some(std::time::Duration::from_secs_f64(time_limit));
+            let ours = heuristics::search::search(&model, heuristic.as_mut(), &search_config, None);
+            let ours_solved = ours.status == heuristics::search::SearchStatus::Solved;
+            let ours_s = ours.elapsed.as_secs_f64();
+            let mut row = json!({
+                "config": config.name, "task": files.id,
+                "solved": ours_solved, "cost": ours_solved.then_some(ours.cost), "expanded": ours.expanded, "search_s": ours_s,
+                "expansions_per_s": ours.expanded as f64 / ours_s.max(1e-9),
+            });
+            let entry = per_domain.entry(domain).or_default();
+            entry[0] += f64::from(u8::from(ours_solved));
+            entry[1] += ours.expanded as f64;
+            entry[2] += ours_s;
+            if let (Some((python, bin)), Some(downward)) = (&reference, &downward) {
+                run_fd(python, bin, &files.domain_path, &files.problem_path, &scratch)?;
+                let fd = run_fd_search(downward, &scratch.join("output.sas"), config.fast_downward, time_limit)?;
+                row["fd_solved"] = json!(fd.solved);
+                row["fd_cost"] = json!(fd.cost);
+                row["fd_expanded"] = json!(fd.expanded);
+                row["fd_search_s"] = json!(fd.search_s);
+                row["fd_expansions_per_s"] = json!(fd.expanded as f64 / fd.search_s.max(1e-9));
+                entry[3] += f64::from(u8::from(fd.solved));
+                entry[4] += fd.expanded as f64;
+                entry[5] += fd.search_s;
+            }
+            if !json {
+                println!("{row}");
+            }
+            rows.push(row);
+        }
+        let mut domains = serde_json::Map::new();
+        for (domain, [solved, expanded, seconds, fd_solved, fd_expanded, fd_seconds]) in per_domain {
+            let rate = expanded / seconds.max(1e-9);
+            let fd_rate = fd_expanded / fd_seconds.max(1e-9);
+            domains.insert(
+                domain,
+                json!({
+                    "coverage": solved, "fd_coverage": fd_solved,
+                    "expansions_per_s": rate, "fd_expansions_per_s": fd_rate, "ratio": rate / fd_rate.max(1e-9),
+                }),
+            );
+        }
+        if !json {
+            eprintln!("{}: {}", config.name, serde_json::Value::Object(domains.clone()));
+        }
+        summary.insert(config.name.to_string(), serde_json::Value::Object(domains));
+    }
+    let _ = std::fs::remove_dir_all(&scratch);
+    if json {
+        println!("{}", json!({ "configs": summary, "tasks": rows }));
     }
     Ok(ExitCode::SUCCESS)
 }

@@ -6,6 +6,7 @@
 mod bench;
 mod eval;
 mod input;
+mod planning;
 
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -46,6 +47,10 @@ enum Command {
         #[arg(long, value_parser = ["pddl", "alfworld", "virtualhome"])]
         spelling: Option<String>,
     },
+    /// Find a plan with a classical planner (A*, eager or lazy GBFS).
+    Plan(planning::PlanArgs),
+    /// The initial state's value under every heuristic.
+    Heuristic(planning::HeuristicArgs),
     /// Evaluate an agent on the benchmarks in fixtures/ (the project's main job).
     Eval(eval::EvalArgs),
     /// Benchmarks that compare with the reference systems.
@@ -130,6 +135,8 @@ fn run(command: Command) -> anyhow::Result<ExitCode> {
                 }
             }
         }
+        Command::Plan(args) => planning::plan(args),
+        Command::Heuristic(args) => planning::heuristic(args),
         Command::Eval(args) => eval::run(args),
         Command::Bench(args) => bench::run(args),
     }

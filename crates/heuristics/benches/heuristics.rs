@@ -1,1 +1,94 @@
-fn main() {}
+//! One evaluation of each heuristic, on real states: along the ALFWorld walkthroughs and
+//! EAI gold plans, and along random walks in IPC tasks. The comparison with Fast Downward's
+//! search on the same tasks is `cargo xtask bench plan`.
+
+use benchmark_data::{Benchmark, Extra, TaskFiles, load};
+use criterion::{Criterion, criterion_group, criterion_main};
+use transition_model::{Spelling, State, TransitionModel};
+
+fn model(files: &TaskFiles) -> TransitionModel {
+    let domain = pddl_syntax::parse_domain(&files.domain).expect("parses");
+    let problem = pddl_syntax::parse_problem(&files.problem).expect("parses");
+    TransitionModel::new(grounding::ground(&domain, &problem).expect("grounds"))
+}
+
+fn states(model: &TransitionModel, files: &TaskFiles) -> Vec<State> {
+    let mut state = model.initial_state();
+    let mut out = vec![state.clone()];
+    let plan = match &files.extra {
+        Extra::Alfworld(game) => Some((Spelling::alfworld(model.task(), &game.grammar).expect("grammar"), game.walkthrough.clone())),
+        Extra::Virtualhome { gold_plan: Some(plan), .. } => Some((Spelling::pddl(model.task()), plan.clone())),
+        _ => None,
+    };
+    if let Some((spelling, plan)) = plan {
+        for text in plan {
+            let action = spelling.parse(&text).iter().copied().find(|&a| model.is_applicable(&state, a)).expect("plan applies");
+            state = model.apply(&state, action);
+            out.push(state.clone());
+        }
+        return out;
+    }
+    let mut applicable = Vec::new();
+    let mut seed: u64 = 0x9E37_79B9_7F4A_7C15;
+    for _ in 0..20 {
+        model.applicable(&state, &mut applicable);
+        if applicable.is_empty() {
+            break;
+        }
+        seed ^= seed << 13;
+        seed ^= seed >> 7;
+        seed ^= seed << 17;
+        state = model.apply(&state, applicable[(seed % applicable.len() as u64) as usize]);
+        out.push(state.clone());
+    }
+    out
+}
+
+fn bench(c: &mut Criterion) {
+    let mut sets: Vec<(&str, Vec<TaskFiles>)> = Vec::new();
+    sets.push(("alfworld-seen", load(Benchmark::AlfworldSeen).expect("fixtures").into_iter().step_by(20).collect()));
+    sets.push((
+        "virtualhome-eai",
+        load(Benchmark::VirtualhomeEai)
+            .expect("fixtures")
+            .into_iter()
+            .filter(|t| matches!(t.extra, Extra::Virtualhome { gold_plan: Some(_), .. }))
+            .step_by(40)
+            .collect(),
+    ));
+    let ipc = load(Benchmark::Ipc).expect("fixtures");
+    sets.push(("ipc-logistics00", ipc.iter().filter(|t| t.id == "logistics00/instance-13").cloned().collect()));
+    sets.push(("ipc-visitall-opt11", ipc.iter().filter(|t| t.id == "visitall-opt11/instance-12").cloned().collect()));
+    sets.push(("ipc-elevators-opt08", ipc.iter().filter(|t| t.id == "elevators-opt08/instance-5").cloned().collect()));
+    let mut group = c.benchmark_group("heuristic");
+    for (name, tasks) in &sets {
+        let prepared: Vec<(TransitionModel, Vec<State>)> = tasks
+            .iter()
+            .map(|t| {
+                let m = model(t);
+                let s = states(&m, t);
+                (m, s)
+            })
+            .collect();
+        let evaluations: usize = prepared.iter().map(|(_, s)| s.len()).sum();
+        eprintln!("{name}: {} tasks, {evaluations} states per iteration", prepared.len());
+        for heuristic in ["goalcount", "hmax", "hadd", "ff", "lmcut"] {
+            let mut evaluators: Vec<_> = prepared.iter().map(|(m, _)| heuristics::by_name(heuristic, m).expect("heuristic")).collect();
+            group.bench_function(format!("{name}/{heuristic}"), |b| {
+                b.iter(|| {
+                    let mut total = 0u64;
+                    for ((_, states), evaluator) in prepared.iter().zip(&mut evaluators) {
+                        for state in states {
+                            total += u64::from(evaluator.evaluate(state).unwrap_or(0));
+                        }
+                    }
+                    total
+                })
+            });
+        }
+    }
+    group.finish();
+}
+
+criterion_group!(benches, bench);
+criterion_main!(benches);

@@ -6,6 +6,11 @@ fn main() {
     let p = pddl_syntax::parse_problem(&files.problem).unwrap();
     let model = transition_model::TransitionModel::new(grounding::ground(&d, &p).unwrap());
     let t = std::time::Instant::now();
-    let r = heuristics::search::search(&model, &mut heuristics::LmCut::new(&model), &heuristics::search::SearchConfig::new(heuristics::search::Algorithm::AStar), None);
+    let r = heuristics::search::search(
+        &model,
+        &mut heuristics::LmCut::new(&model),
+        &heuristics::search::SearchConfig::new(heuristics::search::Algorithm::AStar),
+        None,
+    );
     println!("{id} cost {} expanded {} evaluated {} {:?}", r.cost, r.expanded, r.evaluated, t.elapsed());
 }

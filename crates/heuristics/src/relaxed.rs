@@ -155,7 +155,14 @@ impl Builder {
         relaxed.pre.extend_from_slice(&pre);
         let add_start = relaxed.add.len() as u32;
         relaxed.add.extend_from_slice(&add);
-        relaxed.ops.push(RelaxedOp { pre_start, pre_end: relaxed.pre.len() as u32, add_start, add_end: relaxed.add.len() as u32, cost, action });
+        relaxed.ops.push(RelaxedOp {
+            pre_start,
+            pre_end: relaxed.pre.len() as u32,
+            add_start,
+            add_end: relaxed.add.len() as u32,
+            cost,
+            action,
+        });
     }
 
     fn finish(mut self) -> RelaxedTask {

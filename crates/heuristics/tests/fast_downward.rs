@@ -19,7 +19,8 @@ fn reference() -> BTreeMap<(String, String), BTreeMap<String, u32>> {
         if fields.len() < 9 || fields[2] != "fd-h0" || fields[3] != "ok" {
             continue;
         }
-        let values = fields[8].split(';').filter_map(|kv| kv.split_once('=')).map(|(k, v)| (k.to_string(), v.parse().expect("number"))).collect();
+        let values =
+            fields[8].split(';').filter_map(|kv| kv.split_once('=')).map(|(k, v)| (k.to_string(), v.parse().expect("number"))).collect();
         out.insert((fields[0].to_string(), fields[1].to_string()), values);
     }
     out
@@ -52,7 +53,14 @@ fn initial_state_values_match_fast_downward() {
         entry.0 += u64::from(lmcut.unwrap_or(0));
         entry.1 += u64::from(expected["lmcut"]);
         entry.2 += 1;
-        rows.push(format!("{:<32} ff {:>4} (FD {:>4})  lmcut {:>4} (FD {:>4})", files.id, ff.unwrap_or(0), expected["hff"], lmcut.unwrap_or(0), expected["lmcut"]));
+        rows.push(format!(
+            "{:<32} ff {:>4} (FD {:>4})  lmcut {:>4} (FD {:>4})",
+            files.id,
+            ff.unwrap_or(0),
+            expected["hff"],
+            lmcut.unwrap_or(0),
+            expected["lmcut"]
+        ));
     }
     println!("{}", rows.join("\n"));
     for (domain, (ours, theirs, n)) in &lmcut_sums {

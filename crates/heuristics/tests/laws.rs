@@ -27,7 +27,8 @@ struct RandomTask {
 fn random_task() -> impl Strategy<Value = RandomTask> {
     (3usize..8).prop_flat_map(|facts| {
         let subset = move |max: usize| prop::collection::vec(0..facts, 0..max);
-        let action = (subset(3), prop::collection::vec(0..facts, 1..3), subset(2), 0u32..4).prop_map(|(pre, add, del, cost)| RandomAction { pre, add, del, cost });
+        let action = (subset(3), prop::collection::vec(0..facts, 1..3), subset(2), 0u32..4)
+            .prop_map(|(pre, add, del, cost)| RandomAction { pre, add, del, cost });
         (Just(facts), subset(3), prop::collection::vec(0..facts, 1..4), prop::collection::vec(action, 1..9))
             .prop_map(|(facts, init, goal, actions)| RandomTask { facts, init, goal, actions })
     })

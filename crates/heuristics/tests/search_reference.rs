@@ -53,7 +53,9 @@ fn astar_lmcut_matches_fast_downward_costs_and_expansions() {
 fn greedy_searches_return_valid_plans() {
     for files in load(Benchmark::Ipc).expect("fixtures").iter().filter(|t| t.id.ends_with("instance-1") || t.id.ends_with("instance-5")) {
         let model = model(files);
-        for (algorithm, preferred) in [(Algorithm::Gbfs, false), (Algorithm::Gbfs, true), (Algorithm::LazyGbfs, false), (Algorithm::LazyGbfs, true)] {
+        for (algorithm, preferred) in
+            [(Algorithm::Gbfs, false), (Algorithm::Gbfs, true), (Algorithm::LazyGbfs, false), (Algorithm::LazyGbfs, true)]
+        {
             let mut config = SearchConfig::new(algorithm);
             config.preferred_operators = preferred;
             let result = search(&model, &mut HFF::new(&model), &config, None);

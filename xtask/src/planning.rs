@@ -1,0 +1,131 @@
+//! `cargo xtask plan` and `cargo xtask heuristic`: the symbolic planner and the
+//! initial-state heuristic values.
+
+use std::path::PathBuf;
+use std::process::ExitCode;
+use std::time::{Duration, Instant};
+
+use anyhow::Context;
+use heuristics::search::{Algorithm, SearchConfig, SearchStatus, search};
+use serde_json::json;
+use transition_model::TransitionModel;
+
+use crate::input::{self, TaskArgs};
+
+#[derive(Debug, clap::Args)]
+pub struct PlanArgs {
+    #[command(flatten)]
+    task: TaskArgs,
+    /// The search algorithm.
+    #[arg(long, default_value = "lazy-gbfs", value_parser = ["astar", "gbfs", "lazy-gbfs"])]
+    planner: String,
+    /// The heuristic.
+    #[arg(long, default_value = "ff", value_parser = heuristics::NAMES)]
+    heuristic: String,
+    /// Use the heuristic's preferred operators (GBFS).
+    #[arg(long)]
+    preferred: bool,
+    /// Stop after this many expansions.
+    #[arg(long)]
+    max_expansions: Option<u64>,
+    /// Stop after this many seconds of search.
+    #[arg(long)]
+    time_limit: Option<f64>,
+    /// Write the plan here, in Fast Downward's format.
+    #[arg(long)]
+    out: Option<PathBuf>,
+    /// Print one JSON object.
+    #[arg(long)]
+    json: bool,
+}
+
+pub fn algorithm(name: &str) -> Algorithm {
+    match name {
+        "astar" => Algorithm::AStar,
+        "gbfs" => Algorithm::Gbfs,
+        _ => Algorithm::LazyGbfs,
+    }
+}
+
+/// The plan in Fast Downward's format: one `(action args)` a line, then the cost line.
+pub fn plan_text(model: &TransitionModel, plan: &[grounding::ActionId], cost: u64) -> String {
+    let mut text = String::new();
+    for &action in plan {
+        text.push_str(&model.task().action_name(action));
+        text.push('\n');
+    }
+    let kind = if model.task().uses_costs { "general cost" } else { "unit cost" };
+    text.push_str(&format!("; cost = {cost} ({kind})\n"));
+    text
+}
+
+pub fn plan(args: PlanArgs) -> anyhow::Result<ExitCode> {
+    let files = args.task.load()?;
+    let model = TransitionModel::new(input::ground(&files)?);
+    let mut heuristic = heuristics::by_name(&args.heuristic, &model).context("unknown heuristic")?;
+    let mut config = SearchConfig::new(algorithm(&args.planner));
+    config.preferred_operators = args.preferred;
+    config.max_expansions = args.max_expansions;
+    config.time_limit = args.time_limit.map(Duration::from_secs_f64);
+    let start = Instant::now();
+    let result = search(&model, heuristic.as_mut(), &config, None);
+    let millis = start.elapsed().as_secs_f64() * 1e3;
+    let solved = result.status == SearchStatus::Solved;
+    if solved {
+        model
+            .validate(&result.plan)
+            .map_err(|e| anyhow::anyhow!("internal error: the plan found does not validate: {}", e.describe(model.task())))?;
+        if let Some(out) = &args.out {
+            std::fs::write(out, plan_text(&model, &result.plan, result.cost)).with_context(|| format!("cannot write {}", out.display()))?;
+        }
+    }
+    let status = match result.status {
+        SearchStatus::Solved => "solved",
+        SearchStatus::Unsolvable => "unsolvable",
+        SearchStatus::OutOfBudget => "out-of-budget",
+    };
+    if args.json {
+        println!(
+            "{}",
+            json!({
+                "task": files.id, "planner": args.planner, "heuristic": args.heuristic, "preferred": args.preferred,
+                "solved": solved, "status": status, "cost": solved.then_some(result.cost), "length": solved.then_some(result.plan.len()),
+                "expanded": result.expanded, "evaluated": result.evaluated, "generated": result.generated, "millis": millis,
+            })
+        );
+    } else {
+        if solved {
+            print!("{}", plan_text(&model, &result.plan, result.cost));
+        }
+        eprintln!("{status}: {} expanded, {} evaluated, {millis:.1} ms", result.expanded, result.evaluated);
+    }
+    Ok(if solved { ExitCode::SUCCESS } else { ExitCode::from(1) })
+}
+
+#[derive(Debug, clap::Args)]
+pub struct HeuristicArgs {
+    #[command(flatten)]
+    task: TaskArgs,
+    /// Print one JSON object.
+    #[arg(long)]
+    json: bool,
+}
+
+pub fn heuristic(args: HeuristicArgs) -> anyhow::Result<ExitCode> {
+    let files = args.task.load()?;
+    let model = TransitionModel::new(input::ground(&files)?);
+    let state = model.initial_state();
+    let mut values = serde_json::Map::new();
+    for name in heuristics::NAMES {
+        let mut heuristic = heuristics::by_name(name, &model).context("known heuristic")?;
+        values.insert(name.to_string(), json!(heuristic.evaluate(&state)));
+    }
+    if args.json {
+        println!("{}", serde_json::Value::Object(values));
+    } else {
+        for (name, value) in values {
+            println!("{name:<10} {}", if value.is_null() { "dead end".to_string() } else { value.to_string() });
+        }
+    }
+    Ok(ExitCode::SUCCESS)
+}
