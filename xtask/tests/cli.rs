@@ -100,3 +100,77 @@ fn validate_reads_alfworld_commands_from_a_game() {
     assert_eq!(output.status.code(), Some(1));
     assert!(stdout(&output).starts_with("invalid: step 1: `use desklamp 1`"), "{}", stdout(&output));
 }
+
+#[test]
+fn plan_writes_a_fast_downward_plan_and_heuristic_prints_every_value() {
+    let domain = fixtures().join("ipc/blocks/domain.pddl").display().to_string();
+    let problem = fixtures().join("ipc/blocks/instance-1.pddl").display().to_string();
+    let out = scratch("blocks-1.plan", "");
+    let output = xtask(&[
+        "plan",
+        "--domain",
+        &domain,
+        "--problem",
+        &problem,
+        "--planner",
+        "astar",
+        "--heuristic",
+        "lmcut",
+        "--out",
+        &out.display().to_string(),
+        "--json",
+    ]);
+    assert!(output.status.success(), "{}", String::from_utf8_lossy(&output.stderr));
+    let value: serde_json::Value = serde_json::from_str(stdout(&output).trim()).expect("one JSON object");
+    assert_eq!(value["solved"], true);
+    assert_eq!(value["cost"], 6);
+    assert_eq!(value["length"], 6);
+    for key in ["expanded", "evaluated", "millis"] {
+        assert!(value[key].is_number(), "{key}");
+    }
+    let plan = std::fs::read_to_string(&out).expect("plan written");
+    assert_eq!(plan.lines().count(), 7);
+    assert_eq!(plan.lines().last(), Some("; cost = 6 (unit cost)"));
+    // The written plan validates.
+    let output = xtask(&["validate", "--domain", &domain, "--problem", &problem, "--plan", &out.display().to_string()]);
+    assert_eq!(output.status.code(), Some(0), "{}", stdout(&output));
+
+    let output = xtask(&["heuristic", "--domain", &domain, "--problem", &problem, "--json"]);
+    assert!(output.status.success());
+    let value: serde_json::Value = serde_json::from_str(stdout(&output).trim()).expect("one JSON object");
+    assert_eq!(value["hmax"], 2);
+    assert_eq!(value["hadd"], 6);
+    assert_eq!(value["lmcut"], 6);
+    assert_eq!(value["ff"], 6);
+    assert_eq!(value["goalcount"], 3);
+    assert_eq!(value["blind"], 1);
+}
+
+#[test]
+fn plan_reports_unsolvable_tasks() {
+    let domain = fixtures().join("pddl-valid/household/domain.pddl").display().to_string();
+    let problem = scratch(
+        "stuck.pddl",
+        "(define (problem stuck) (:domain household) (:objects kitchentable - place dishwasher - container wineglass - item)
+         (:init (at kitchentable) (on wineglass kitchentable)) (:goal (on wineglass dishwasher)))",
+    );
+    let output = xtask(&[
+        "plan",
+        "--domain",
+        &domain,
+        "--problem",
+        &problem.display().to_string(),
+        "--planner",
+        "gbfs",
+        "--heuristic",
+        "ff",
+        "--json",
+    ]);
+    assert_eq!(output.status.code(), Some(1));
+    let value: serde_json::Value = serde_json::from_str(stdout(&output).trim()).expect("one JSON object");
+    assert_eq!(value["solved"], false);
+    assert_eq!(value["status"], "unsolvable");
+    let output = xtask(&["heuristic", "--domain", &domain, "--problem", &problem.display().to_string(), "--json"]);
+    let value: serde_json::Value = serde_json::from_str(stdout(&output).trim()).expect("one JSON object");
+    assert!(value["lmcut"].is_null() && value["ff"].is_null() && value["hmax"].is_null(), "{value}");
+}

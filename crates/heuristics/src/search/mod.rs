@@ -115,7 +115,7 @@ struct Budget {
 impl Budget {
     fn exhausted(&self, expanded: u64) -> bool {
         self.config.max_expansions.is_some_and(|m| expanded >= m)
-            || (expanded % 256 == 0 && self.config.time_limit.is_some_and(|t| self.start.elapsed() >= t))
+            || (expanded.is_multiple_of(256) && self.config.time_limit.is_some_and(|t| self.start.elapsed() >= t))
     }
 }
 

@@ -30,7 +30,7 @@ impl StateRegistry {
     }
 
     pub fn len(&self) -> usize {
-        if self.width == 0 { self.table.len() } else { self.words.len() / self.width }
+        self.words.len().checked_div(self.width).unwrap_or(self.table.len())
     }
 
     pub fn is_empty(&self) -> bool {
