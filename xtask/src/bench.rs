@@ -319,6 +319,8 @@ fn run_fd_search(downward: &Path, sas: &Path, search: &str, time_limit: f64) -> 
         .arg(downward)
         .args(["--search", search])
         .stdin(input)
+        // Fast Downward writes its plan (`sas_plan`) into the working directory.
+        .current_dir(sas.parent().unwrap_or(Path::new(".")))
         .output()
         .context("cannot run Fast Downward's search")?;
     let stdout = String::from_utf8_lossy(&output.stdout);

@@ -142,8 +142,8 @@ impl Heuristic for LmCut {
                     }
                 }
             }
-            self.cut.sort_unstable();
-            self.cut.dedup();
+            // Each fact is reached once and each operator triggered by its supporter only,
+            // so the cut has no duplicates.
             // A cut exists and costs more than zero whenever the goal does (the goal zone
             // holds every fact that reaches the goal at zero cost); stop rather than loop if not.
             let cheapest = self.cut.iter().map(|&op| self.costs[op as usize]).min().unwrap_or(0);
