@@ -4,7 +4,7 @@
 //! cannot reach the goal (checked by a naive fixpoint here); every returned plan validates.
 
 use heuristics::search::{Algorithm, SearchConfig, SearchStatus, search};
-use heuristics::{Blind, GoalCount, HAdd, HFF, HMax, Heuristic, LmCut};
+use heuristics::{Blind, GoalCount, HAdd, HFF, HMax, Heuristic, LmCut, RemainingPlanCost, WeightedMix};
 use proptest::prelude::*;
 use transition_model::{State, TransitionModel};
 
@@ -136,6 +136,21 @@ proptest! {
             if result.status == SearchStatus::Solved {
                 model.validate(&result.plan).expect("plans validate");
             }
+        }
+        // Remaining plan cost is the cost of a real plan: never below h*, ∞ only when unsolvable.
+        let remaining_cost = RemainingPlanCost::new(&model, 10_000).evaluate(&model.initial_state());
+        if optimal.status == SearchStatus::Solved {
+            prop_assert!(remaining_cost.is_some_and(|c| u64::from(c) >= optimal.cost));
+        } else if !relaxed_solvable(&model, &model.initial_state()) {
+            prop_assert_eq!(remaining_cost, None);
+        }
+        // The mix is the weighted average of its parts; a dead end for one is a dead end for it.
+        let state = model.initial_state();
+        let (ff_value, cut_value) = (HFF::new(&model).evaluate(&state), LmCut::new(&model).evaluate(&state));
+        let mixed = WeightedMix::new().with(1.0, HFF::new(&model)).with(3.0, LmCut::new(&model)).evaluate(&state);
+        match (ff_value, cut_value) {
+            (Some(a), Some(b)) => prop_assert!((mixed.expect("mix") - (f64::from(a) + 3.0 * f64::from(b)) / 4.0).abs() < 1e-9),
+            _ => prop_assert_eq!(mixed, None),
         }
         let lmcut_astar = search(&model, &mut LmCut::new(&model), &SearchConfig::new(Algorithm::AStar), None);
         prop_assert_eq!(lmcut_astar.status, optimal.status);
