@@ -29,11 +29,15 @@ pub struct LmCut {
     reached: Vec<bool>,
     queue: VecDeque<u32>,
     cut: Vec<u32>,
+    /// Update h_max incrementally between rounds instead of recomputing it.
+    incremental: bool,
 }
 
 const NONE: u32 = u32::MAX;
 
 impl LmCut {
+    /// LM-cut with a full h_max computation per round: as informed as Fast Downward's on
+    /// the IPC fixtures (see the module docs).
     pub fn new(model: &TransitionModel) -> LmCut {
         let exploration = Exploration::new(model.task());
         let relaxed = &exploration.relaxed;
@@ -63,8 +67,19 @@ impl LmCut {
             reached: vec![false; facts],
             queue: VecDeque::new(),
             cut: Vec::new(),
+            incremental: false,
             exploration,
         }
+    }
+}
+
+impl LmCut {
+    /// LM-cut that updates h_max incrementally between rounds (only downstream of the cut),
+    /// choosing supporters by the same rule on the facts whose cost changed. About twice as
+    /// fast per evaluation on logistics and blocks; less informed where many preconditions
+    /// tie (visitall: 78% of Fast Downward's initial values instead of 99.6%).
+    pub fn incremental(model: &TransitionModel) -> LmCut {
+        LmCut { incremental: true, ..LmCut::new(model) }
     }
 }
 
@@ -78,11 +93,11 @@ impl Heuristic for LmCut {
             *cost = op.cost;
         }
         let mut h: u32 = 0;
+        let mut goal_cost = self.exploration.run(state, Combine::Max, Some(&self.costs));
+        if goal_cost == INFINITE {
+            return None;
+        }
         loop {
-            let goal_cost = self.exploration.run(state, Combine::Max, Some(&self.costs));
-            if goal_cost == INFINITE {
-                return None;
-            }
             if goal_cost == 0 {
                 return Some(h);
             }
@@ -154,6 +169,11 @@ impl Heuristic for LmCut {
             for &op in &self.cut {
                 self.costs[op as usize] -= cheapest;
             }
+            goal_cost = if self.incremental {
+                self.exploration.lower(&self.cut, &self.costs)
+            } else {
+                self.exploration.run(state, Combine::Max, Some(&self.costs))
+            };
         }
     }
 }

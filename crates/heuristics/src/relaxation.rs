@@ -86,6 +86,10 @@ pub struct Exploration {
     /// Per operator: the precondition whose arrival made it applicable (the last one
     /// popped, so one of maximal cost), `u32::MAX` if none.
     pub op_supporter: Vec<u32>,
+    /// When each fact was last taken from the queue (a global clock): among preconditions
+    /// of equal cost, the supporter is the one taken last.
+    stamp: Vec<u32>,
+    clock: u32,
     unsatisfied: Vec<u32>,
     /// Precondition count of each operator, copied into `unsatisfied` per run.
     pre_count: Vec<u32>,
@@ -105,6 +109,8 @@ impl Exploration {
             supporter: vec![u32::MAX; facts],
             op_cost: vec![0; ops],
             op_supporter: vec![u32::MAX; ops],
+            stamp: vec![0; facts],
+            clock: 0,
             unsatisfied: vec![0; ops],
             queue: FactQueue::default(),
         }
@@ -152,6 +158,8 @@ impl Exploration {
             if fact == goal && costs.is_none() {
                 break;
             }
+            self.clock = self.clock.wrapping_add(1);
+            self.stamp[fact as usize] = self.clock;
             for &op in relaxed.pre_of(fact) {
                 let i = op as usize;
                 if additive {
@@ -177,6 +185,58 @@ impl Exploration {
             }
         }
         self.fact_cost[goal as usize]
+    }
+}
+
+impl Exploration {
+    /// After a run with `costs` (which must be `Combine::Max`), the operators in `lowered`
+    /// got cheaper: update h_max incrementally (costs only fall, so only what lies
+    /// downstream of those operators changes) and return the goal's new cost. An operator's
+    /// supporter changes only when that fact got cheaper; it is then chosen as in a full run,
+    /// a precondition of maximal cost and, among those, the one taken from the queue last.
+    pub fn lower(&mut self, lowered: &[u32], costs: &[u32]) -> u32 {
+        let relaxed = &self.relaxed;
+        self.queue.clear();
+        for &op in lowered {
+            let supporter = self.op_supporter[op as usize];
+            let base = if supporter == u32::MAX { 0 } else { self.fact_cost[supporter as usize] };
+            let target = base.saturating_add(costs[op as usize]);
+            for &added in relaxed.ops[op as usize].add(relaxed) {
+                if target < self.fact_cost[added as usize] {
+                    self.fact_cost[added as usize] = target;
+                    self.queue.push(target, added);
+                }
+            }
+        }
+        while let Some((cost, fact)) = self.queue.pop() {
+            if cost > self.fact_cost[fact as usize] {
+                continue;
+            }
+            self.clock = self.clock.wrapping_add(1);
+            self.stamp[fact as usize] = self.clock;
+            for &op in relaxed.pre_of(fact) {
+                let i = op as usize;
+                if self.op_supporter[i] != fact {
+                    continue;
+                }
+                let mut supporter = fact;
+                for &pre in relaxed.ops[i].pre(relaxed) {
+                    let (c, best) = (self.fact_cost[pre as usize], self.fact_cost[supporter as usize]);
+                    if c > best || (c == best && self.stamp[pre as usize] > self.stamp[supporter as usize]) {
+                        supporter = pre;
+                    }
+                }
+                self.op_supporter[i] = supporter;
+                let target = self.fact_cost[supporter as usize].saturating_add(costs[i]);
+                for &added in relaxed.ops[i].add(relaxed) {
+                    if target < self.fact_cost[added as usize] {
+                        self.fact_cost[added as usize] = target;
+                        self.queue.push(target, added);
+                    }
+                }
+            }
+        }
+        self.fact_cost[relaxed.goal as usize]
     }
 }
 
