@@ -12,36 +12,19 @@ fn model(files: &TaskFiles) -> TransitionModel {
     TransitionModel::new(grounding::ground(&domain, &problem).expect("grounds"))
 }
 
+/// States along the task's own plan (ALFWorld walkthrough, EAI gold plan), or along a
+/// seeded random walk.
 fn states(model: &TransitionModel, files: &TaskFiles) -> Vec<State> {
-    let mut state = model.initial_state();
-    let mut out = vec![state.clone()];
-    let plan = match &files.extra {
-        Extra::Alfworld(game) => Some((Spelling::alfworld(model.task(), &game.grammar).expect("grammar"), game.walkthrough.clone())),
-        Extra::Virtualhome { gold_plan: Some(plan), .. } => Some((Spelling::pddl(model.task()), plan.clone())),
-        _ => None,
-    };
-    if let Some((spelling, plan)) = plan {
-        for text in plan {
-            let action = spelling.parse(&text).iter().copied().find(|&a| model.is_applicable(&state, a)).expect("plan applies");
-            state = model.apply(&state, action);
-            out.push(state.clone());
+    match &files.extra {
+        Extra::Alfworld(game) => {
+            let spelling = Spelling::alfworld(model.task(), &game.grammar).expect("grammar");
+            model.states_along(&spelling, &game.walkthrough).expect("walkthrough applies")
         }
-        return out;
-    }
-    let mut applicable = Vec::new();
-    let mut seed: u64 = 0x9E37_79B9_7F4A_7C15;
-    for _ in 0..20 {
-        model.applicable(&state, &mut applicable);
-        if applicable.is_empty() {
-            break;
+        Extra::Virtualhome { gold_plan: Some(plan), .. } => {
+            model.states_along(&Spelling::pddl(model.task()), plan).expect("gold plan applies")
         }
-        seed ^= seed << 13;
-        seed ^= seed >> 7;
-        seed ^= seed << 17;
-        state = model.apply(&state, applicable[(seed % applicable.len() as u64) as usize]);
-        out.push(state.clone());
+        _ => model.random_walk(0x9E37_79B9_7F4A_7C15, 50),
     }
-    out
 }
 
 fn bench(c: &mut Criterion) {

@@ -101,4 +101,27 @@ impl TransitionModel {
     pub fn successor_generator(&self) -> &SuccessorGenerator {
         &self.successors
     }
+
+    /// The states of a seeded random walk of at most `steps` actions from the initial state
+    /// (it stops early in a state without applicable actions), the initial state first.
+    /// Deterministic for a seed; for benchmarks and tests that need realistic states.
+    pub fn random_walk(&self, seed: u64, steps: usize) -> Vec<State> {
+        let mut state = self.initial_state();
+        let mut states = vec![state.clone()];
+        let mut applicable = Vec::new();
+        // xorshift64: a fixed, dependency-free sequence.
+        let mut random = seed | 1;
+        for _ in 0..steps {
+            self.applicable(&state, &mut applicable);
+            if applicable.is_empty() {
+                break;
+            }
+            random ^= random << 13;
+            random ^= random >> 7;
+            random ^= random << 17;
+            state = self.apply(&state, applicable[(random % applicable.len() as u64) as usize]);
+            states.push(state.clone());
+        }
+        states
+    }
 }

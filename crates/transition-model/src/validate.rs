@@ -107,7 +107,26 @@ impl TransitionModel {
         self.replay(steps)
     }
 
+    /// The states a text plan visits, from the initial state to the last (the plan need not
+    /// reach the goal; it must apply).
+    pub fn states_along<S: AsRef<str>>(&self, spelling: &Spelling, plan: &[S]) -> Result<Vec<State>, PlanError> {
+        let mut states = vec![self.initial_state()];
+        let steps = plan.iter().map(|text| (text.as_ref().trim().to_string(), spelling.parse(text.as_ref()).to_vec()));
+        match self.replay_into(steps, Some(&mut states)) {
+            Ok(_) | Err(PlanError::GoalNotReached { .. }) => Ok(states),
+            Err(error) => Err(error),
+        }
+    }
+
     fn replay(&self, steps: impl Iterator<Item = (String, Vec<ActionId>)>) -> Result<ValidPlan, PlanError> {
+        self.replay_into(steps, None)
+    }
+
+    fn replay_into(
+        &self,
+        steps: impl Iterator<Item = (String, Vec<ActionId>)>,
+        mut visited: Option<&mut Vec<State>>,
+    ) -> Result<ValidPlan, PlanError> {
         let task = self.task();
         let mut state = self.initial_state();
         let mut actions = Vec::new();
@@ -128,6 +147,9 @@ impl TransitionModel {
                 return Err(PlanError::Inapplicable { step, text, action, unmet: parts });
             };
             state = self.apply(&state, action);
+            if let Some(visited) = visited.as_deref_mut() {
+                visited.push(state.clone());
+            }
             cost += u64::from(task.action(action).cost);
             actions.push(action);
         }
