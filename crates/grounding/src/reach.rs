@@ -93,6 +93,27 @@ pub(crate) fn reachable(lifted: &Lifted) -> Reachable {
     Reachable { atoms, instances }
 }
 
+/// Calls `emit` with the ground atom of `effect` for every binding of its `forall`
+/// variables under which its relaxed condition holds on `atoms` (the instance's parameters
+/// bound to `args`).
+fn effect_atoms(
+    lifted: &Lifted,
+    schema: &LiftedSchema,
+    args: &[ObjectId],
+    effect: &crate::lifted::LiftedEffect,
+    atoms: &AtomStore,
+    emit: &mut dyn FnMut(Tuple),
+) {
+    let join = Join { store: atoms, domains: &lifted.domains, var_domains: &schema.var_domains };
+    for conj in &effect.relaxed_condition {
+        let mut binding: Binding = vec![None; schema.var_domains.len()];
+        for (i, &object) in args.iter().enumerate() {
+            binding[i] = Some(object);
+        }
+        join.run(conj, &mut binding, &effect.forall, &mut |binding| emit(instantiate_args(&effect.atom.args, binding)));
+    }
+}
+
 fn add_effect_atoms(
     lifted: &Lifted,
     schema: &LiftedSchema,
@@ -101,19 +122,11 @@ fn add_effect_atoms(
     atoms: &AtomStore,
     out: &mut Vec<(PredicateId, Tuple)>,
 ) {
-    let join = Join { store: atoms, domains: &lifted.domains, var_domains: &schema.var_domains };
-    for conj in &effect.relaxed_condition {
-        let mut binding: Binding = vec![None; schema.var_domains.len()];
-        for (i, &object) in args.iter().enumerate() {
-            binding[i] = Some(object);
+    effect_atoms(lifted, schema, args, effect, atoms, &mut |tuple| {
+        if !atoms.contains(effect.atom.predicate, &tuple) {
+            out.push((effect.atom.predicate, tuple));
         }
-        join.run(conj, &mut binding, &effect.forall, &mut |binding| {
-            let tuple = instantiate_args(&effect.atom.args, binding);
-            if !atoms.contains(effect.atom.predicate, &tuple) {
-                out.push((effect.atom.predicate, tuple));
-            }
-        });
-    }
+    });
 }
 
 /// Every ground atom some reachable instance deletes (relaxed conditions), for deciding
@@ -123,19 +136,11 @@ pub(crate) fn deleted_atoms(lifted: &Lifted, reachable: &Reachable) -> Vec<(Pred
     for (schema_index, args) in &reachable.instances {
         let schema = &lifted.schemas[*schema_index];
         for effect in schema.effects.iter().filter(|e| e.delete) {
-            let join = Join { store: &reachable.atoms, domains: &lifted.domains, var_domains: &schema.var_domains };
-            for conj in &effect.relaxed_condition {
-                let mut binding: Binding = vec![None; schema.var_domains.len()];
-                for (i, &object) in args.iter().enumerate() {
-                    binding[i] = Some(object);
+            effect_atoms(lifted, schema, args, effect, &reachable.atoms, &mut |tuple| {
+                if reachable.atoms.contains(effect.atom.predicate, &tuple) {
+                    out.push((effect.atom.predicate, tuple));
                 }
-                join.run(conj, &mut binding, &effect.forall, &mut |binding| {
-                    let tuple = instantiate_args(&effect.atom.args, binding);
-                    if reachable.atoms.contains(effect.atom.predicate, &tuple) {
-                        out.push((effect.atom.predicate, tuple));
-                    }
-                });
-            }
+            });
         }
     }
     out
