@@ -3,7 +3,7 @@
 
 use std::fmt;
 
-use grounding::{ActionId, Cost, Literal, Task};
+use grounding::{ActionId, Literal, Task};
 
 use crate::TransitionModel;
 use crate::spelling::Spelling;
@@ -163,5 +163,5 @@ impl TransitionModel {
 
 /// Cost of a plan (sum of action costs).
 pub fn plan_cost(task: &Task, plan: &[ActionId]) -> u64 {
-    plan.iter().map(|&a| u64::from(task.action(a).cost as Cost)).sum()
+    plan.iter().map(|&a| u64::from(task.action(a).cost)).sum()
 }

@@ -275,7 +275,6 @@ fn eager_greedy(model: &TransitionModel, heuristic: &mut dyn Heuristic, budget: 
     }
     open.push((h, sequence, root), false);
     let mut applicable = Vec::new();
-    let mut best_h = h;
     while let Some((_, _, id)) = open.pop() {
         if space.nodes[id as usize].closed {
             continue;
@@ -311,9 +310,6 @@ fn eager_greedy(model: &TransitionModel, heuristic: &mut dyn Heuristic, budget: 
             node.action = action.0;
             if budget.config.preferred_operators {
                 preferred_of.insert(child, heuristic.preferred_operators().into());
-            }
-            if h < best_h {
-                best_h = h;
             }
             sequence += 1;
             open.push((h, sequence, child), parent_preferred.contains(&action));
