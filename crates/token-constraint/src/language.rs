@@ -1,0 +1,438 @@
+//! The allowed language of one state, and the byte-level matcher that walks it.
+//!
+//! A [`Language`] holds the texts of the actions applicable in one state, each followed by
+//! the separator, plus the end marker, as a trie. The plan language is
+//! `(action separator)* (end-marker | EOS)`, and additionally `action EOS` when that
+//! action may end the plan. Only the action texts change with the state; everything after
+//! a completed action is judged against the *next* state's language (see [`Matcher`]).
+
+use std::sync::Arc;
+
+use rustc_hash::FxHashMap;
+
+use crate::mask::TokenMask;
+use crate::vocab::{VocabNode, VocabTrie, Vocabulary};
+use crate::{ChoiceId, TokenId};
+
+/// Separator and end marker of a plan language.
+#[derive(Debug, Clone, PartialEq, Eq, Hash)]
+pub struct LanguageConfig {
+    /// Bytes written after every action (default `\n`).
+    pub separator: Vec<u8>,
+    /// Text that ends the plan at an action boundary, besides the end-of-sequence token
+    /// (default `DONE`, as the paper's prompts say); `None` for EOS only.
+    pub end_marker: Option<Vec<u8>>,
+}
+
+impl Default for LanguageConfig {
+    fn default() -> LanguageConfig {
+        LanguageConfig { separator: b"\n".to_vec(), end_marker: Some(b"DONE".to_vec()) }
+    }
+}
+
+/// Why an action text cannot be put in a language.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+pub enum LanguageError {
+    #[error("action text {index} is empty")]
+    EmptyText { index: usize },
+    #[error("action text {text:?} contains the separator {separator:?}")]
+    ContainsSeparator { text: String, separator: String },
+    #[error("action text {text:?} starts with the end marker {marker:?}")]
+    StartsWithEndMarker { text: String, marker: String },
+    #[error("the separator is empty")]
+    EmptySeparator,
+}
+
+const NONE: u32 = u32::MAX;
+const END: u32 = u32::MAX - 1;
+
+/// Collects the action texts of one state.
+#[derive(Debug, Clone)]
+pub struct LanguageBuilder {
+    config: LanguageConfig,
+    texts: Vec<Vec<u8>>,
+    end_after: Vec<bool>,
+    index: FxHashMap<Vec<u8>, ChoiceId>,
+    end_here: bool,
+}
+
+impl LanguageBuilder {
+    pub fn new(config: LanguageConfig) -> LanguageBuilder {
+        LanguageBuilder { config, texts: Vec::new(), end_after: Vec::new(), index: FxHashMap::default(), end_here: true }
+    }
+
+    /// Adds an action text; `end_after`: the plan may end (EOS) right after this text,
+    /// without a separator. A text added twice keeps its first id.
+    pub fn push(&mut self, text: &[u8], end_after: bool) -> Result<ChoiceId, LanguageError> {
+        let sep = &self.config.separator;
+        let lossy = || String::from_utf8_lossy(text).into_owned();
+        if sep.is_empty() {
+            return Err(LanguageError::EmptySeparator);
+        }
+        if text.is_empty() {
+            return Err(LanguageError::EmptyText { index: self.texts.len() });
+        }
+        if text.windows(sep.len()).any(|w| w == sep.as_slice()) {
+            return Err(LanguageError::ContainsSeparator { text: lossy(), separator: String::from_utf8_lossy(sep).into_owned() });
+        }
+        if let Some(marker) = &self.config.end_marker
+            && text.starts_with(marker)
+        {
+            return Err(LanguageError::StartsWithEndMarker { text: lossy(), marker: String::from_utf8_lossy(marker).into_owned() });
+        }
+        if let Some(&id) = self.index.get(text) {
+            self.end_after[id as usize] |= end_after;
+            return Ok(id);
+        }
+        let id = self.texts.len() as ChoiceId;
+        self.texts.push(text.to_vec());
+        self.end_after.push(end_after);
+        self.index.insert(text.to_vec(), id);
+        Ok(id)
+    }
+
+    /// Whether the plan may end at this state's boundary (EOS or the end marker); default true.
+    pub fn end_here(&mut self, allowed: bool) -> &mut LanguageBuilder {
+        self.end_here = allowed;
+        self
+    }
+
+    pub fn build(self) -> Language {
+        // A pointer trie first (small: the texts of one state), then compressed rows.
+        let mut children: Vec<Vec<(u8, u32)>> = vec![Vec::new()];
+        let mut text_end = vec![NONE];
+        let mut event = vec![NONE];
+        let insert = |bytes: &[u8], children: &mut Vec<Vec<(u8, u32)>>, text_end: &mut Vec<u32>, event: &mut Vec<u32>| {
+            let mut node = 0usize;
+            for &b in bytes {
+                node = match children[node].iter().find(|(c, _)| *c == b) {
+                    Some(&(_, child)) => child as usize,
+                    None => {
+                        let child = children.len();
+                        children.push(Vec::new());
+                        text_end.push(NONE);
+                        event.push(NONE);
+                        children[node].push((b, child as u32));
+                        child
+                    }
+                };
+            }
+            node
+        };
+        for (id, text) in self.texts.iter().enumerate() {
+            let node = insert(text, &mut children, &mut text_end, &mut event);
+            text_end[node] = id as u32;
+            let mut full = text.clone();
+            full.extend_from_slice(&self.config.separator);
+            let node = insert(&full, &mut children, &mut text_end, &mut event);
+            event[node] = id as u32;
+        }
+        if self.end_here
+            && let Some(marker) = &self.config.end_marker
+            && !marker.is_empty()
+        {
+            let node = insert(marker, &mut children, &mut text_end, &mut event);
+            event[node] = END;
+        }
+        let mut child_start = Vec::with_capacity(children.len() + 1);
+        let mut child_byte = Vec::new();
+        let mut child_node = Vec::new();
+        for row in &mut children {
+            row.sort_unstable();
+            child_start.push(child_byte.len() as u32);
+            for &(b, c) in row.iter() {
+                child_byte.push(b);
+                child_node.push(c);
+            }
+        }
+        child_start.push(child_byte.len() as u32);
+        Language {
+            config: self.config,
+            texts: self.texts,
+            end_after: self.end_after,
+            end_here: self.end_here,
+            child_start,
+            child_byte,
+            child_node,
+            text_end,
+            event,
+        }
+    }
+}
+
+/// The allowed strings of one state, as a trie (see the module comment).
+#[derive(Debug, Clone)]
+pub struct Language {
+    config: LanguageConfig,
+    texts: Vec<Vec<u8>>,
+    end_after: Vec<bool>,
+    end_here: bool,
+    child_start: Vec<u32>,
+    child_byte: Vec<u8>,
+    child_node: Vec<u32>,
+    /// Per node: the choice whose text ends here (the separator or EOS may follow).
+    text_end: Vec<u32>,
+    /// Per node: the choice completed by its separator, `END` for the end marker.
+    event: Vec<u32>,
+}
+
+impl Language {
+    pub fn config(&self) -> &LanguageConfig {
+        &self.config
+    }
+
+    /// Number of distinct action texts.
+    pub fn choices(&self) -> usize {
+        self.texts.len()
+    }
+
+    pub fn text(&self, choice: ChoiceId) -> &[u8] {
+        &self.texts[choice as usize]
+    }
+
+    /// Whether the plan may end at this language's boundary.
+    pub fn end_here(&self) -> bool {
+        self.end_here
+    }
+
+    /// Whether the plan may end right after `choice`'s text.
+    pub fn end_after(&self, choice: ChoiceId) -> bool {
+        self.end_after[choice as usize]
+    }
+
+    pub fn node_count(&self) -> usize {
+        self.text_end.len()
+    }
+
+    #[inline]
+    fn row(&self, node: u32) -> (usize, usize) {
+        (self.child_start[node as usize] as usize, self.child_start[node as usize + 1] as usize)
+    }
+
+    #[inline]
+    fn child(&self, node: u32, byte: u8) -> Option<u32> {
+        let (lo, hi) = self.row(node);
+        self.child_byte[lo..hi].iter().position(|&b| b == byte).map(|i| self.child_node[lo + i])
+    }
+
+    /// Emits every token whose bytes, appended at `node`, stay inside the trie: the paired
+    /// walk of this trie and the vocabulary trie from their roots. It visits only the
+    /// pairs of nodes both tries share, so its cost is the number of allowed tokens and
+    /// their prefixes, not the vocabulary size.
+    fn walk(&self, node: u32, trie: &VocabTrie, vnode: VocabNode, emit: &mut impl FnMut(TokenId)) {
+        let (lo, hi) = self.row(node);
+        for i in lo..hi {
+            let Some(vchild) = trie.child(vnode, self.child_byte[i]) else { continue };
+            for &t in trie.tokens_at(vchild) {
+                emit(t);
+            }
+            let lchild = self.child_node[i];
+            if trie.has_children(vchild) && self.child_start[lchild as usize] != self.child_start[lchild as usize + 1] {
+                self.walk(lchild, trie, vchild, emit);
+            }
+        }
+    }
+}
+
+/// What a token did to the partial plan.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Step {
+    /// Inside an action text (or the end marker): nothing completed.
+    Partial,
+    /// The separator after this action was written: the action is complete. The matcher
+    /// now waits for the next state's language ([`Matcher::enter`]).
+    Action(ChoiceId),
+    /// End of sequence right after this action's text: the action completes and the plan ends.
+    ActionThenEnd(ChoiceId),
+    /// The plan ended at a boundary (EOS or the end marker).
+    End,
+}
+
+/// Why a token was refused.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+pub enum TokenError {
+    #[error("token {token} ({text:?}) does not extend {prefix:?} towards an allowed action")]
+    NotAllowed { token: TokenId, text: String, prefix: String },
+    #[error("token {token} is outside the vocabulary")]
+    UnknownToken { token: TokenId },
+    #[error("an action was completed: enter the next state's language before the next token")]
+    AwaitingLanguage,
+    #[error("the plan has ended")]
+    Finished,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Phase {
+    Open,
+    AwaitingLanguage,
+    Finished,
+}
+
+/// The partial action `u` inside one state's language: Eq. 5 of the paper at the byte level.
+///
+/// **Boundaries.** A token is allowed at `u` iff its bytes `b` make `u·b` a prefix of
+/// `text·separator` for an action text of this state, or of the end marker at a boundary.
+/// A token may *end* exactly at the separator (that completes the action); a token whose
+/// bytes run *past* the separator, into the next action, is refused: those bytes would be
+/// judged against a state the plan has not reached. For byte-level BPE tokenizers whose
+/// pre-tokenizer splits line breaks from letters (GPT-2, Llama 3, Qwen, SmolLM2) no
+/// canonical tokenization crosses a `\n` separator, so nothing they would write is lost.
+/// End-of-sequence is allowed only at a boundary: at the start of an action (when the
+/// language allows ending there) or right after a complete action text marked
+/// `end_after`. Special tokens other than EOS, and tokens with no bytes, are never allowed.
+#[derive(Debug, Clone)]
+pub struct Matcher {
+    language: Arc<Language>,
+    node: u32,
+    prefix: Vec<u8>,
+    phase: Phase,
+}
+
+impl Matcher {
+    pub fn new(language: Arc<Language>) -> Matcher {
+        Matcher { language, node: 0, prefix: Vec::new(), phase: Phase::Open }
+    }
+
+    pub fn language(&self) -> &Arc<Language> {
+        &self.language
+    }
+
+    /// The bytes of the partial action written so far.
+    pub fn prefix(&self) -> &[u8] {
+        &self.prefix
+    }
+
+    /// At the start of an action (nothing of it written).
+    pub fn at_boundary(&self) -> bool {
+        self.phase == Phase::Open && self.node == 0
+    }
+
+    pub fn is_finished(&self) -> bool {
+        self.phase == Phase::Finished
+    }
+
+    /// Waiting for [`Matcher::enter`] after a completed action.
+    pub fn is_awaiting_language(&self) -> bool {
+        self.phase == Phase::AwaitingLanguage
+    }
+
+    /// Starts the next action in `language` (the state after the completed action).
+    pub fn enter(&mut self, language: Arc<Language>) {
+        self.language = language;
+        self.node = 0;
+        self.prefix.clear();
+        self.phase = Phase::Open;
+    }
+
+    fn eos_allowed(&self) -> bool {
+        if self.phase != Phase::Open {
+            return false;
+        }
+        if self.node == 0 {
+            return self.language.end_here;
+        }
+        let choice = self.language.text_end[self.node as usize];
+        choice != NONE && self.language.end_after[choice as usize]
+    }
+
+    /// Calls `emit` once per allowed token.
+    pub fn for_each_allowed(&self, vocab: &Vocabulary, mut emit: impl FnMut(TokenId)) {
+        if self.phase != Phase::Open {
+            return;
+        }
+        self.language.walk(self.node, vocab.trie(), VocabTrie::ROOT, &mut emit);
+        if self.eos_allowed() {
+            vocab.eos().iter().copied().for_each(emit);
+        }
+    }
+
+    /// The next-token mask at `u`, into `mask` (cleared first; resized to the vocabulary).
+    pub fn fill_mask(&self, vocab: &Vocabulary, mask: &mut TokenMask) {
+        mask.reset(vocab.len());
+        self.for_each_allowed(vocab, |t| mask.insert(t));
+    }
+
+    /// The next-token mask at `u`.
+    pub fn mask(&self, vocab: &Vocabulary) -> TokenMask {
+        let mut mask = TokenMask::new(vocab.len());
+        self.fill_mask(vocab, &mut mask);
+        mask
+    }
+
+    /// The allowed tokens at `u`, in no particular order, into `out` (cleared first).
+    pub fn allowed(&self, vocab: &Vocabulary, out: &mut Vec<TokenId>) {
+        out.clear();
+        self.for_each_allowed(vocab, |t| out.push(t));
+    }
+
+    /// Whether `token` is allowed at `u`, without computing the mask.
+    pub fn is_allowed(&self, vocab: &Vocabulary, token: TokenId) -> bool {
+        self.step(vocab, token).is_ok()
+    }
+
+    /// What [`Matcher::advance`] would report for `token`, without moving.
+    pub fn peek(&self, vocab: &Vocabulary, token: TokenId) -> Result<Step, TokenError> {
+        self.step(vocab, token).map(|(_, step)| step)
+    }
+
+    fn step(&self, vocab: &Vocabulary, token: TokenId) -> Result<(u32, Step), TokenError> {
+        match self.phase {
+            Phase::Open => {}
+            Phase::AwaitingLanguage => return Err(TokenError::AwaitingLanguage),
+            Phase::Finished => return Err(TokenError::Finished),
+        }
+        if token as usize >= vocab.len() {
+            return Err(TokenError::UnknownToken { token });
+        }
+        let refuse = || TokenError::NotAllowed {
+            token,
+            text: String::from_utf8_lossy(vocab.token_bytes(token)).into_owned(),
+            prefix: String::from_utf8_lossy(&self.prefix).into_owned(),
+        };
+        if vocab.is_special(token) {
+            if !vocab.is_eos(token) || !self.eos_allowed() {
+                return Err(refuse());
+            }
+            let choice = self.language.text_end[self.node as usize];
+            return Ok((self.node, if self.node == 0 { Step::End } else { Step::ActionThenEnd(choice) }));
+        }
+        let bytes = vocab.token_bytes(token);
+        if bytes.is_empty() {
+            return Err(refuse());
+        }
+        let mut node = self.node;
+        for &b in bytes {
+            node = self.language.child(node, b).ok_or_else(refuse)?;
+        }
+        Ok((node, match self.language.event[node as usize] {
+            NONE => Step::Partial,
+            END => Step::End,
+            choice => Step::Action(choice),
+        }))
+    }
+
+    /// Writes `token`: moves `u`, and reports a completed action or the end of the plan.
+    /// A refused token leaves the matcher as it was.
+    pub fn advance(&mut self, vocab: &Vocabulary, token: TokenId) -> Result<Step, TokenError> {
+        let (node, step) = self.step(vocab, token)?;
+        match step {
+            Step::Partial => {
+                self.node = node;
+                self.prefix.extend_from_slice(vocab.token_bytes(token));
+            }
+            Step::Action(_) => {
+                self.node = node;
+                self.prefix.extend_from_slice(vocab.token_bytes(token));
+                self.phase = Phase::AwaitingLanguage;
+            }
+            Step::ActionThenEnd(_) | Step::End => {
+                if !vocab.is_special(token) {
+                    self.prefix.extend_from_slice(vocab.token_bytes(token));
+                }
+                self.node = node;
+                self.phase = Phase::Finished;
+            }
+        }
+        Ok(step)
+    }
+}
