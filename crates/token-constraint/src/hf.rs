@@ -90,8 +90,7 @@ pub fn load_tokenizer(path: &Path) -> Result<Tokenizer, HfError> {
 /// from the vocabulary are skipped; at least one must be present).
 pub fn vocabulary(tokenizer: &Tokenizer, eos: &[&str], path: &Path) -> Result<Vocabulary, HfError> {
     let path_text = || path.display().to_string();
-    let decoding =
-        decoding(tokenizer.get_decoder()).map_err(|decoder| HfError::UnsupportedDecoder { path: path_text(), decoder })?;
+    let decoding = decoding(tokenizer.get_decoder()).map_err(|decoder| HfError::UnsupportedDecoder { path: path_text(), decoder })?;
     let added = tokenizer.get_added_tokens_decoder();
     let vocab = tokenizer.get_vocab(true);
     let len = vocab.values().map(|&id| id as usize + 1).max().unwrap_or(0);
@@ -120,7 +119,9 @@ pub fn vocabulary(tokenizer: &Tokenizer, eos: &[&str], path: &Path) -> Result<Vo
         };
         *token = Token { bytes, special: false };
     }
-    let eos_ids: Vec<TokenId> = eos.iter().filter_map(|name| tokenizer.token_to_id(name)).collect();
+    // Only added special tokens end a sequence: Qwen3's vocabulary also has an ordinary `</s>`.
+    let eos_ids: Vec<TokenId> =
+        eos.iter().filter_map(|name| tokenizer.token_to_id(name)).filter(|id| added.get(id).is_some_and(|a| a.special)).collect();
     if eos_ids.is_empty() {
         return Err(HfError::NoEos { path: path_text(), names: eos.iter().map(|s| s.to_string()).collect() });
     }

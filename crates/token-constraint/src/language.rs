@@ -404,11 +404,14 @@ impl Matcher {
         for &b in bytes {
             node = self.language.child(node, b).ok_or_else(refuse)?;
         }
-        Ok((node, match self.language.event[node as usize] {
-            NONE => Step::Partial,
-            END => Step::End,
-            choice => Step::Action(choice),
-        }))
+        Ok((
+            node,
+            match self.language.event[node as usize] {
+                NONE => Step::Partial,
+                END => Step::End,
+                choice => Step::Action(choice),
+            },
+        ))
     }
 
     /// Writes `token`: moves `u`, and reports a completed action or the end of the plan.

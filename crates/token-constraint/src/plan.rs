@@ -102,6 +102,7 @@ impl<'m> PlanLanguages<'m> {
             builder.end_here(actions.is_empty() || self.model.is_goal(state));
             let mut next = state.clone();
             for group in &actions {
+                next.clone_from(state);
                 self.model.apply_into(state, group[0], &mut next);
                 if self.model.is_goal(&next) {
                     // Pushing a text again marks it `end_after`, keeping its id.
@@ -124,9 +125,15 @@ pub enum PlanStep {
     Partial,
     /// An action completed and was applied; `alternatives` are the other applicable
     /// actions with the same spelling (not applied).
-    Action { action: ActionId, alternatives: Vec<ActionId> },
+    Action {
+        action: ActionId,
+        alternatives: Vec<ActionId>,
+    },
     /// The plan ended; `action` is set when the end-of-sequence came right after an action.
-    End { action: Option<ActionId>, goal_reached: bool },
+    End {
+        action: Option<ActionId>,
+        goal_reached: bool,
+    },
 }
 
 /// Why a plan-level step failed.
