@@ -58,12 +58,28 @@ enum Which {
         #[arg(long)]
         json: bool,
     },
+    /// Next-token masks over Qwen3's vocabulary on real states, ours beside llguidance.
+    Mask {
+        /// A Hugging Face tokenizer.json [default: fixtures/tokenizers/qwen3/tokenizer.json].
+        #[arg(long)]
+        tokenizer: Option<PathBuf>,
+        /// Use every N-th ALFWorld game and VirtualHome problem.
+        #[arg(long, default_value_t = 5)]
+        every: usize,
+        /// Skip llguidance.
+        #[arg(long)]
+        no_reference: bool,
+        /// Print one JSON object.
+        #[arg(long)]
+        json: bool,
+    },
 }
 
 pub fn run(args: BenchArgs) -> anyhow::Result<ExitCode> {
     match args.which {
         Which::Ground { benchmark, limit, runs, no_reference, json } => ground(&benchmark, limit, runs.max(1), no_reference, json),
         Which::Plan { configs, time_limit, filter, json } => plan(&configs, time_limit, filter.as_deref(), json),
+        Which::Mask { tokenizer, every, no_reference, json } => crate::mask_bench::run(tokenizer, every, no_reference, json),
     }
 }
 

@@ -6,6 +6,7 @@
 mod bench;
 mod eval;
 mod input;
+mod mask_bench;
 mod planning;
 
 use std::path::PathBuf;

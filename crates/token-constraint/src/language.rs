@@ -8,9 +8,12 @@
 
 use std::sync::Arc;
 
-use rustc_hash::FxHashMap;
+use std::hash::Hasher;
+
+use hashbrown::HashTable;
 
 use crate::mask::TokenMask;
+use crate::trie::FlatTrie;
 use crate::vocab::{VocabNode, VocabTrie, Vocabulary};
 use crate::{ChoiceId, TokenId};
 
@@ -46,19 +49,30 @@ pub enum LanguageError {
 const NONE: u32 = u32::MAX;
 const END: u32 = u32::MAX - 1;
 
+fn hash(bytes: &[u8]) -> u64 {
+    let mut hasher = rustc_hash::FxHasher::default();
+    hasher.write(bytes);
+    hasher.finish()
+}
+
 /// Collects the action texts of one state.
 #[derive(Debug, Clone)]
 pub struct LanguageBuilder {
     config: LanguageConfig,
-    texts: Vec<Vec<u8>>,
+    bytes: Vec<u8>,
+    offsets: Vec<u32>,
     end_after: Vec<bool>,
-    index: FxHashMap<Vec<u8>, ChoiceId>,
+    index: HashTable<ChoiceId>,
     end_here: bool,
 }
 
 impl LanguageBuilder {
     pub fn new(config: LanguageConfig) -> LanguageBuilder {
-        LanguageBuilder { config, texts: Vec::new(), end_after: Vec::new(), index: FxHashMap::default(), end_here: true }
+        LanguageBuilder { config, bytes: Vec::new(), offsets: vec![0], end_after: Vec::new(), index: HashTable::new(), end_here: true }
+    }
+
+    fn text(&self, choice: ChoiceId) -> &[u8] {
+        &self.bytes[self.offsets[choice as usize] as usize..self.offsets[choice as usize + 1] as usize]
     }
 
     /// Adds an action text; `end_after`: the plan may end (EOS) right after this text,
@@ -70,7 +84,7 @@ impl LanguageBuilder {
             return Err(LanguageError::EmptySeparator);
         }
         if text.is_empty() {
-            return Err(LanguageError::EmptyText { index: self.texts.len() });
+            return Err(LanguageError::EmptyText { index: self.end_after.len() });
         }
         if text.windows(sep.len()).any(|w| w == sep.as_slice()) {
             return Err(LanguageError::ContainsSeparator { text: lossy(), separator: String::from_utf8_lossy(sep).into_owned() });
@@ -80,14 +94,17 @@ impl LanguageBuilder {
         {
             return Err(LanguageError::StartsWithEndMarker { text: lossy(), marker: String::from_utf8_lossy(marker).into_owned() });
         }
-        if let Some(&id) = self.index.get(text) {
+        let h = hash(text);
+        if let Some(&id) = self.index.find(h, |&id| self.text(id) == text) {
             self.end_after[id as usize] |= end_after;
             return Ok(id);
         }
-        let id = self.texts.len() as ChoiceId;
-        self.texts.push(text.to_vec());
+        let id = self.end_after.len() as ChoiceId;
+        self.bytes.extend_from_slice(text);
+        self.offsets.push(self.bytes.len() as u32);
         self.end_after.push(end_after);
-        self.index.insert(text.to_vec(), id);
+        let (bytes, offsets) = (&self.bytes, &self.offsets);
+        self.index.insert_unique(h, id, |&id| hash(&bytes[offsets[id as usize] as usize..offsets[id as usize + 1] as usize]));
         Ok(id)
     }
 
@@ -98,62 +115,51 @@ impl LanguageBuilder {
     }
 
     pub fn build(self) -> Language {
-        // A pointer trie first (small: the texts of one state), then compressed rows.
-        let mut children: Vec<Vec<(u8, u32)>> = vec![Vec::new()];
-        let mut text_end = vec![NONE];
-        let mut event = vec![NONE];
-        let insert = |bytes: &[u8], children: &mut Vec<Vec<(u8, u32)>>, text_end: &mut Vec<u32>, event: &mut Vec<u32>| {
-            let mut node = 0usize;
-            for &b in bytes {
-                node = match children[node].iter().find(|(c, _)| *c == b) {
-                    Some(&(_, child)) => child as usize,
-                    None => {
-                        let child = children.len();
-                        children.push(Vec::new());
-                        text_end.push(NONE);
-                        event.push(NONE);
-                        children[node].push((b, child as u32));
-                        child
-                    }
-                };
-            }
-            node
-        };
-        for (id, text) in self.texts.iter().enumerate() {
-            let node = insert(text, &mut children, &mut text_end, &mut event);
-            text_end[node] = id as u32;
-            let mut full = text.clone();
-            full.extend_from_slice(&self.config.separator);
-            let node = insert(&full, &mut children, &mut text_end, &mut event);
-            event[node] = id as u32;
+        // Keys: every text followed by the separator, and the end marker; sorted, then laid
+        // out breadth first like the vocabulary trie.
+        let sep = &self.config.separator;
+        let choices = self.end_after.len();
+        let mut key_bytes = Vec::with_capacity(self.bytes.len() + choices * sep.len() + 8);
+        let mut key_range = Vec::with_capacity(choices + 1);
+        for c in 0..choices as u32 {
+            let start = key_bytes.len();
+            key_bytes.extend_from_slice(self.text(c));
+            key_bytes.extend_from_slice(sep);
+            key_range.push((start, key_bytes.len(), c));
         }
         if self.end_here
-            && let Some(marker) = &self.config.end_marker
-            && !marker.is_empty()
+            && let Some(marker) = self.config.end_marker.as_ref().filter(|m| !m.is_empty())
         {
-            let node = insert(marker, &mut children, &mut text_end, &mut event);
-            event[node] = END;
+            let start = key_bytes.len();
+            key_bytes.extend_from_slice(marker);
+            key_range.push((start, key_bytes.len(), END));
         }
-        let mut child_start = Vec::with_capacity(children.len() + 1);
-        let mut child_byte = Vec::new();
-        let mut child_node = Vec::new();
-        for row in &mut children {
-            row.sort_unstable();
-            child_start.push(child_byte.len() as u32);
-            for &(b, c) in row.iter() {
-                child_byte.push(b);
-                child_node.push(c);
+        let key = |&(s, e, _): &(usize, usize, u32)| &key_bytes[s..e];
+        key_range.sort_unstable_by(|a, b| key(a).cmp(key(b)));
+        let keys: Vec<&[u8]> = key_range.iter().map(key).collect();
+        let mut text_end = Vec::with_capacity(key_bytes.len());
+        let mut event = Vec::with_capacity(key_bytes.len());
+        let trie = FlatTrie::build(&keys, |_, depth, range| {
+            let mut ends = NONE;
+            let mut completes = NONE;
+            for i in range {
+                let (len, id) = (keys[i].len(), key_range[i].2);
+                if len == depth {
+                    completes = id;
+                } else if id != END && len == depth + sep.len() {
+                    ends = id;
+                }
             }
-        }
-        child_start.push(child_byte.len() as u32);
+            text_end.push(ends);
+            event.push(completes);
+        });
         Language {
             config: self.config,
-            texts: self.texts,
+            bytes: self.bytes,
+            offsets: self.offsets,
             end_after: self.end_after,
             end_here: self.end_here,
-            child_start,
-            child_byte,
-            child_node,
+            trie,
             text_end,
             event,
         }
@@ -164,12 +170,11 @@ impl LanguageBuilder {
 #[derive(Debug, Clone)]
 pub struct Language {
     config: LanguageConfig,
-    texts: Vec<Vec<u8>>,
+    bytes: Vec<u8>,
+    offsets: Vec<u32>,
     end_after: Vec<bool>,
     end_here: bool,
-    child_start: Vec<u32>,
-    child_byte: Vec<u8>,
-    child_node: Vec<u32>,
+    trie: FlatTrie,
     /// Per node: the choice whose text ends here (the separator or EOS may follow).
     text_end: Vec<u32>,
     /// Per node: the choice completed by its separator, `END` for the end marker.
@@ -183,11 +188,11 @@ impl Language {
 
     /// Number of distinct action texts.
     pub fn choices(&self) -> usize {
-        self.texts.len()
+        self.end_after.len()
     }
 
     pub fn text(&self, choice: ChoiceId) -> &[u8] {
-        &self.texts[choice as usize]
+        &self.bytes[self.offsets[choice as usize] as usize..self.offsets[choice as usize + 1] as usize]
     }
 
     /// Whether the plan may end at this language's boundary.
@@ -201,18 +206,12 @@ impl Language {
     }
 
     pub fn node_count(&self) -> usize {
-        self.text_end.len()
-    }
-
-    #[inline]
-    fn row(&self, node: u32) -> (usize, usize) {
-        (self.child_start[node as usize] as usize, self.child_start[node as usize + 1] as usize)
+        self.trie.node_count()
     }
 
     #[inline]
     fn child(&self, node: u32, byte: u8) -> Option<u32> {
-        let (lo, hi) = self.row(node);
-        self.child_byte[lo..hi].iter().position(|&b| b == byte).map(|i| self.child_node[lo + i])
+        self.trie.child(node, byte)
     }
 
     /// Emits every token whose bytes, appended at `node`, stay inside the trie: the paired
@@ -220,14 +219,12 @@ impl Language {
     /// pairs of nodes both tries share, so its cost is the number of allowed tokens and
     /// their prefixes, not the vocabulary size.
     fn walk(&self, node: u32, trie: &VocabTrie, vnode: VocabNode, emit: &mut impl FnMut(TokenId)) {
-        let (lo, hi) = self.row(node);
-        for i in lo..hi {
-            let Some(vchild) = trie.child(vnode, self.child_byte[i]) else { continue };
+        for lchild in self.trie.children(node) {
+            let Some(vchild) = trie.child(vnode, self.trie.byte[lchild as usize]) else { continue };
             for &t in trie.tokens_at(vchild) {
                 emit(t);
             }
-            let lchild = self.child_node[i];
-            if trie.has_children(vchild) && self.child_start[lchild as usize] != self.child_start[lchild as usize + 1] {
+            if trie.has_children(vchild) && self.trie.has_children(lchild) {
                 self.walk(lchild, trie, vchild, emit);
             }
         }

@@ -40,6 +40,7 @@
 mod language;
 mod mask;
 mod plan;
+mod trie;
 mod vocab;
 
 #[cfg(feature = "hf")]

@@ -3,23 +3,42 @@
 use crate::TokenId;
 
 /// Allowed tokens, one bit per vocabulary entry (`words()` is ready for a logits mask).
-#[derive(Debug, Clone, PartialEq, Eq, Default)]
+#[derive(Debug, Clone, Default)]
 pub struct TokenMask {
     words: Vec<u64>,
     len: usize,
+    /// Indices of the words that may be non-zero: a reset clears only those, so a sparse
+    /// mask over a large vocabulary costs its set bits, not the vocabulary size.
+    dirty: Vec<u32>,
 }
+
+/// Equal when the same tokens are allowed over the same vocabulary size.
+impl PartialEq for TokenMask {
+    fn eq(&self, other: &TokenMask) -> bool {
+        self.len == other.len && self.words == other.words
+    }
+}
+
+impl Eq for TokenMask {}
 
 impl TokenMask {
     /// An empty mask over `len` tokens.
     pub fn new(len: usize) -> TokenMask {
-        TokenMask { words: vec![0; len.div_ceil(64)], len }
+        TokenMask { words: vec![0; len.div_ceil(64)], len, dirty: Vec::new() }
     }
 
     /// Empties the mask and sizes it for `len` tokens, keeping the allocation.
     pub fn reset(&mut self, len: usize) {
-        self.words.clear();
-        self.words.resize(len.div_ceil(64), 0);
-        self.len = len;
+        if len == self.len {
+            for &w in &self.dirty {
+                self.words[w as usize] = 0;
+            }
+        } else {
+            self.words.clear();
+            self.words.resize(len.div_ceil(64), 0);
+            self.len = len;
+        }
+        self.dirty.clear();
     }
 
     /// Number of tokens the mask ranges over.
@@ -32,7 +51,11 @@ impl TokenMask {
     pub fn insert(&mut self, token: TokenId) {
         let i = token as usize;
         if i < self.len {
-            self.words[i / 64] |= 1 << (i % 64);
+            let word = &mut self.words[i / 64];
+            if *word == 0 {
+                self.dirty.push((i / 64) as u32);
+            }
+            *word |= 1 << (i % 64);
         }
     }
 
@@ -85,6 +108,10 @@ mod tests {
         assert_eq!(mask.iter().collect::<Vec<_>>(), vec![0, 63, 64, 129]);
         assert_eq!(mask.count(), 4);
         assert!(mask.contains(64) && !mask.contains(65) && !mask.contains(200));
+        mask.reset(130);
+        assert!(mask.is_empty(), "a reset clears every word that was set");
+        mask.insert(5);
+        assert_eq!(mask.iter().collect::<Vec<_>>(), vec![5]);
         mask.reset(10);
         assert!(mask.is_empty() && mask.vocab_len() == 10);
     }

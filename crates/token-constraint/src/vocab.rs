@@ -1,14 +1,12 @@
 //! A vocabulary as token id → bytes, and its byte trie.
 //!
-//! The trie is laid out once, breadth first, in flat arrays: node `n`'s children are the
-//! nodes `first_child[n]..first_child[n + 1]`, sorted by byte, and the tokens spelled by the
-//! path to `n` are `tokens[token_start[n]..token_start[n + 1]]` (several ids may share one
-//! byte string). Nine bytes per node plus four per token; no pointers to chase but one
-//! array index per step. Written by hand: the crates that build tries (toktrie, fst, …) do
-//! not give the "follow one byte from this node" step a paired walk needs, or bring a
-//! grammar engine with them.
+//! The trie is laid out once in the flat breadth-first layout of [`crate::trie`]; the
+//! tokens spelled by the path to node `n` are `tokens[token_start[n]..token_start[n + 1]]`
+//! (several ids may share one byte string), and the root's 256 children are a direct
+//! table. Nine bytes per node plus four per token.
 
 use crate::TokenId;
+use crate::trie::FlatTrie;
 
 /// Why a vocabulary could not be built.
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
@@ -125,8 +123,7 @@ pub type VocabNode = u32;
 /// The byte trie of a vocabulary's non-special, non-empty tokens (see the module comment).
 #[derive(Debug, Clone)]
 pub struct VocabTrie {
-    byte: Vec<u8>,
-    first_child: Vec<u32>,
+    trie: FlatTrie,
     token_start: Vec<u32>,
     tokens: Vec<TokenId>,
     root_children: Box<[u32; 256]>,
@@ -138,54 +135,28 @@ impl VocabTrie {
     pub const ROOT: VocabNode = 0;
 
     fn build(tokens: &[Token], special: &[bool]) -> VocabTrie {
-        // Sorted byte strings make each node's children arrive in byte order, so a
-        // breadth-first pass over runs of equal prefixes lays out the flat arrays directly.
         let mut order: Vec<u32> =
             (0..tokens.len() as u32).filter(|&t| !special[t as usize] && !tokens[t as usize].bytes.is_empty()).collect();
         order.sort_by(|&a, &b| tokens[a as usize].bytes.cmp(&tokens[b as usize].bytes).then(a.cmp(&b)));
-        let key = |i: u32| tokens[order[i as usize] as usize].bytes.as_slice();
-
-        let mut byte = vec![0u8];
-        let mut first_child = Vec::new();
+        let keys: Vec<&[u8]> = order.iter().map(|&t| tokens[t as usize].bytes.as_slice()).collect();
         let mut token_start = vec![0u32];
-        let mut ids = Vec::new();
-        // The queue holds, per node in breadth-first order, its depth and the range of
-        // `order` whose strings pass through it.
-        let mut queue: std::collections::VecDeque<(usize, u32, u32)> = std::collections::VecDeque::new();
-        queue.push_back((0, 0, order.len() as u32));
-        let mut next_node = 1u32;
-        while let Some((depth, lo, hi)) = queue.pop_front() {
-            first_child.push(next_node);
-            let mut i = lo;
-            // Strings that end at this node are first in sorted order.
-            while i < hi && key(i).len() == depth {
-                ids.push(order[i as usize]);
-                i += 1;
-            }
+        let mut ids = Vec::with_capacity(order.len());
+        let trie = FlatTrie::build(&keys, |_, depth, range| {
+            // The keys that end at this node come first in its range.
+            ids.extend(range.clone().take_while(|&i| keys[i].len() == depth).map(|i| order[i]));
             token_start.push(ids.len() as u32);
-            while i < hi {
-                let b = key(i)[depth];
-                let start = i;
-                while i < hi && key(i)[depth] == b {
-                    i += 1;
-                }
-                byte.push(b);
-                queue.push_back((depth + 1, start, i));
-                next_node += 1;
-            }
-        }
-        first_child.push(next_node);
-        let mut root_children = Box::new([NO_NODE; 256]);
-        for child in first_child[0]..first_child[1] {
-            root_children[byte[child as usize] as usize] = child;
-        }
-        byte.shrink_to_fit();
+        });
         ids.shrink_to_fit();
-        VocabTrie { byte, first_child, token_start, tokens: ids, root_children }
+        token_start.shrink_to_fit();
+        let mut root_children = Box::new([NO_NODE; 256]);
+        for child in trie.children(0) {
+            root_children[trie.byte[child as usize] as usize] = child;
+        }
+        VocabTrie { trie, token_start, tokens: ids, root_children }
     }
 
     pub fn node_count(&self) -> usize {
-        self.byte.len()
+        self.trie.node_count()
     }
 
     /// The child of `node` along `byte`, if some token continues that way.
@@ -195,14 +166,7 @@ impl VocabTrie {
             let c = self.root_children[byte as usize];
             return (c != NO_NODE).then_some(c);
         }
-        let lo = self.first_child[node as usize] as usize;
-        let hi = self.first_child[node as usize + 1] as usize;
-        let bytes = &self.byte[lo..hi];
-        if bytes.len() <= 8 {
-            bytes.iter().position(|&b| b == byte).map(|i| (lo + i) as u32)
-        } else {
-            bytes.binary_search(&byte).ok().map(|i| (lo + i) as u32)
-        }
+        self.trie.child(node, byte)
     }
 
     /// The tokens whose bytes are exactly the path to `node`.
@@ -213,19 +177,17 @@ impl VocabTrie {
 
     /// The children of `node` as (byte, child) pairs in byte order.
     pub fn children(&self, node: VocabNode) -> impl Iterator<Item = (u8, VocabNode)> + '_ {
-        let lo = self.first_child[node as usize];
-        let hi = self.first_child[node as usize + 1];
-        (lo..hi).map(|c| (self.byte[c as usize], c))
+        self.trie.children(node).map(|c| (self.trie.byte[c as usize], c))
     }
 
     /// Whether some token continues past `node`.
     #[inline]
     pub fn has_children(&self, node: VocabNode) -> bool {
-        self.first_child[node as usize] != self.first_child[node as usize + 1]
+        self.trie.has_children(node)
     }
 
     pub fn heap_bytes(&self) -> usize {
-        self.byte.capacity() + self.first_child.capacity() * 4 + self.token_start.capacity() * 4 + self.tokens.capacity() * 4 + 256 * 4
+        self.trie.heap_bytes() + self.token_start.capacity() * 4 + self.tokens.capacity() * 4 + 256 * 4
     }
 }
 
