@@ -174,3 +174,17 @@ fn plan_reports_unsolvable_tasks() {
     let value: serde_json::Value = serde_json::from_str(stdout(&output).trim()).expect("one JSON object");
     assert!(value["lmcut"].is_null() && value["ff"].is_null() && value["hmax"].is_null(), "{value}");
 }
+
+#[test]
+fn bench_mask_reports_the_issue_figures_and_agrees_with_llguidance() {
+    let output = xtask(&["bench", "mask", "--every", "70", "--json"]);
+    assert!(output.status.success(), "{}", String::from_utf8_lossy(&output.stderr));
+    let report: serde_json::Value = serde_json::from_str(stdout(&output).trim()).expect("one JSON object");
+    for key in ["vocab", "states", "median_ns", "p99_ns", "llguidance_median_ns", "llguidance_per_state_median_us"] {
+        assert!(report[key].is_number(), "{key} in {report}");
+    }
+    assert_eq!(report["vocab"], 151_669);
+    assert!(report["masks"].as_u64().unwrap() > 0);
+    assert_eq!(report["masks_disagree"], 0, "every mask equals llguidance's on the same grammar");
+    assert_eq!(report["vocab_bytes_agree"], true, "our tokenizer.json reading equals llguidance's");
+}
