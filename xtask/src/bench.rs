@@ -58,12 +58,15 @@ enum Which {
         #[arg(long)]
         json: bool,
     },
+    /// Local language model speed (prefill, decode, branch rewind) beside candle-transformers' quantized llama.
+    Lm(crate::lm::BenchLmArgs),
 }
 
 pub fn run(args: BenchArgs) -> anyhow::Result<ExitCode> {
     match args.which {
         Which::Ground { benchmark, limit, runs, no_reference, json } => ground(&benchmark, limit, runs.max(1), no_reference, json),
         Which::Plan { configs, time_limit, filter, json } => plan(&configs, time_limit, filter.as_deref(), json),
+        Which::Lm(args) => crate::lm::bench(args),
     }
 }
 
