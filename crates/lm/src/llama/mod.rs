@@ -1,23 +1,63 @@
 //! The Llama-family decoder over quantized GGUF weights: RMSNorm, RoPE with the file's
 //! parameters, grouped-query attention over a truncatable per-layer KV cache, SwiGLU, and a tied
 //! or separate output head. Matrix products are candle's quantized matmuls (`QMatMul`, the
-//! activations quantized to the weights' dot-product type); everything between them works on
-//! plain `f32` rows, so that a decode step is a few dozen kernel calls and no tensor graph.
+//! activations quantized to the weights' dot-product type); norms, RoPE and SwiGLU work on plain
+//! `f32` rows; attention uses candle-core tensor ops (see `attention` for why).
 
 mod config;
 mod kv_cache;
+mod q4_1;
 
 use std::sync::Arc;
 
-use candle_core::quantized::{QMatMul, QStorage, QTensor};
 use candle_core::quantized::GgmlDType;
+use candle_core::quantized::{QMatMul, QStorage, QTensor};
 use candle_core::{D, Device, Module, Tensor};
 
 pub use config::{Architecture, ModelConfig, RopeConfig};
 pub use kv_cache::KvCache;
+use q4_1::Q4_1Matrix;
 
 use crate::error::LmError;
 use crate::gguf::{GgufFile, Metadata};
+
+/// A weight matrix: Q4_1 through this crate's vectorised kernel (bitwise equal to candle's
+/// scalar one), every other type through candle's `QMatMul`.
+#[derive(Debug)]
+enum Weight {
+    Candle(QMatMul),
+    Q4_1(Q4_1Matrix),
+}
+
+impl Weight {
+    fn new(matrix: QTensor) -> Result<Self, LmError> {
+        if matrix.dtype() == GgmlDType::Q4_1
+            && let [rows, columns] = *matrix.shape().dims()
+            && let Some(q4_1) = Q4_1Matrix::from_ggml(&matrix.data()?, rows, columns)
+        {
+            return Ok(Weight::Q4_1(q4_1));
+        }
+        Ok(Weight::Candle(QMatMul::from_qtensor(matrix)?))
+    }
+
+    fn from_shared(matrix: Arc<QTensor>) -> Result<Self, LmError> {
+        if matrix.dtype() == GgmlDType::Q4_1 {
+            return Self::new(QTensor::new(QStorage::from_data(matrix.data()?, &Device::Cpu, matrix.dtype())?, matrix.shape().clone())?);
+        }
+        Ok(Weight::Candle(QMatMul::from_arc(matrix)?))
+    }
+
+    /// `x · Wᵀ` for the `n` rows of `x`, row-major.
+    fn forward(&self, x: &[f32], n: usize) -> Result<Vec<f32>, LmError> {
+        match self {
+            Weight::Q4_1(matrix) => Ok(matrix.matmul(x, n)),
+            Weight::Candle(matrix) => {
+                let x = Tensor::from_slice(x, (n, x.len() / n), &Device::Cpu)?;
+                Ok(matrix.forward(&x)?.flatten_all()?.to_vec1::<f32>()?)
+            }
+        }
+    }
+}
 
 /// Projections of the same input, as few matmuls as possible: matrices of one quantization type
 /// are stacked row-wise at load time (Q, K, V; gate, up), which saves a quantization of the
@@ -26,7 +66,7 @@ use crate::gguf::{GgufFile, Metadata};
 #[derive(Debug)]
 struct Projections {
     /// Each matmul and the widths of the outputs it produces, in order.
-    groups: Vec<(QMatMul, Vec<usize>)>,
+    groups: Vec<(Weight, Vec<usize>)>,
 }
 
 impl Projections {
@@ -48,17 +88,17 @@ impl Projections {
             .into_iter()
             .map(|(members, widths)| {
                 let matrix = if members.len() == 1 { members.into_iter().next().expect("one member") } else { stack_rows(&members)? };
-                Ok((QMatMul::from_qtensor(matrix)?, widths))
+                Ok((Weight::new(matrix)?, widths))
             })
             .collect::<Result<_, LmError>>()?;
         Ok(Projections { groups })
     }
 
     /// `x · Wᵢᵀ` for each of the `N` matrices, in the order given to `new`, each `n × widthᵢ`.
-    fn apply<const N: usize>(&self, x: &Tensor, n: usize) -> Result<[Vec<f32>; N], LmError> {
+    fn apply<const N: usize>(&self, x: &[f32], n: usize) -> Result<[Vec<f32>; N], LmError> {
         let mut outputs = Vec::new();
         for (matrix, widths) in &self.groups {
-            let y = linear(matrix, x)?;
+            let y = matrix.forward(x, n)?;
             if widths.len() == 1 {
                 outputs.push(y);
                 continue;
@@ -105,11 +145,11 @@ struct Layer {
     /// Qwen3's per-head RMSNorm weights on queries and keys.
     q_norm: Option<Vec<f32>>,
     k_norm: Option<Vec<f32>>,
-    wo: QMatMul,
+    wo: Weight,
     ffn_norm: Vec<f32>,
     /// Gate, up.
     gate_up: Projections,
-    w_down: QMatMul,
+    w_down: Weight,
 }
 
 /// A loaded model: configuration and weights. It holds no sequence state; a [`KvCache`] does,
@@ -121,7 +161,7 @@ pub struct LlamaModel {
     embedding: Arc<QTensor>,
     layers: Vec<Layer>,
     output_norm: Vec<f32>,
-    output: QMatMul,
+    output: Weight,
     /// θ_i for i < rope.dimensions / 2 (after `rope_freqs.weight` where the file has it).
     rope_theta: Vec<f32>,
 }
@@ -147,8 +187,8 @@ impl Loader<'_> {
             .map_err(|e| LmError::MalformedGguf(format!("tensor `{name}`: {e}")))
     }
 
-    fn matrix(&mut self, name: &str, rows: usize, columns: usize) -> Result<QMatMul, LmError> {
-        Ok(QMatMul::from_qtensor(self.tensor(name, &[rows, columns])?)?)
+    fn matrix(&mut self, name: &str, rows: usize, columns: usize) -> Result<Weight, LmError> {
+        Weight::new(self.tensor(name, &[rows, columns])?)
     }
 
     fn projections(&mut self, names: &[(String, usize)], columns: usize) -> Result<Projections, LmError> {
@@ -209,7 +249,7 @@ impl LlamaModel {
         let output = if loader.has("output.weight") {
             loader.matrix("output.weight", vocabulary_size, config.embedding)?
         } else {
-            QMatMul::from_arc(embedding.clone())?
+            Weight::from_shared(embedding.clone())?
         };
         let output_norm = loader.vector("output_norm.weight", config.embedding)?;
         let (d, q, kv, ff, hd) = (config.embedding, config.q_dim(), config.kv_dim(), config.feed_forward, config.head_dim);
@@ -295,7 +335,6 @@ impl LlamaModel {
         let (cos, sin) = self.rope_tables(start, n);
         for (layer, layer_cache) in self.layers.iter().zip(cache.layers_mut()) {
             let h = rms_norm_rows(&x, &layer.attn_norm, d, cfg.rms_eps);
-            let h = Tensor::from_vec(h, (n, d), &Device::Cpu)?;
             let [mut q, mut k, mut v] = layer.qkv.apply(&h, n)?;
             add_bias_rows(&mut q, layer.bias_q.as_deref());
             add_bias_rows(&mut k, layer.bias_k.as_deref());
@@ -310,20 +349,19 @@ impl LlamaModel {
             self.rotate(&mut k, cfg.kv_heads, &cos, &sin);
             layer_cache.append(&k, &v);
             let attended = attention(cfg, q, layer_cache.keys(), layer_cache.values(), start, n)?;
-            let o = linear(&layer.wo, &Tensor::from_vec(attended, (n, cfg.q_dim()), &Device::Cpu)?)?;
+            let o = layer.wo.forward(&attended, n)?;
             add_in_place(&mut x, &o);
             let h = rms_norm_rows(&x, &layer.ffn_norm, d, cfg.rms_eps);
-            let h = Tensor::from_vec(h, (n, d), &Device::Cpu)?;
             let [mut gate, up] = layer.gate_up.apply(&h, n)?;
             for (g, u) in gate.iter_mut().zip(&up) {
                 *g = silu(*g) * u;
             }
-            let down = linear(&layer.w_down, &Tensor::from_vec(gate, (n, cfg.feed_forward), &Device::Cpu)?)?;
+            let down = layer.w_down.forward(&gate, n)?;
             add_in_place(&mut x, &down);
         }
         cache.set_len(total);
         let last = rms_norm_rows(&x[(n - 1) * d..], &self.output_norm, d, cfg.rms_eps);
-        linear(&self.output, &Tensor::from_vec(last, (1, d), &Device::Cpu)?)
+        self.output.forward(&last, 1)
     }
 
     /// cos/sin of position × θ_i for the `n` positions from `start`, row-major by position.
@@ -359,11 +397,6 @@ impl LlamaModel {
             }
         }
     }
-}
-
-/// `x · Wᵀ` for the rows of `x`, as a flat row-major vector.
-fn linear(w: &QMatMul, x: &Tensor) -> Result<Vec<f32>, LmError> {
-    Ok(w.forward(x)?.flatten_all()?.to_vec1::<f32>()?)
 }
 
 fn silu(x: f32) -> f32 {
