@@ -10,6 +10,7 @@ mod common;
 
 use std::path::PathBuf;
 
+#[cfg(feature = "reference")]
 use common::max_abs_diff;
 use lm::{LanguageModel, LocalModel, Logprobs, Usage, generate_greedy};
 use serde_json::Value;
@@ -82,7 +83,21 @@ fn a_sibling_branch_costs_its_suffix_and_matches_a_fresh_computation() {
         Usage { forward_calls: 1, tokens_prefilled: suffix, tokens_reused: prefix.len() as u64, tokens_generated: 1, cache_hits: 0 }
     );
     let fresh = dense(LocalModel::load(&path).expect("loads").next_logprobs(&b).expect("runs"));
-    assert!(max_abs_diff(&sibling, &fresh) < 1e-3);
+    // Not bitwise: with 8-bit activations, computing the same positions in chunks of other
+    // sizes (the prefix inside `a`, then a 3-token suffix, against all of `b` at once) changes
+    // the shapes of candle's attention matmuls, hence a few roundings, hence a few activation
+    // quanta downstream. candle-transformers' quantized llama shows the same spread between a
+    // one-shot prefill and prefix-then-suffix on these tokens (total variation 0.023, the same
+    // floats as ours). A wrong cache position gives a different distribution altogether.
+    let total_variation: f32 = sibling.iter().zip(&fresh).map(|(a, b)| (a.exp() - b.exp()).abs()).sum::<f32>() / 2.0;
+    assert!(total_variation < 0.05, "total variation {total_variation}");
+    assert_eq!(Logprobs::Dense(sibling.clone()).argmax(), Logprobs::Dense(fresh).argmax());
+    // Chunked the same way, it is the same bit for bit, whatever was computed in between.
+    let c: Vec<u32> = prefix.iter().copied().chain(model.encode(" fridge 1").expect("encodes")).collect();
+    let mut other = LocalModel::load(&path).expect("loads");
+    other.next_logprobs(&a).expect("runs");
+    other.next_logprobs(&c).expect("runs");
+    assert_eq!(dense(other.next_logprobs(&b).expect("runs")), sibling);
 }
 
 #[cfg(feature = "reference")]
