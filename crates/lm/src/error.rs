@@ -1,0 +1,111 @@
+//! The crate's one error type, and the typed HTTP error of the OpenAI-compatible backend.
+
+use std::path::PathBuf;
+use std::time::Duration;
+
+/// Everything that can go wrong when loading or running a language model.
+#[derive(Debug, thiserror::Error)]
+pub enum LmError {
+    /// A model or tokenizer file could not be read.
+    #[error("{}: cannot read: {source}", path.display())]
+    Io {
+        path: PathBuf,
+        #[source]
+        source: std::io::Error,
+    },
+    /// The file is not a readable GGUF file (bad magic, truncated header, bad lengths).
+    #[error("not a readable GGUF file: {0}")]
+    MalformedGguf(String),
+    /// A metadata key the model needs is absent.
+    #[error("GGUF metadata `{key}` is missing")]
+    MissingMetadata { key: String },
+    /// A metadata key has a value of the wrong type or out of range.
+    #[error("GGUF metadata `{key}`: expected {expected}, found {found}")]
+    BadMetadata { key: String, expected: &'static str, found: String },
+    /// A weight tensor the architecture needs is absent.
+    #[error("GGUF tensor `{name}` is missing")]
+    MissingTensor { name: String },
+    /// A weight tensor has the wrong shape for the configuration in the metadata.
+    #[error("GGUF tensor `{name}` has shape {found:?}, the metadata implies {expected:?}")]
+    BadTensorShape { name: String, expected: Vec<usize>, found: Vec<usize> },
+    /// `general.architecture` names a model family this crate does not run.
+    #[error("unsupported architecture `{0}` in `general.architecture` (supported: llama, qwen2, qwen3)")]
+    UnsupportedArchitecture(String),
+    /// The tokenizer described by the metadata is not one this crate builds.
+    #[error("unsupported tokenizer: `{key}` = `{value}` ({hint})")]
+    UnsupportedTokenizer { key: &'static str, value: String, hint: &'static str },
+    /// The tokenizer library rejected the vocabulary or an input.
+    #[error("tokenizer: {0}")]
+    Tokenizer(String),
+    /// The model file has no `tokenizer.chat_template`.
+    #[error("the model has no chat template (`tokenizer.chat_template` is missing)")]
+    NoChatTemplate,
+    /// The chat template failed to compile or render.
+    #[error("chat template: {0}")]
+    ChatTemplate(String),
+    /// A token id outside the vocabulary.
+    #[error("token id {id} is outside the vocabulary of {size} tokens")]
+    TokenOutOfRange { id: u32, size: usize },
+    /// A next-token distribution needs at least one token of context.
+    #[error("empty token sequence: a next-token distribution needs at least one token")]
+    EmptySequence,
+    /// `next_logprobs_among` with no allowed token.
+    #[error("the set of allowed tokens is empty")]
+    NoAllowedTokens,
+    /// The sequence is longer than the model's context.
+    #[error("a sequence of {len} tokens exceeds the context length of {max}")]
+    ContextOverflow { len: usize, max: usize },
+    /// An error inside candle's tensor code.
+    #[error("candle: {0}")]
+    Candle(#[from] candle_core::Error),
+    /// The model server could not be reached or gave no usable answer.
+    #[error(transparent)]
+    Http(#[from] HttpError),
+}
+
+/// A request to a model server that failed, after `attempts` tries over `elapsed`.
+#[derive(Debug, thiserror::Error)]
+#[error("{url}: {kind} (after {attempts} attempt(s), {:.1} s)", elapsed.as_secs_f64())]
+pub struct HttpError {
+    pub kind: HttpErrorKind,
+    pub url: String,
+    pub attempts: u32,
+    pub elapsed: Duration,
+}
+
+/// Why a model server request failed.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+pub enum HttpErrorKind {
+    /// The URL is not `http://host[:port][/path]` (TLS is not built in; see `OpenAiConfig`).
+    #[error("unsupported URL: {0}")]
+    BadUrl(String),
+    /// The TCP connection could not be made (refused, unreachable, DNS).
+    #[error("cannot connect: {0}")]
+    Connect(String),
+    /// No complete answer within the configured timeout.
+    #[error("timed out after {0:?}")]
+    Timeout(Duration),
+    /// The connection broke mid-request or mid-response.
+    #[error("connection failed: {0}")]
+    Io(String),
+    /// The server answered with a non-2xx status.
+    #[error("HTTP status {status}: {body}")]
+    Status { status: u16, body: String },
+    /// The response is not valid HTTP/1.x.
+    #[error("malformed HTTP response: {0}")]
+    MalformedHttp(String),
+    /// The body is not JSON, or not the JSON of a completions response.
+    #[error("malformed JSON response: {0}")]
+    MalformedJson(String),
+}
+
+impl HttpErrorKind {
+    /// Errors worth another try: the server may recover (overload, restart, a dropped connection).
+    pub fn is_transient(&self) -> bool {
+        match self {
+            HttpErrorKind::Connect(_) | HttpErrorKind::Timeout(_) | HttpErrorKind::Io(_) => true,
+            HttpErrorKind::Status { status, .. } => *status >= 500 || *status == 429,
+            HttpErrorKind::BadUrl(_) | HttpErrorKind::MalformedHttp(_) | HttpErrorKind::MalformedJson(_) => false,
+        }
+    }
+}

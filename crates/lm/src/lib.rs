@@ -1,0 +1,63 @@
+//! Language models for the planner (paper §3.2, Eq. 6-7): the next-token distribution at every
+//! node of a token-level search tree whose branches share long prefixes.
+//!
+//! [`LanguageModel`] is the interface: a [`Vocabulary`] (token id → bytes, end-of-sequence and
+//! other special tokens) and [`LanguageModel::next_logprobs`] for a full token sequence. Every
+//! backend keeps a prefix cache, so that a sequence extending the previous one pays only for its
+//! new tokens and a sibling branch rewinds the cache to the common prefix instead of
+//! recomputing it. [`LanguageModel::next_logprobs_among`] gives the prior renormalised over the
+//! tokens a constraint allows, which is what the search needs at a node. [`Usage`] counts
+//! forward calls, prefilled and reused positions, and generated tokens.
+//!
+//! Backends:
+//! - [`LocalModel`]: a llama / qwen2 / qwen3 GGUF file run by this crate's own forward pass on
+//!   `candle-core` quantized matmuls ([`LlamaModel`]), with a KV cache that truncates to any
+//!   length; its [`Tokenizer`] and [`ChatTemplate`] are built from the GGUF metadata.
+//! - [`OpenAiModel`]: a served model (vLLM, llama.cpp server, Ollama) through
+//!   `/v1/completions` with `max_tokens = 1` and top-k `logprobs` (plus vLLM's
+//!   `allowed_token_ids`), over a minimal HTTP/1.1 client with timeouts and bounded retries.
+//! - [`UniformModel`]: every token equally likely (symbolic-only runs, a control).
+//!
+//! ```
+//! use lm::{LanguageModel, LocalModel, tiny};
+//! let path = std::env::temp_dir().join(format!("lm-doc-{}.gguf", std::process::id()));
+//! tiny::write_tiny_gguf(&path, &tiny::TinySpec::default())?;
+//! let mut model = LocalModel::load(&path)?;
+//! let prompt = model.encode(" open the fridge")?;
+//! let after_prompt = model.next_logprobs(&prompt)?;
+//! // A sibling branch: same prompt, another last token; only that token is recomputed.
+//! let mut sibling = prompt.clone();
+//! *sibling.last_mut().unwrap() = model.encode(" the")?[0];
+//! let prior = model.next_logprobs_among(&sibling, &[3, 4, 5])?;
+//! assert_eq!(prior.tokens.len(), 3);
+//! assert_eq!(model.usage().tokens_prefilled as usize, prompt.len() + 1);
+//! # let _ = after_prompt;
+//! # std::fs::remove_file(&path).ok();
+//! # Ok::<(), lm::LmError>(())
+//! ```
+
+mod chat;
+mod error;
+mod gguf;
+mod http;
+mod llama;
+mod local;
+mod model;
+mod openai;
+#[cfg(feature = "reference")]
+pub mod reference;
+pub mod tiny;
+mod tokenizer;
+mod uniform;
+mod vocabulary;
+
+pub use chat::ChatTemplate;
+pub use error::{HttpError, HttpErrorKind, LmError};
+pub use gguf::{GgufFile, Metadata};
+pub use llama::{Architecture, KvCache, LlamaModel, ModelConfig, RopeConfig};
+pub use local::LocalModel;
+pub use model::{LanguageModel, Logprobs, Prior, Usage, generate_greedy};
+pub use openai::{OpenAiConfig, OpenAiModel, ServerDialect};
+pub use tokenizer::{BpeParts, PreTokenizer, Tokenizer};
+pub use uniform::UniformModel;
+pub use vocabulary::{TokenId, TokenKind, Vocabulary, byte_level_decode, byte_level_encode, char_to_byte_map};

@@ -1,0 +1,87 @@
+//! The per-layer key/value cache: one flat `positions × kv_dim` buffer per layer for keys and
+//! one for values, so that appending is `extend` and rewinding to any length is `truncate`.
+
+/// Keys and values of every layer for positions `0..len()`.
+#[derive(Debug, Clone)]
+pub struct KvCache {
+    layers: Vec<LayerCache>,
+    kv_dim: usize,
+    len: usize,
+}
+
+#[derive(Debug, Clone, Default)]
+pub(crate) struct LayerCache {
+    keys: Vec<f32>,
+    values: Vec<f32>,
+}
+
+impl LayerCache {
+    pub(crate) fn append(&mut self, keys: &[f32], values: &[f32]) {
+        self.keys.extend_from_slice(keys);
+        self.values.extend_from_slice(values);
+    }
+
+    pub(crate) fn keys(&self) -> &[f32] {
+        &self.keys
+    }
+
+    pub(crate) fn values(&self) -> &[f32] {
+        &self.values
+    }
+}
+
+impl KvCache {
+    pub(crate) fn new(layers: usize, kv_dim: usize) -> Self {
+        KvCache { layers: vec![LayerCache::default(); layers], kv_dim, len: 0 }
+    }
+
+    /// Positions held.
+    pub fn len(&self) -> usize {
+        self.len
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.len == 0
+    }
+
+    /// Forgets every position from `len` on (no-op if `len >= self.len()`); the kept positions'
+    /// keys and values are untouched, so a sibling branch continues from them.
+    pub fn truncate(&mut self, len: usize) {
+        if len >= self.len {
+            return;
+        }
+        for layer in &mut self.layers {
+            layer.keys.truncate(len * self.kv_dim);
+            layer.values.truncate(len * self.kv_dim);
+        }
+        self.len = len;
+    }
+
+    pub fn clear(&mut self) {
+        self.truncate(0);
+    }
+
+    /// Bytes held by keys and values.
+    pub fn memory_bytes(&self) -> usize {
+        self.layers.iter().map(|l| (l.keys.len() + l.values.len()) * std::mem::size_of::<f32>()).sum()
+    }
+
+    pub(crate) fn layers_mut(&mut self) -> impl Iterator<Item = &mut LayerCache> {
+        self.layers.iter_mut()
+    }
+
+    /// Drops whatever a failed forward pass appended after `len` in some layers.
+    pub(crate) fn rollback(&mut self, len: usize) {
+        for layer in &mut self.layers {
+            layer.keys.truncate(len * self.kv_dim);
+            layer.values.truncate(len * self.kv_dim);
+        }
+        self.len = len;
+    }
+
+    /// Called by the forward pass once every layer has appended the new positions.
+    pub(crate) fn set_len(&mut self, len: usize) {
+        debug_assert!(self.layers.iter().all(|l| l.keys.len() == len * self.kv_dim));
+        self.len = len;
+    }
+}

@@ -1,0 +1,249 @@
+//! The OpenAI-compatible backend: a served model (vLLM, llama.cpp server, Ollama) asked for one
+//! token at a time through `/v1/completions` with `max_tokens = 1`, `temperature = 0` and top-k
+//! `logprobs`, the prompt sent as token ids. With vLLM, `allowed_token_ids` masks on the
+//! server and `return_tokens_as_token_ids` names tokens by id.
+//!
+//! What is approximated: the server returns only its top-k tokens. The prior over an allowed
+//! set is exact when every allowed token is among them (vLLM with `allowed_token_ids` and
+//! `k ≥ |allowed|`, the default case for action spellings); an allowed token outside the top-k
+//! gets an estimate from the leftover mass (see [`Logprobs::among`]) and is counted in
+//! [`Prior::estimated`]. Prefix reuse across requests is the server's (vLLM's automatic prefix
+//! caching, llama.cpp's `cache_prompt`); this side remembers recent answers, so a repeated
+//! request costs nothing.
+
+use std::sync::Arc;
+use std::time::{Duration, Instant};
+
+use rustc_hash::FxHashMap;
+use serde_json::{Value, json};
+
+use crate::error::{HttpError, HttpErrorKind, LmError};
+use crate::http::{Url, post_json};
+use crate::model::{LanguageModel, Logprobs, Prior, Usage};
+use crate::tokenizer::Tokenizer;
+use crate::vocabulary::TokenId;
+
+/// Which extensions of the completions API the server has.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ServerDialect {
+    /// vLLM: `allowed_token_ids` and `return_tokens_as_token_ids` are sent.
+    Vllm,
+    /// Plain OpenAI completions (llama.cpp server, Ollama): tokens come back as text and are
+    /// mapped to ids through the tokenizer; allowed sets are applied on this side.
+    Generic,
+}
+
+/// Where the server is and how to talk to it.
+#[derive(Debug, Clone)]
+pub struct OpenAiConfig {
+    /// `http://host:port/v1` (the path before `/completions`).
+    pub base_url: String,
+    /// The `model` field of each request.
+    pub model: String,
+    /// Sent as `Authorization: Bearer ...` where set.
+    pub api_key: Option<String>,
+    /// The k of top-k `logprobs` (vLLM's default server limit is 20; OpenAI's is 5).
+    pub top_logprobs: usize,
+    pub dialect: ServerDialect,
+    /// For one attempt: connect, send and receive.
+    pub timeout: Duration,
+    /// Further attempts after a transient failure (connection, timeout, 5xx, 429).
+    pub max_retries: u32,
+    /// Wait before the first retry; doubled for each further one.
+    pub retry_backoff: Duration,
+    /// Answers remembered for repeated requests.
+    pub cache_entries: usize,
+}
+
+impl OpenAiConfig {
+    pub fn new(base_url: &str, model: &str) -> Self {
+        OpenAiConfig {
+            base_url: base_url.to_string(),
+            model: model.to_string(),
+            api_key: None,
+            top_logprobs: 20,
+            dialect: ServerDialect::Vllm,
+            timeout: Duration::from_secs(60),
+            max_retries: 2,
+            retry_backoff: Duration::from_millis(250),
+            cache_entries: 4096,
+        }
+    }
+}
+
+/// A served model.
+#[derive(Debug)]
+pub struct OpenAiModel {
+    config: OpenAiConfig,
+    url: Url,
+    tokenizer: Arc<Tokenizer>,
+    /// Token text → id, for servers that name tokens by text; built on first need.
+    text_to_id: Option<FxHashMap<Vec<u8>, TokenId>>,
+    answers: FxHashMap<(Vec<TokenId>, Vec<TokenId>), Logprobs>,
+    usage: Usage,
+}
+
+impl OpenAiModel {
+    /// A client; `tokenizer` must be the served model's (prompts are sent as its ids).
+    pub fn new(config: OpenAiConfig, tokenizer: Arc<Tokenizer>) -> Result<Self, LmError> {
+        let url = Url::parse(&config.base_url).map_err(|kind| HttpError {
+            kind,
+            url: config.base_url.clone(),
+            attempts: 0,
+            elapsed: Duration::ZERO,
+        })?;
+        Ok(OpenAiModel { config, url, tokenizer, text_to_id: None, answers: FxHashMap::default(), usage: Usage::default() })
+    }
+
+    pub fn config(&self) -> &OpenAiConfig {
+        &self.config
+    }
+
+    fn check(&self, tokens: &[TokenId]) -> Result<(), LmError> {
+        if tokens.is_empty() {
+            return Err(LmError::EmptySequence);
+        }
+        tokens.iter().try_for_each(|&t| self.tokenizer.vocabulary().check(t))
+    }
+
+    /// One completions request with retries; the parsed top-k distribution.
+    fn request(&mut self, tokens: &[TokenId], allowed: Option<&[TokenId]>) -> Result<Logprobs, LmError> {
+        let key = (tokens.to_vec(), allowed.map(<[TokenId]>::to_vec).unwrap_or_default());
+        self.usage.tokens_generated += 1;
+        if let Some(answer) = self.answers.get(&key) {
+            self.usage.cache_hits += 1;
+            self.usage.tokens_reused += tokens.len() as u64;
+            return Ok(answer.clone());
+        }
+        let top_k = match allowed {
+            Some(allowed) if self.config.dialect == ServerDialect::Vllm => allowed.len().min(self.config.top_logprobs),
+            _ => self.config.top_logprobs,
+        }
+        .max(1);
+        let mut body = json!({
+            "model": self.config.model,
+            "prompt": tokens,
+            "max_tokens": 1,
+            "temperature": 0.0,
+            "logprobs": top_k,
+        });
+        if self.config.dialect == ServerDialect::Vllm {
+            body["return_tokens_as_token_ids"] = json!(true);
+            if let Some(allowed) = allowed {
+                body["allowed_token_ids"] = json!(allowed);
+            }
+        }
+        let body = serde_json::to_vec(&body).map_err(|e| LmError::Tokenizer(e.to_string()))?;
+        let start = Instant::now();
+        let mut attempts = 0;
+        let outcome = loop {
+            attempts += 1;
+            let result = post_json(&self.url, "/completions", &body, self.config.api_key.as_deref(), self.config.timeout).and_then(|r| {
+                if (200..300).contains(&r.status) {
+                    Ok(r.body)
+                } else {
+                    let text = String::from_utf8_lossy(&r.body);
+                    Err(HttpErrorKind::Status { status: r.status, body: text.chars().take(500).collect() })
+                }
+            });
+            match result {
+                Ok(body) => break self.parse(&body),
+                Err(kind) if kind.is_transient() && attempts <= self.config.max_retries => {
+                    std::thread::sleep(self.config.retry_backoff * 2u32.saturating_pow(attempts - 1));
+                }
+                Err(kind) => break Err(kind),
+            }
+        };
+        self.usage.forward_calls += attempts as u64;
+        let (logprobs, prompt_tokens) =
+            outcome.map_err(|kind| HttpError { kind, url: self.config.base_url.clone(), attempts, elapsed: start.elapsed() })?;
+        self.usage.tokens_prefilled += prompt_tokens.unwrap_or(tokens.len() as u64);
+        if self.answers.len() >= self.config.cache_entries {
+            self.answers.clear();
+        }
+        if self.config.cache_entries > 0 {
+            self.answers.insert(key, logprobs.clone());
+        }
+        Ok(logprobs)
+    }
+
+    /// The top-k distribution of a completions response, and its `usage.prompt_tokens`.
+    fn parse(&mut self, body: &[u8]) -> Result<(Logprobs, Option<u64>), HttpErrorKind> {
+        let malformed = |why: String| HttpErrorKind::MalformedJson(why);
+        let value: Value = serde_json::from_slice(body).map_err(|e| malformed(format!("{e}")))?;
+        let choice = value.get("choices").and_then(|c| c.get(0)).ok_or_else(|| malformed("no `choices[0]`".into()))?;
+        let logprobs = choice.get("logprobs").filter(|l| !l.is_null()).ok_or_else(|| malformed("no `choices[0].logprobs`".into()))?;
+        let top = logprobs
+            .get("top_logprobs")
+            .and_then(|t| t.get(0))
+            .and_then(Value::as_object)
+            .ok_or_else(|| malformed("no `choices[0].logprobs.top_logprobs[0]` object".into()))?;
+        let mut entries: Vec<(TokenId, f32)> = Vec::with_capacity(top.len());
+        for (name, logprob) in top {
+            let logprob = logprob.as_f64().ok_or_else(|| malformed(format!("logprob of `{name}` is not a number")))?;
+            if logprob > 1e-4 || logprob.is_nan() {
+                return Err(malformed(format!("logprob {logprob} of `{name}` is not a log-probability")));
+            }
+            match self.token_id(name) {
+                Some(id) => entries.push((id, logprob.min(0.0) as f32)),
+                // A token text this tokenizer cannot name: left out, its mass joins the rest.
+                None => continue,
+            }
+        }
+        if entries.is_empty() {
+            return Err(malformed("no token of `top_logprobs[0]` is in the vocabulary".into()));
+        }
+        entries.sort_by(|a, b| b.1.total_cmp(&a.1).then(a.0.cmp(&b.0)));
+        entries.dedup_by_key(|e| e.0);
+        let prompt_tokens = value.get("usage").and_then(|u| u.get("prompt_tokens")).and_then(Value::as_u64);
+        Ok((Logprobs::Sparse { top: entries, vocabulary_size: self.tokenizer.vocabulary().len() }, prompt_tokens))
+    }
+
+    fn token_id(&mut self, name: &str) -> Option<TokenId> {
+        if let Some(id) = name.strip_prefix("token_id:").and_then(|n| n.parse::<TokenId>().ok()) {
+            return (self.tokenizer.vocabulary().check(id).is_ok()).then_some(id);
+        }
+        let vocabulary = self.tokenizer.vocabulary();
+        let map = self.text_to_id.get_or_insert_with(|| {
+            let mut map = FxHashMap::default();
+            // Text tokens first, so that a control token spelled like text does not shadow it.
+            for (id, bytes) in vocabulary.iter() {
+                if !vocabulary.is_special(id) {
+                    map.entry(bytes.to_vec()).or_insert(id);
+                }
+            }
+            for (id, bytes) in vocabulary.iter() {
+                map.entry(bytes.to_vec()).or_insert(id);
+            }
+            map
+        });
+        map.get(name.as_bytes()).copied()
+    }
+}
+
+impl LanguageModel for OpenAiModel {
+    fn tokenizer(&self) -> &Tokenizer {
+        &self.tokenizer
+    }
+
+    /// The server's top-k as a sparse distribution.
+    fn next_logprobs(&mut self, tokens: &[TokenId]) -> Result<Logprobs, LmError> {
+        self.check(tokens)?;
+        self.request(tokens, None)
+    }
+
+    /// With vLLM, the server masks to `allowed` and returns up to `top_logprobs` of them; the
+    /// answer is renormalised over `allowed` either way (see the module notes).
+    fn next_logprobs_among(&mut self, tokens: &[TokenId], allowed: &[TokenId]) -> Result<Prior, LmError> {
+        self.check(tokens)?;
+        if allowed.is_empty() {
+            return Err(LmError::NoAllowedTokens);
+        }
+        allowed.iter().try_for_each(|&t| self.tokenizer.vocabulary().check(t))?;
+        self.request(tokens, Some(allowed))?.among(allowed)
+    }
+
+    fn usage(&self) -> Usage {
+        self.usage
+    }
+}

@@ -1,0 +1,125 @@
+//! Tests on the real default model, SmolLM2-135M-Instruct Q4_1 (98 MB), behind the
+//! `real-model` feature: `cargo xtask fetch-model` puts the file in the model cache first
+//! (`.ci/run` does both). Token ids must equal llama.cpp's for the same file
+//! (`fixtures/smollm2_token_ids.json`, see `fixtures/README.md`); with the `reference` feature the
+//! logits must be within 1e-3 of candle-transformers' quantized llama.
+
+#![cfg(feature = "real-model")]
+
+mod common;
+
+use std::path::PathBuf;
+
+#[cfg(feature = "reference")]
+use common::max_abs_diff;
+use lm::{LanguageModel, LocalModel, Logprobs, Usage, generate_greedy};
+use serde_json::Value;
+
+fn model_path() -> PathBuf {
+    let dir = std::env::var_os("NSEA_MODEL_DIR").map(PathBuf::from).unwrap_or_else(|| {
+        std::env::var_os("XDG_CACHE_HOME")
+            .map(PathBuf::from)
+            .unwrap_or_else(|| PathBuf::from(std::env::var_os("HOME").unwrap_or_default()).join(".cache"))
+            .join("nsea/models")
+    });
+    let path = dir.join("SmolLM2-135M-Instruct.Q4_1.gguf");
+    assert!(path.is_file(), "{} is missing: run `cargo xtask fetch-model` before the real-model tests", path.display());
+    path
+}
+
+fn dense(logprobs: Logprobs) -> Vec<f32> {
+    match logprobs {
+        Logprobs::Dense(values) => values,
+        Logprobs::Sparse { .. } => panic!("the local backend is dense"),
+    }
+}
+
+#[test]
+fn token_ids_equal_llama_cpp() {
+    let model = LocalModel::load(&model_path()).expect("loads");
+    let fixture: Value = serde_json::from_str(include_str!("fixtures/smollm2_token_ids.json")).expect("fixture is JSON");
+    let cases = fixture["cases"].as_array().expect("cases");
+    assert!(cases.len() >= 20);
+    for case in cases {
+        let text = case["text"].as_str().expect("text");
+        let expected: Vec<u32> = case["ids"].as_array().expect("ids").iter().map(|v| v.as_u64().expect("id") as u32).collect();
+        assert_eq!(model.encode(text).expect("encodes"), expected, "ids of {text:?}");
+        assert_eq!(model.decode(&expected).expect("decodes"), text.as_bytes(), "bytes of {text:?}");
+    }
+    let vocabulary = model.vocabulary();
+    assert_eq!(vocabulary.len(), 49_152);
+    assert_eq!((vocabulary.eos(), vocabulary.bos()), (2, Some(1)));
+    assert_eq!(vocabulary.token_bytes(2), Some(&b"<|im_end|>"[..]));
+}
+
+#[test]
+fn chat_prompt_and_greedy_answer() {
+    let mut model = LocalModel::load(&model_path()).expect("loads");
+    let prompt = model.chat_prompt("You are a helpful assistant.", "What is the capital of France?").expect("renders");
+    assert_eq!(
+        prompt,
+        "<|im_start|>system\nYou are a helpful assistant.<|im_end|>\n<|im_start|>user\nWhat is the capital of France?<|im_end|>\n<|im_start|>assistant\n"
+    );
+    let ids = model.encode(&prompt).expect("encodes");
+    let answer = generate_greedy(&mut model, &ids, 24).expect("generates");
+    let text = String::from_utf8_lossy(&model.decode(&answer).expect("decodes")).into_owned();
+    assert!(text.contains("Paris"), "{text}");
+}
+
+#[test]
+fn a_sibling_branch_costs_its_suffix_and_matches_a_fresh_computation() {
+    let path = model_path();
+    let mut model = LocalModel::load(&path).expect("loads");
+    let prefix =
+        model.encode("<|im_start|>user\nPut a clean mug in the coffeemachine.<|im_end|>\n<|im_start|>assistant\ngo to").expect("encodes");
+    let a: Vec<u32> = prefix.iter().copied().chain(model.encode(" countertop 1").expect("encodes")).collect();
+    let b: Vec<u32> = prefix.iter().copied().chain(model.encode(" sinkbasin").expect("encodes")).collect();
+    model.next_logprobs(&a).expect("runs");
+    let before = model.usage();
+    let sibling = dense(model.next_logprobs(&b).expect("runs"));
+    let suffix = (b.len() - prefix.len()) as u64;
+    assert_eq!(
+        model.usage().since(&before),
+        Usage { forward_calls: 1, tokens_prefilled: suffix, tokens_reused: prefix.len() as u64, tokens_generated: 1, cache_hits: 0 }
+    );
+    let fresh = dense(LocalModel::load(&path).expect("loads").next_logprobs(&b).expect("runs"));
+    // Not bitwise: with 8-bit activations, computing the same positions in chunks of other
+    // sizes (the prefix inside `a`, then a 3-token suffix, against all of `b` at once) changes
+    // the shapes of candle's attention matmuls, hence a few roundings, hence a few activation
+    // quanta downstream. candle-transformers' quantized llama shows the same spread between a
+    // one-shot prefill and prefix-then-suffix on these tokens (total variation 0.023, the same
+    // floats as ours). A wrong cache position gives a different distribution altogether.
+    let total_variation: f32 = sibling.iter().zip(&fresh).map(|(a, b)| (a.exp() - b.exp()).abs()).sum::<f32>() / 2.0;
+    assert!(total_variation < 0.05, "total variation {total_variation}");
+    assert_eq!(Logprobs::Dense(sibling.clone()).argmax(), Logprobs::Dense(fresh).argmax());
+    // Chunked the same way, it is the same bit for bit, whatever was computed in between.
+    let c: Vec<u32> = prefix.iter().copied().chain(model.encode(" fridge 1").expect("encodes")).collect();
+    let mut other = LocalModel::load(&path).expect("loads");
+    other.next_logprobs(&a).expect("runs");
+    other.next_logprobs(&c).expect("runs");
+    assert_eq!(dense(other.next_logprobs(&b).expect("runs")), sibling);
+}
+
+#[cfg(feature = "reference")]
+#[test]
+fn logits_match_candle_transformers_quantized_llama() {
+    let path = model_path();
+    let mut model = LocalModel::load(&path).expect("loads");
+    let mut reference = lm::reference::ReferenceLlama::load(&path).expect("reference loads");
+    let prompt = model.encode(&model.chat_prompt("You plan household tasks.", "Make a cup of coffee.").expect("renders")).expect("encodes");
+    let mut ours = model.next_logits(&prompt).expect("runs").to_vec();
+    let theirs = reference.forward(&prompt).expect("runs");
+    let diff = max_abs_diff(&ours, &theirs);
+    assert!(diff < 1e-3, "prefill logits differ by {diff}");
+    // Then token by token through both caches.
+    let mut sequence = prompt.clone();
+    for _ in 0..8 {
+        let next = Logprobs::from_logits(&ours).argmax().expect("token");
+        sequence.push(next);
+        let ours_step = model.next_logits(&sequence).expect("runs").to_vec();
+        let theirs_step = reference.forward(&[next]).expect("runs");
+        let diff = max_abs_diff(&ours_step, &theirs_step);
+        assert!(diff < 1e-3, "decode logits differ by {diff}");
+        ours = ours_step;
+    }
+}

