@@ -6,8 +6,8 @@
 mod bench;
 mod eval;
 mod input;
-mod mask_bench;
 mod lm;
+mod mask_bench;
 mod planning;
 
 use std::path::PathBuf;
