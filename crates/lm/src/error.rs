@@ -56,11 +56,20 @@ pub enum LmError {
     #[error("a sequence of {len} tokens exceeds the context length of {max}")]
     ContextOverflow { len: usize, max: usize },
     /// An error inside candle's tensor code.
-    #[error("candle: {0}")]
+    #[error("candle: {}", candle_message(.0))]
     Candle(#[from] candle_core::Error),
     /// The model server could not be reached or gave no usable answer.
     #[error(transparent)]
     Http(#[from] HttpError),
+}
+
+/// candle's message without the backtrace it attaches when `RUST_BACKTRACE` is set.
+pub(crate) fn candle_message(error: &candle_core::Error) -> String {
+    match error {
+        candle_core::Error::WithBacktrace { inner, .. } => candle_message(inner),
+        candle_core::Error::Context { inner, context } => format!("{context}: {}", candle_message(inner)),
+        other => other.to_string(),
+    }
 }
 
 /// A request to a model server that failed, after `attempts` tries over `elapsed`.

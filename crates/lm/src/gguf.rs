@@ -7,7 +7,7 @@ use std::path::Path;
 
 use candle_core::quantized::gguf_file::{Content, Value};
 
-use crate::error::LmError;
+use crate::error::{LmError, candle_message};
 
 /// An open GGUF file: its header (metadata + tensor table) and a reader for the weights.
 #[derive(Debug)]
@@ -21,7 +21,8 @@ impl GgufFile {
     pub fn open(path: &Path) -> Result<Self, LmError> {
         let file = File::open(path).map_err(|source| LmError::Io { path: path.to_path_buf(), source })?;
         let mut reader = BufReader::new(file);
-        let content = Content::read(&mut reader).map_err(|e| LmError::MalformedGguf(format!("{}: {e}", path.display())))?;
+        let content =
+            Content::read(&mut reader).map_err(|e| LmError::MalformedGguf(format!("{}: {}", path.display(), candle_message(&e))))?;
         Ok(GgufFile { content, reader })
     }
 }

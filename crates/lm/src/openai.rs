@@ -133,7 +133,7 @@ impl OpenAiModel {
                 body["allowed_token_ids"] = json!(allowed);
             }
         }
-        let body = serde_json::to_vec(&body).map_err(|e| LmError::Tokenizer(e.to_string()))?;
+        let body = body.to_string().into_bytes();
         let start = Instant::now();
         let mut attempts = 0;
         let outcome = loop {

@@ -184,7 +184,7 @@ impl Loader<'_> {
         self.file
             .content
             .tensor(&mut self.file.reader, name, &Device::Cpu)
-            .map_err(|e| LmError::MalformedGguf(format!("tensor `{name}`: {e}")))
+            .map_err(|e| LmError::MalformedGguf(format!("tensor `{name}`: {}", crate::error::candle_message(&e))))
     }
 
     fn matrix(&mut self, name: &str, rows: usize, columns: usize) -> Result<Weight, LmError> {
