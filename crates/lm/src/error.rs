@@ -31,9 +31,18 @@ pub enum LmError {
     /// `general.architecture` names a model family this crate does not run.
     #[error("unsupported architecture `{0}` in `general.architecture` (supported: llama, qwen2, qwen3)")]
     UnsupportedArchitecture(String),
-    /// The tokenizer described by the metadata is not one this crate builds.
+    /// The tokenizer described by the metadata or `tokenizer.json` is not one this crate builds
+    /// (`key` names the field).
     #[error("unsupported tokenizer: `{key}` = `{value}` ({hint})")]
     UnsupportedTokenizer { key: &'static str, value: String, hint: &'static str },
+    /// A tokenizer file (`tokenizer.json`, `tokenizer_config.json`) that is not JSON, or not JSON
+    /// of the expected shape (serde's message, at the place it stopped).
+    #[error("{}:{line}:{column}: {message}", path.display())]
+    MalformedJson { path: PathBuf, line: usize, column: usize, message: String },
+    /// A tokenizer file whose content is inconsistent: a special token it names is not in the
+    /// vocabulary, a token is not a byte-level piece, no end-of-sequence token can be found.
+    #[error("{}: {message}", path.display())]
+    BadTokenizerFile { path: PathBuf, message: String },
     /// The tokenizer library rejected the vocabulary or an input.
     #[error("tokenizer: {0}")]
     Tokenizer(String),

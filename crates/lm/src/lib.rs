@@ -16,7 +16,9 @@
 //! - [`OpenAiModel`]: a served model (vLLM, llama.cpp server, Ollama) through
 //!   `/v1/completions` with `max_tokens = 1` and top-k `logprobs` (plus vLLM's
 //!   `allowed_token_ids`), over a minimal HTTP/1.1 client with timeouts and bounded retries.
-//! - [`UniformModel`]: every token equally likely (symbolic-only runs, a control).
+//! - [`UniformModel`]: every token equally likely (symbolic-only runs, a control), over any
+//!   [`Tokenizer`]: a GGUF file's, or a Hugging Face `tokenizer.json`'s
+//!   ([`Tokenizer::from_tokenizer_json`]), which needs no model file.
 //!
 //! ```
 //! use lm::{LanguageModel, LocalModel, tiny};
@@ -58,6 +60,6 @@ pub use llama::{Architecture, KvCache, LlamaModel, ModelConfig, RopeConfig};
 pub use local::LocalModel;
 pub use model::{LanguageModel, Logprobs, Prior, Usage, generate_greedy};
 pub use openai::{OpenAiConfig, OpenAiModel, ServerDialect};
-pub use tokenizer::{BpeParts, PreTokenizer, Tokenizer};
+pub use tokenizer::{BpeParts, COMMON_BOS_TOKENS, COMMON_STOP_TOKENS, PreTokenizer, Tokenizer};
 pub use uniform::UniformModel;
 pub use vocabulary::{TokenId, TokenKind, Vocabulary, byte_level_decode, byte_level_encode, char_to_byte_map};

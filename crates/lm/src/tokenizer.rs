@@ -1,10 +1,18 @@
-//! The text ⇄ token-id map of a GGUF model, built from its metadata: byte-level BPE (the
-//! `tokenizers` crate's BPE model over `tokenizer.ggml.tokens` and `tokenizer.ggml.merges`), the
-//! pre-tokenizer that `tokenizer.ggml.pre` names (llama.cpp's table), special tokens from
-//! `tokenizer.ggml.token_type`, and the chat template from `tokenizer.chat_template`.
+//! The text ⇄ token-id map of a model, from one of two sources.
+//!
+//! - GGUF metadata: byte-level BPE (the `tokenizers` crate's BPE model over
+//!   `tokenizer.ggml.tokens` and `tokenizer.ggml.merges`), the pre-tokenizer that
+//!   `tokenizer.ggml.pre` names (llama.cpp's table), special tokens from
+//!   `tokenizer.ggml.token_type`, and the chat template from `tokenizer.chat_template`.
+//! - A Hugging Face `tokenizer.json` (byte-level BPE only), loaded as it is by the `tokenizers`
+//!   crate, so that encoding is exactly the reference's; the special tokens and chat template come
+//!   from the `tokenizer_config.json` beside it. No model file is needed (the uniform backend).
 
 use std::path::Path;
+use std::str::FromStr;
 
+use serde::Deserialize;
+use tokenizers::models::ModelWrapper;
 use tokenizers::models::bpe::{BPE, Vocab};
 use tokenizers::normalizers::unicode::NFC;
 use tokenizers::pre_tokenizers::PreTokenizerWrapper;
@@ -25,8 +33,26 @@ use crate::vocabulary::{TokenId, TokenKind, Vocabulary, byte_level_decode, char_
 const REGEX_LLAMA3: &str = r"(?:'[sS]|'[tT]|'[rR][eE]|'[vV][eE]|'[mM]|'[lL][lL]|'[dD])|[^\r\n\p{L}\p{N}]?\p{L}+|\p{N}{1,3}| ?[^\s\p{L}\p{N}]+[\r\n]*|\s*[\r\n]+|\s+(?!\S)|\s+";
 /// Qwen2's split: as Llama 3's, but every digit alone (llama.cpp `LLAMA_VOCAB_PRE_TYPE_QWEN2`).
 const REGEX_QWEN2: &str = r"(?:'[sS]|'[tT]|'[rR][eE]|'[vV][eE]|'[mM]|'[lL][lL]|'[dD])|[^\r\n\p{L}\p{N}]?\p{L}+|\p{N}| ?[^\s\p{L}\p{N}]+[\r\n]*|\s*[\r\n]+|\s+(?!\S)|\s+";
+/// Llama 3's split as its `tokenizer.json` spells it (contractions case-insensitive by `(?i:)`).
+const REGEX_LLAMA3_HF: &str =
+    r"(?i:'s|'t|'re|'ve|'m|'ll|'d)|[^\r\n\p{L}\p{N}]?\p{L}+|\p{N}{1,3}| ?[^\s\p{L}\p{N}]+[\r\n]*|\s*[\r\n]+|\s+(?!\S)|\s+";
+/// Qwen2's (and Qwen2.5's, Qwen3's) split as its `tokenizer.json` spells it.
+const REGEX_QWEN2_HF: &str =
+    r"(?i:'s|'t|'re|'ve|'m|'ll|'d)|[^\r\n\p{L}\p{N}]?\p{L}+|\p{N}| ?[^\s\p{L}\p{N}]+[\r\n]*|\s*[\r\n]+|\s+(?!\S)|\s+";
 
-/// How text is cut into words before BPE, by the value of `tokenizer.ggml.pre`.
+/// End-of-sequence and end-of-turn tokens by name, for a `tokenizer.json` whose
+/// `tokenizer_config.json` does not name its `eos_token`: the first one present as a special
+/// token is the EOS. Every one present as a special token stops a generation. Qwen and SmolLM2
+/// (`<|im_end|>`, `<|endoftext|>`), Llama 3 (`<|eot_id|>`, `<|end_of_text|>`, `<|eom_id|>`),
+/// Llama 2 and Mistral (`</s>`), Phi-3 (`<|end|>`), Gemma (`<end_of_turn>`, `<eos>`).
+pub const COMMON_STOP_TOKENS: &[&str] =
+    &["<|im_end|>", "<|eot_id|>", "<|endoftext|>", "<|end_of_text|>", "<|eom_id|>", "</s>", "<|end|>", "<end_of_turn>", "<eos>"];
+/// Beginning-of-sequence tokens by name, for a `tokenizer.json` without a `tokenizer_config.json`
+/// (Llama 3, Llama 2, Gemma, Yi); Qwen has none.
+pub const COMMON_BOS_TOKENS: &[&str] = &["<|begin_of_text|>", "<s>", "<bos>", "<|startoftext|>"];
+
+/// How text is cut into words before BPE, by the value of `tokenizer.ggml.pre` or the
+/// `pre_tokenizer` section of a `tokenizer.json`.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum PreTokenizer {
     /// GPT-2's regex, no prefix space (`gpt2`, `default`; also when the key is absent).
@@ -51,6 +77,34 @@ impl PreTokenizer {
         })
     }
 
+    /// The pre-tokenizer a `tokenizer.json`'s `pre_tokenizer` section spells: `ByteLevel` with
+    /// GPT-2's regex; `Digits` (each alone) then that; or a `Split` by Llama 3's or Qwen2's regex
+    /// (either spelling of the contractions), isolating the matches, then `ByteLevel` without a
+    /// regex. No prefix space in any. `None` for anything else.
+    fn from_tokenizer_json(section: Option<&PreTokenizerWrapper>) -> Option<Self> {
+        use PreTokenizerWrapper as Pre;
+        let byte_level = |b: &ByteLevel, use_regex: bool| !b.add_prefix_space && b.use_regex == use_regex;
+        match section? {
+            Pre::ByteLevel(b) if byte_level(b, true) => Some(PreTokenizer::Gpt2),
+            Pre::Sequence(sequence) => match sequence.as_ref() {
+                [Pre::Digits(digits), Pre::ByteLevel(b)] if digits.individual_digits && byte_level(b, true) => {
+                    Some(PreTokenizer::DigitsThenGpt2)
+                }
+                [Pre::Split(split), Pre::ByteLevel(b)]
+                    if byte_level(b, false) && split.behavior == SplitDelimiterBehavior::Isolated && !split.invert =>
+                {
+                    match &split.pattern {
+                        SplitPattern::Regex(r) if r == REGEX_LLAMA3 || r == REGEX_LLAMA3_HF => Some(PreTokenizer::Llama3),
+                        SplitPattern::Regex(r) if r == REGEX_QWEN2 || r == REGEX_QWEN2_HF => Some(PreTokenizer::Qwen2),
+                        _ => None,
+                    }
+                }
+                _ => None,
+            },
+            _ => None,
+        }
+    }
+
     fn build(self) -> Result<PreTokenizerWrapper, LmError> {
         let split = |regex: &str| {
             Split::new(SplitPattern::Regex(regex.to_string()), SplitDelimiterBehavior::Isolated, false)
@@ -70,6 +124,7 @@ impl PreTokenizer {
 pub struct Tokenizer {
     inner: HfTokenizer,
     vocabulary: Vocabulary,
+    pre_tokenizer: PreTokenizer,
     chat_template: Option<ChatTemplate>,
     add_bos: bool,
 }
@@ -219,11 +274,144 @@ impl Tokenizer {
         inner.add_special_tokens(whole(TokenKind::Control, true)).map_err(|e| LmError::Tokenizer(e.to_string()))?;
         inner.add_tokens(whole(TokenKind::UserDefined, false)).map_err(|e| LmError::Tokenizer(e.to_string()))?;
         let chat_template = chat_template.map(ChatTemplate::new).transpose()?;
-        Ok(Tokenizer { inner, vocabulary, chat_template, add_bos })
+        Ok(Tokenizer { inner, vocabulary, pre_tokenizer, chat_template, add_bos })
+    }
+
+    /// The Hugging Face `tokenizer.json` at `path` (byte-level BPE), with the special tokens and
+    /// chat template of the `tokenizer_config.json` beside it when there is one, else of a
+    /// `chat_template.jinja` beside it. See [`Tokenizer::from_tokenizer_json_str`].
+    pub fn from_tokenizer_json(path: &Path) -> Result<Self, LmError> {
+        let read = |p: &Path| std::fs::read_to_string(p).map_err(|source| LmError::Io { path: p.to_path_buf(), source });
+        let json = read(path)?;
+        let config_path = path.with_file_name("tokenizer_config.json");
+        let mut config = if config_path.is_file() { Some(TokenizerConfig::parse(&read(&config_path)?, &config_path)?) } else { None };
+        let template_path = path.with_file_name("chat_template.jinja");
+        if config.as_ref().is_none_or(|c| c.chat_template.is_none()) && template_path.is_file() {
+            config.get_or_insert_default().chat_template = Some(read(&template_path)?);
+        }
+        Self::from_tokenizer_json_parts(&json, path, config, &config_path)
+    }
+
+    /// The tokenizer in the text of a Hugging Face `tokenizer.json`, and of its
+    /// `tokenizer_config.json` where there is one.
+    ///
+    /// Only byte-level BPE is built (`model.type = BPE`, no byte fallback, no subword affixes,
+    /// a `pre_tokenizer` that [`PreTokenizer`] names). The file is loaded by the `tokenizers`
+    /// crate as it is (normalizer, regex, added tokens), so `encode` gives the reference's ids.
+    /// Added tokens marked `special` are [`TokenKind::Control`], the others
+    /// [`TokenKind::UserDefined`]; both are matched whole in the input. The config gives
+    /// `eos_token`, `bos_token`, `add_bos_token` and `chat_template`; without one, the EOS is the
+    /// first of [`COMMON_STOP_TOKENS`] present as a special token, and the BOS the first of
+    /// [`COMMON_BOS_TOKENS`]. Every special token of [`COMMON_STOP_TOKENS`] also stops a
+    /// generation (Qwen3: `<|im_end|>`, then `<|endoftext|>`). Without `add_bos_token`, a BOS is
+    /// added where the file's post-processor adds one (Llama 3). Errors name `tokenizer.json` or
+    /// `tokenizer_config.json` as the file.
+    pub fn from_tokenizer_json_str(tokenizer_json: &str, tokenizer_config_json: Option<&str>) -> Result<Self, LmError> {
+        let config_path = Path::new("tokenizer_config.json");
+        let config = tokenizer_config_json.map(|text| TokenizerConfig::parse(text, config_path)).transpose()?;
+        Self::from_tokenizer_json_parts(tokenizer_json, Path::new("tokenizer.json"), config, config_path)
+    }
+
+    fn from_tokenizer_json_parts(json: &str, path: &Path, config: Option<TokenizerConfig>, config_path: &Path) -> Result<Self, LmError> {
+        let inner = HfTokenizer::from_str(json).map_err(|e| json_error(path, &*e))?;
+        let ModelWrapper::BPE(bpe) = inner.get_model() else {
+            let value = match inner.get_model() {
+                ModelWrapper::BPE(_) => "BPE",
+                ModelWrapper::WordPiece(_) => "WordPiece",
+                ModelWrapper::WordLevel(_) => "WordLevel",
+                ModelWrapper::Unigram(_) => "Unigram",
+            };
+            return Err(LmError::UnsupportedTokenizer {
+                key: "model.type",
+                value: value.to_string(),
+                hint: "only byte-level BPE is supported, as in Llama 3, SmolLM and Qwen models",
+            });
+        };
+        check_byte_level_bpe(bpe)?;
+        let pre_tokenizer = PreTokenizer::from_tokenizer_json(inner.get_pre_tokenizer()).ok_or_else(|| {
+            let section = serde_json::to_string(&inner.get_pre_tokenizer()).unwrap_or_default();
+            LmError::UnsupportedTokenizer {
+                key: "pre_tokenizer",
+                value: abbreviate(&section, 300),
+                hint: "known: ByteLevel (GPT-2), Digits then ByteLevel (SmolLM2), Split by Llama 3's or Qwen2's regex then ByteLevel",
+            }
+        })?;
+
+        let model_vocab = bpe.get_vocab();
+        let added = inner.get_added_tokens_decoder();
+        // The `tokenizers` crate numbers added tokens itself, after the model's vocabulary, and
+        // only warns where the file says otherwise; ids that differ from the file's would not be
+        // the model's, so they are an error here.
+        let declared: AddedTokensSection = serde_json::from_str(json).map_err(|e| json_error(path, &e))?;
+        for token in &declared.added_tokens {
+            let id = inner.token_to_id(&token.content);
+            if id != Some(token.id) {
+                return Err(LmError::BadTokenizerFile {
+                    path: path.to_path_buf(),
+                    message: format!(
+                        "`added_tokens` gives {:?} the id {}, but it is numbered {} (added tokens must follow the vocabulary without gaps)",
+                        token.content,
+                        token.id,
+                        id.map_or("nothing".to_string(), |id| id.to_string())
+                    ),
+                });
+            }
+        }
+        let size = model_vocab.values().chain(added.keys()).map(|&id| id as usize + 1).max().unwrap_or(0);
+        // Ids no token has (holes in some files) stay empty `Unused` tokens: never text, never allowed.
+        let mut bytes = vec![Vec::new(); size];
+        let mut kinds = vec![TokenKind::Unused; size];
+        let char_to_byte = char_to_byte_map();
+        for (text, &id) in &model_vocab {
+            bytes[id as usize] = byte_level_decode(text, &char_to_byte).ok_or_else(|| LmError::BadTokenizerFile {
+                path: path.to_path_buf(),
+                message: format!("`model.vocab` token {id} ({text:?}) has a character outside the byte-level alphabet"),
+            })?;
+            kinds[id as usize] = TokenKind::Normal;
+        }
+        for (&id, token) in &added {
+            bytes[id as usize] = token.content.as_bytes().to_vec();
+            kinds[id as usize] = if token.special { TokenKind::Control } else { TokenKind::UserDefined };
+        }
+
+        let special_id = |name: &str| inner.token_to_id(name).filter(|&id| kinds[id as usize] == TokenKind::Control);
+        let named_id = |name: &str, key: &str| {
+            inner.token_to_id(name).ok_or_else(|| LmError::BadTokenizerFile {
+                path: config_path.to_path_buf(),
+                message: format!("`{key}` {name:?} is not in the vocabulary"),
+            })
+        };
+        let stop: Vec<TokenId> = COMMON_STOP_TOKENS.iter().filter_map(|name| special_id(name)).collect();
+        let eos = match config.as_ref().and_then(|c| c.eos_token.as_ref()) {
+            Some(name) => named_id(name.content(), "eos_token")?,
+            None => *stop.first().ok_or_else(|| LmError::BadTokenizerFile {
+                path: path.to_path_buf(),
+                message: format!(
+                    "no end-of-sequence token: no `eos_token` in a tokenizer_config.json, and none of {COMMON_STOP_TOKENS:?} is a special token"
+                ),
+            })?,
+        };
+        let bos = match &config {
+            Some(config) => config.bos_token.as_ref().map(|name| named_id(name.content(), "bos_token")).transpose()?,
+            None => COMMON_BOS_TOKENS.iter().find_map(|name| special_id(name)),
+        };
+        let add_bos = match config.as_ref().and_then(|c| c.add_bos_token) {
+            Some(add_bos) => add_bos,
+            // Ask the post-processor (Llama 3's `TemplateProcessing` puts `<|begin_of_text|>` first).
+            None => bos.is_some_and(|bos| inner.encode_fast("", true).is_ok_and(|e| e.get_ids().first() == Some(&bos))),
+        };
+        let chat_template = config.and_then(|c| c.chat_template).map(|source| ChatTemplate::new(&source)).transpose()?;
+        let vocabulary = Vocabulary::new(bytes, kinds, eos, bos, &stop)?;
+        Ok(Tokenizer { inner, vocabulary, pre_tokenizer, chat_template, add_bos })
     }
 
     pub fn vocabulary(&self) -> &Vocabulary {
         &self.vocabulary
+    }
+
+    /// How text is cut into words before BPE.
+    pub fn pre_tokenizer(&self) -> PreTokenizer {
+        self.pre_tokenizer
     }
 
     /// The token ids of `text`. Spelled control tokens (`<|im_start|>`) become their ids, as
@@ -275,6 +463,118 @@ impl Tokenizer {
     }
 }
 
+/// The ids a `tokenizer.json` gives its added tokens (the rest of the file is skipped).
+#[derive(Debug, Deserialize)]
+struct AddedTokensSection {
+    #[serde(default)]
+    added_tokens: Vec<DeclaredToken>,
+}
+
+#[derive(Debug, Deserialize)]
+struct DeclaredToken {
+    id: TokenId,
+    content: String,
+}
+
+/// The fields of a `tokenizer_config.json` this crate reads; the rest is ignored.
+#[derive(Debug, Default, Deserialize)]
+struct TokenizerConfig {
+    #[serde(default)]
+    eos_token: Option<SpecialTokenName>,
+    #[serde(default)]
+    bos_token: Option<SpecialTokenName>,
+    #[serde(default)]
+    add_bos_token: Option<bool>,
+    #[serde(default, deserialize_with = "chat_template_source")]
+    chat_template: Option<String>,
+}
+
+/// A special token as a config names it: its text, or (older files) an `AddedToken` object.
+#[derive(Debug, Deserialize)]
+#[serde(untagged)]
+enum SpecialTokenName {
+    Text(String),
+    Object { content: String },
+}
+
+impl SpecialTokenName {
+    fn content(&self) -> &str {
+        match self {
+            SpecialTokenName::Text(text) | SpecialTokenName::Object { content: text } => text,
+        }
+    }
+}
+
+/// `chat_template` is one template, or a list of `{name, template}` of which `default` is used
+/// (the first where none is so named).
+fn chat_template_source<'de, D: serde::Deserializer<'de>>(deserializer: D) -> Result<Option<String>, D::Error> {
+    #[derive(Deserialize)]
+    struct Named {
+        name: String,
+        template: String,
+    }
+    #[derive(Deserialize)]
+    #[serde(untagged)]
+    enum Source {
+        One(String),
+        Named(Vec<Named>),
+    }
+    Ok(match Option::<Source>::deserialize(deserializer)? {
+        None => None,
+        Some(Source::One(template)) => Some(template),
+        Some(Source::Named(mut list)) => {
+            let index = list.iter().position(|named| named.name == "default").unwrap_or(0);
+            (index < list.len()).then(|| list.swap_remove(index).template)
+        }
+    })
+}
+
+impl TokenizerConfig {
+    fn parse(text: &str, path: &Path) -> Result<Self, LmError> {
+        serde_json::from_str(text).map_err(|e| json_error(path, &e))
+    }
+}
+
+/// `path:line:column: message` for a serde error, or the message alone for another.
+fn json_error(path: &Path, error: &(dyn std::error::Error + 'static)) -> LmError {
+    match error.downcast_ref::<serde_json::Error>() {
+        Some(e) => {
+            let message = e.to_string();
+            let suffix = format!(" at line {} column {}", e.line(), e.column());
+            let message = message.strip_suffix(&suffix).unwrap_or(&message).to_string();
+            LmError::MalformedJson { path: path.to_path_buf(), line: e.line(), column: e.column(), message }
+        }
+        None => LmError::BadTokenizerFile { path: path.to_path_buf(), message: error.to_string() },
+    }
+}
+
+/// BPE whose pieces are plain byte-level strings: no byte fallback (`<0x0A>` pieces), no
+/// continuing-subword prefix or end-of-word suffix, no dropout (encoding would be random).
+fn check_byte_level_bpe(bpe: &BPE) -> Result<(), LmError> {
+    let unsupported = |key, value: String, hint| Err(LmError::UnsupportedTokenizer { key, value, hint });
+    if bpe.byte_fallback {
+        return unsupported("model.byte_fallback", "true".into(), "SentencePiece-style byte fallback is not byte-level BPE");
+    }
+    if let Some(prefix) = bpe.continuing_subword_prefix.as_ref().filter(|p| !p.is_empty()) {
+        return unsupported("model.continuing_subword_prefix", prefix.clone(), "byte-level BPE has no subword prefix");
+    }
+    if let Some(suffix) = bpe.end_of_word_suffix.as_ref().filter(|s| !s.is_empty()) {
+        return unsupported("model.end_of_word_suffix", suffix.clone(), "byte-level BPE has no end-of-word suffix");
+    }
+    if let Some(dropout) = bpe.dropout.filter(|&p| p > 0.0) {
+        return unsupported("model.dropout", dropout.to_string(), "BPE dropout makes encoding random");
+    }
+    Ok(())
+}
+
+/// The first `max` characters of `text`, with `…` where it was cut.
+fn abbreviate(text: &str, max: usize) -> String {
+    match text.char_indices().nth(max) {
+        Some((cut, _)) => format!("{}…", &text[..cut]),
+        None => text.to_string(),
+    }
+}
+
 fn parse_byte_token(token: &str) -> Option<u8> {
     let hex = token.strip_prefix("<0x")?.strip_suffix('>')?;
     if hex.len() != 2 {
@@ -302,5 +602,33 @@ mod tests {
             assert!(pre.build().is_ok(), "{name}");
         }
         assert_eq!(PreTokenizer::from_gguf_name("tekken"), None);
+    }
+
+    #[test]
+    fn tokenizer_json_pre_tokenizers_map_to_the_table() {
+        use PreTokenizer::*;
+        for pre in [Gpt2, DigitsThenGpt2, Llama3, Qwen2] {
+            assert_eq!(PreTokenizer::from_tokenizer_json(Some(&pre.build().expect("builds"))), Some(pre), "{pre:?}");
+        }
+        let split = |regex: &str| -> PreTokenizerWrapper {
+            Split::new(SplitPattern::Regex(regex.to_string()), SplitDelimiterBehavior::Isolated, false).expect("compiles").into()
+        };
+        let then_byte_level = |first: PreTokenizerWrapper, use_regex: bool| {
+            Some(Sequence::new(vec![first, ByteLevel::new(false, false, use_regex).into()]).into())
+        };
+        let cases: [(Option<PreTokenizerWrapper>, Option<PreTokenizer>); 8] = [
+            (then_byte_level(split(REGEX_LLAMA3_HF), false), Some(Llama3)),
+            (then_byte_level(split(REGEX_QWEN2_HF), false), Some(Qwen2)),
+            // A prefix space, GPT-2's regex after the split, digits in runs, another regex, none.
+            (Some(ByteLevel::new(true, true, true).into()), None),
+            (then_byte_level(split(REGEX_QWEN2_HF), true), None),
+            (then_byte_level(Digits::new(false).into(), true), None),
+            (then_byte_level(split(r"\s+"), false), None),
+            (Some(split(REGEX_QWEN2_HF)), None),
+            (None, None),
+        ];
+        for (section, expected) in cases {
+            assert_eq!(PreTokenizer::from_tokenizer_json(section.as_ref()), expected, "{section:?}");
+        }
     }
 }

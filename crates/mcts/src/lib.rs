@@ -1,0 +1,34 @@
+//! Phase II of the paper: a language model writes the plan token by token under the
+//! state-dependent mask of [`token_constraint`], and token-level MCTS (PUCB with the
+//! constrained prior, Eq. 6-7; planning-heuristic values, Eq. 8) chooses among executable
+//! continuations. The ablations (unconstrained / constrained × greedy / sampling / MCTS)
+//! share one [`Decoder`]: the same [`cursor::Cursor`] steps every token, the same
+//! distribution request feeds every strategy.
+//!
+//! ```no_run
+//! # fn demo(model: &transition_model::TransitionModel, lm: &mut dyn lm::LanguageModel) -> Result<(), Box<dyn std::error::Error>> {
+//! use std::sync::Arc;
+//! use mcts::{DecodeConfig, Decoder, Mode, ValueConfig};
+//! let spelling = transition_model::Spelling::pddl(model.task());
+//! let vocab = Arc::new(mcts::constraint_vocabulary(lm.vocabulary())?);
+//! let mut decoder = Decoder::new(model, &spelling, vocab, ValueConfig::default());
+//! let prompt = lm.encode("Plan:\n")?;
+//! let config = DecodeConfig::new(Mode::from_name("constrained-mcts").unwrap());
+//! let outcome = decoder.decode(lm, &prompt, &model.initial_state(), &config)?;
+//! assert!(outcome.valid);
+//! # Ok(()) }
+//! ```
+
+pub mod cursor;
+mod decode;
+pub mod prompt;
+mod sampling;
+mod search;
+mod value;
+mod vocab;
+
+pub use decode::{Budget, DecodeConfig, DecodeError, Decoder, InvalidStep, Mode, Outcome, Stats, StopReason, Strategy};
+pub use sampling::{Sampler, SamplingConfig};
+pub use search::MctsConfig;
+pub use value::{Evaluator, ValueConfig};
+pub use vocab::constraint_vocabulary;

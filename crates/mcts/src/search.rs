@@ -1,0 +1,410 @@
+//! Token-level MCTS (paper §3.2, Eq. 7-8; Appendix A.4).
+//!
+//! A node is a token prefix of the plan, standing for `n = (s, u)`: the symbolic state `s`
+//! the completed actions reach and the partial action `u`. Nodes do not store `(s, u)`: a
+//! simulation replays its tokens from the root through the constraint (a byte-trie step per
+//! token and one successor per completed action), which keeps a node at 32 bytes.
+//!
+//! **Simulation.** *Selection* descends from the root by
+//! `argmax_v Q̄(n, v) + U(n, v)` over the node's open children, with
+//! `U(n, v) = c(n) · p(v | n) · √N(n) / (1 + N(n, v))` (Eq. 7) and
+//! `c(n) = c_explore + ln((N(n) + c_base + 1) / c_base)`: the exploration constant
+//! (default 2.5) is the constant part of `c_N`, the base constant (default 10) sets how fast
+//! it grows with the parent's visits, as AlphaZero's `c_init` and `c_base`. `p` is the
+//! prior: the model's distribution renormalised over the tokens the mask allows (Eq. 6), or
+//! the full distribution in unconstrained mode. `Q̄` is the mean backed-up value, min-max
+//! normalised over every value the tree has seen (as MuZero does), so that `Q̄ ∈ [0, 1]`
+//! and the prior term are on one scale; an unvisited child takes its parent's `Q̄`.
+//! *Expansion* asks the model once at the leaf and keeps the `width` (16) most likely
+//! allowed tokens as children, with their priors as given (not renormalised over the 16).
+//! The *rollout* then writes greedily — the most likely child, expanding each node on the
+//! way — until the partial action completes (at most `tokens_per_expansion`, 128, tokens):
+//! every simulation ends at an action boundary (or at the end of the plan), where Eq. 8
+//! gives the value, which is *backed up* along the whole path. Distributions are asked for
+//! once per node (the node keeps its children and priors: the cache by prefix); a token the
+//! mask forces needs no model call at all; and the model's own prefix cache makes a
+//! sibling's request cost its divergent suffix.
+//!
+//! **Values.** At a boundary reaching state `s` after `|π|` actions: `R_G` at the goal, else
+//! `−h(s, G) − λ|π|` ([`crate::value`]). A dead end (`h = ∞`), an unconstrained line that
+//! names no applicable action, get `−(h(s₀) + λ·max_actions + 1)`: below any value a live
+//! prefix within the length limit can have. These, a plan that ended (EOS / `DONE`), a prefix
+//! at `max_actions`, and (with `prune_cycles`) a prefix that returns to a state it already
+//! visited are leaves: closed, never selected again. A node whose children are all closed is
+//! closed; a closed root means the tree is exhausted.
+//!
+//! **Result.** The first prefix that reaches the goal stops the search (`stop_at_goal`, the
+//! paper's early termination). Otherwise, when a budget runs out, the best valid candidate:
+//! every boundary the search reached is one; a goal-reaching one beats any other (the
+//! cheapest of them), then the highest value. Ties break on token order, so a run is
+//! deterministic.
+
+use std::time::Instant;
+
+use lm::LanguageModel;
+use serde::Serialize;
+use token_constraint::TokenId;
+use transition_model::State;
+
+use crate::cursor::{Cursor, Event};
+use crate::decode::{DecodeConfig, DecodeError, Decoder, Run, StopReason};
+
+/// The search's settings (paper Appendix A.4).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct MctsConfig {
+    /// Children kept per expanded node: the most likely allowed tokens.
+    pub width: usize,
+    /// `c_explore`, the constant part of the PUCB coefficient.
+    pub exploration: f64,
+    /// `c_base`: the coefficient grows by `ln((N + c_base + 1) / c_base)`.
+    pub base: f64,
+    /// Tokens one rollout may write before it is valued where it stands.
+    pub tokens_per_expansion: usize,
+    /// Close a prefix whose state repeats an earlier state of the same prefix: with
+    /// non-negative costs such a plan is never needed.
+    pub prune_cycles: bool,
+}
+
+impl Default for MctsConfig {
+    fn default() -> Self {
+        MctsConfig { width: 16, exploration: 2.5, base: 10.0, tokens_per_expansion: 128, prune_cycles: true }
+    }
+}
+
+const EXPANDED: u8 = 1;
+const CLOSED: u8 = 2;
+
+#[derive(Debug, Clone, Copy)]
+struct Node {
+    value_sum: f64,
+    token: TokenId,
+    prior: f32,
+    visits: u32,
+    first_child: u32,
+    child_count: u16,
+    flags: u8,
+}
+
+impl Node {
+    fn new(token: TokenId, prior: f32) -> Node {
+        Node { value_sum: 0.0, token, prior, visits: 0, first_child: 0, child_count: 0, flags: 0 }
+    }
+
+    fn expanded(&self) -> bool {
+        self.flags & EXPANDED != 0
+    }
+
+    fn closed(&self) -> bool {
+        self.flags & CLOSED != 0
+    }
+
+    fn children(&self) -> std::ops::Range<usize> {
+        self.first_child as usize..self.first_child as usize + self.child_count as usize
+    }
+}
+
+/// The tree: nodes in one vector, each node's children contiguous.
+#[derive(Debug)]
+struct Tree {
+    nodes: Vec<Node>,
+    min: f64,
+    max: f64,
+}
+
+impl Tree {
+    fn new() -> Tree {
+        Tree { nodes: vec![Node::new(0, 1.0)], min: f64::INFINITY, max: f64::NEG_INFINITY }
+    }
+
+    fn normalize(&self, value: f64) -> f64 {
+        if self.max > self.min { (value - self.min) / (self.max - self.min) } else { 0.5 }
+    }
+
+    fn expand(&mut self, node: usize, candidates: &[(TokenId, f32)]) {
+        let first = self.nodes.len() as u32;
+        let count = candidates.len().min(u16::MAX as usize);
+        self.nodes.extend(candidates[..count].iter().map(|&(t, p)| Node::new(t, p)));
+        let n = &mut self.nodes[node];
+        n.first_child = first;
+        n.child_count = count as u16;
+        n.flags |= EXPANDED;
+        if count == 0 {
+            n.flags |= CLOSED;
+        }
+    }
+
+    /// PUCB (Eq. 7) over the open children; the first of equals.
+    fn select(&self, node: usize, config: &MctsConfig) -> Option<usize> {
+        let n = &self.nodes[node];
+        let visits = f64::from(n.visits);
+        let coefficient = config.exploration + ((visits + config.base + 1.0) / config.base).ln();
+        let scale = coefficient * visits.sqrt();
+        let first_play = if n.visits > 0 { self.normalize(n.value_sum / visits) } else { 0.5 };
+        let mut best: Option<(usize, f64)> = None;
+        for c in n.children() {
+            let child = &self.nodes[c];
+            if child.closed() {
+                continue;
+            }
+            let q = if child.visits > 0 { self.normalize(child.value_sum / f64::from(child.visits)) } else { first_play };
+            let score = q + scale * f64::from(child.prior) / (1.0 + f64::from(child.visits));
+            if best.is_none_or(|(_, b)| score > b) {
+                best = Some((c, score));
+            }
+        }
+        best.map(|(c, _)| c)
+    }
+
+    fn backup(&mut self, path: &[usize], value: f64) {
+        self.min = self.min.min(value);
+        self.max = self.max.max(value);
+        for &n in path {
+            let node = &mut self.nodes[n];
+            node.visits += 1;
+            node.value_sum += value;
+        }
+    }
+
+    /// Closes the last node of `path`, and every ancestor left with no open child.
+    fn close(&mut self, path: &[usize]) {
+        let Some((&leaf, ancestors)) = path.split_last() else { return };
+        self.nodes[leaf].flags |= CLOSED;
+        for &n in ancestors.iter().rev() {
+            let node = self.nodes[n];
+            if node.children().any(|c| !self.nodes[c].closed()) {
+                break;
+            }
+            self.nodes[n].flags |= CLOSED;
+        }
+    }
+}
+
+/// How a simulation's last node is valued.
+enum Leaf {
+    /// A live prefix: its value, and it stays open.
+    Open(f64),
+    /// A leaf of the search (closed).
+    Terminal(f64),
+    /// The goal: the search stops.
+    Goal,
+}
+
+/// The best plan found so far.
+struct Best {
+    plan: Vec<grounding::ActionId>,
+    state: State,
+    goal: bool,
+    cost: u64,
+    value: f64,
+}
+
+impl Best {
+    fn beaten_by(&self, goal: bool, cost: u64, value: f64) -> bool {
+        match (self.goal, goal) {
+            (false, true) => true,
+            (true, false) => false,
+            (true, true) => cost < self.cost,
+            (false, false) => value > self.value,
+        }
+    }
+}
+
+/// The boundary states along the current path (for cycle pruning), reusing their buffers.
+struct PathStates {
+    states: Vec<State>,
+    depth: usize,
+}
+
+impl PathStates {
+    fn reset(&mut self, root: &State) {
+        self.depth = 0;
+        self.push(root);
+    }
+
+    fn push(&mut self, state: &State) {
+        if self.depth < self.states.len() {
+            self.states[self.depth].clone_from(state);
+        } else {
+            self.states.push(state.clone());
+        }
+        self.depth += 1;
+    }
+
+    /// Whether the last state pushed equals an earlier one.
+    fn last_repeats(&self) -> bool {
+        let (last, earlier) = self.states[..self.depth].split_last().expect("the root state is always there");
+        earlier.contains(last)
+    }
+}
+
+/// What valuing a newly reached node needs.
+struct Arrival<'a, 'm> {
+    model: &'m transition_model::TransitionModel,
+    evaluator: &'a mut crate::value::Evaluator<'m>,
+    states: &'a mut PathStates,
+    best: &'a mut Best,
+    config: &'a DecodeConfig,
+    prune_cycles: bool,
+    dead_value: f64,
+}
+
+/// Values a node reached for the first time, after `event`: `None` inside an action (the
+/// rollout goes on), else the leaf it is.
+fn arrival(a: &mut Arrival<'_, '_>, cursor: &Cursor, event: Event, depth: usize) -> Option<Leaf> {
+    let budget = &a.config.budget;
+    let ended = match event {
+        Event::Partial => {
+            if depth >= budget.max_tokens {
+                return Some(Leaf::Terminal(a.evaluator.value(cursor.state(), cursor.plan().len()).unwrap_or(a.dead_value)));
+            }
+            return None;
+        }
+        Event::Invalid(_) => return Some(Leaf::Terminal(a.dead_value)),
+        Event::Action => false,
+        Event::End => true,
+    };
+    let state = cursor.state();
+    let length = cursor.plan().len();
+    if a.model.is_goal(state) {
+        let reward = a.evaluator.config().goal_reward;
+        let cost = transition_model::plan_cost(a.model.task(), cursor.plan());
+        if a.best.beaten_by(true, cost, reward) {
+            *a.best = Best { plan: cursor.plan().to_vec(), state: state.clone(), goal: true, cost, value: reward };
+        }
+        return Some(if a.config.stop_at_goal { Leaf::Goal } else { Leaf::Terminal(reward) });
+    }
+    if !ended {
+        a.states.push(state);
+        if a.prune_cycles && a.states.last_repeats() {
+            return Some(Leaf::Terminal(a.evaluator.value(state, length).unwrap_or(a.dead_value)));
+        }
+    }
+    let Some(value) = a.evaluator.value(state, length) else { return Some(Leaf::Terminal(a.dead_value)) };
+    if a.best.beaten_by(false, 0, value) {
+        *a.best = Best { plan: cursor.plan().to_vec(), state: state.clone(), goal: false, cost: 0, value };
+    }
+    Some(if ended || length >= budget.max_actions || depth >= budget.max_tokens { Leaf::Terminal(value) } else { Leaf::Open(value) })
+}
+
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn run(
+    decoder: &mut Decoder<'_>,
+    lm: &mut dyn LanguageModel,
+    prompt: &[TokenId],
+    root: Cursor,
+    config: &DecodeConfig,
+    mcts: &MctsConfig,
+    stats: &mut crate::decode::Stats,
+    started: Instant,
+) -> Result<Run, DecodeError> {
+    let model = decoder.model;
+    let budget = &config.budget;
+    let start = root.state().clone();
+    let finish = |best: &Best, stop| Run { plan: best.plan.clone(), end_state: best.state.clone(), invalid: None, stop, text: None };
+    let lambda = decoder.evaluator.config().length_penalty;
+    let mut best = Best { plan: Vec::new(), state: start.clone(), goal: model.is_goal(&start), cost: 0, value: 0.0 };
+    if best.goal {
+        return Ok(finish(&best, StopReason::Goal));
+    }
+    let Some(h0) = decoder.evaluator.heuristic(&start) else {
+        return Ok(finish(&best, StopReason::DeadEnd));
+    };
+    best.value = -h0;
+    let dead_value = -(h0 + lambda * budget.max_actions as f64 + 1.0);
+    let width = mcts.width.clamp(1, u16::MAX as usize);
+
+    let mut tree = Tree::new();
+    let mut sequence = prompt.to_vec();
+    let mut path: Vec<usize> = Vec::new();
+    let mut states = PathStates { states: Vec::new(), depth: 0 };
+    macro_rules! arrival_context {
+        () => {
+            Arrival {
+                model,
+                evaluator: &mut decoder.evaluator,
+                states: &mut states,
+                best: &mut best,
+                config,
+                prune_cycles: mcts.prune_cycles,
+                dead_value,
+            }
+        };
+    }
+    let stop = loop {
+        if budget.simulations.is_some_and(|limit| stats.simulations >= limit) {
+            break StopReason::Simulations;
+        }
+        if budget.wall_clock.is_some_and(|limit| started.elapsed() >= limit) {
+            break StopReason::WallClock;
+        }
+        if budget.model_calls.is_some_and(|limit| stats.decoded_tokens - stats.forced_tokens >= limit) {
+            break StopReason::ModelCalls;
+        }
+        if tree.nodes[0].closed() {
+            break StopReason::Exhausted;
+        }
+        stats.simulations += 1;
+        let mut cursor = root.clone();
+        sequence.truncate(prompt.len());
+        path.clear();
+        path.push(0);
+        states.reset(&start);
+
+        // Selection: replay the tree's tokens while the nodes were visited before; a node
+        // reached for the first time is valued on arrival.
+        let mut arrived: Option<Leaf> = None;
+        while tree.nodes[*path.last().expect("root")].expanded() {
+            let Some(child) = tree.select(*path.last().expect("root"), mcts) else {
+                // Not reached: a node with no open child is closed, and closed nodes are not
+                // selected. Close it here all the same rather than expand it twice.
+                arrived = Some(Leaf::Terminal(dead_value));
+                break;
+            };
+            let token = tree.nodes[child].token;
+            sequence.push(token);
+            path.push(child);
+            let event = cursor.advance(model, &mut decoder.languages, &decoder.vocab, token)?;
+            if tree.nodes[child].visits == 0 {
+                arrived = arrival(&mut arrival_context!(), &cursor, event, sequence.len() - prompt.len());
+                break;
+            }
+            if event == Event::Action {
+                states.push(cursor.state());
+            }
+        }
+
+        // Expansion and rollout to the next action boundary.
+        let mut steps = 0;
+        let leaf = loop {
+            if let Some(leaf) = arrived.take() {
+                break leaf;
+            }
+            let node = *path.last().expect("root");
+            let distribution = decoder.distribution(lm, &sequence, &cursor, width)?;
+            tree.expand(node, &distribution.candidates);
+            let Some(&(token, _)) = distribution.candidates.first() else { break Leaf::Terminal(dead_value) };
+            let child = tree.nodes[node].first_child as usize;
+            stats.decoded_tokens += 1;
+            stats.forced_tokens += u64::from(distribution.forced);
+            sequence.push(token);
+            path.push(child);
+            steps += 1;
+            let event = cursor.advance(model, &mut decoder.languages, &decoder.vocab, token)?;
+            arrived = arrival(&mut arrival_context!(), &cursor, event, sequence.len() - prompt.len());
+            if arrived.is_none() && steps >= mcts.tokens_per_expansion {
+                let value = decoder.evaluator.value(cursor.state(), cursor.plan().len());
+                break value.map_or(Leaf::Terminal(dead_value), Leaf::Open);
+            }
+        };
+        match leaf {
+            Leaf::Goal => break StopReason::Goal,
+            Leaf::Open(value) => tree.backup(&path, value),
+            Leaf::Terminal(value) => {
+                tree.backup(&path, value);
+                tree.close(&path);
+            }
+        }
+    };
+    stats.nodes = tree.nodes.len() as u64;
+    Ok(finish(&best, stop))
+}

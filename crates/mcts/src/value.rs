@@ -1,0 +1,100 @@
+//! The value of a plan prefix (paper Eq. 8): `R_G` when the state it reaches satisfies the
+//! goal, else `−h(s, G) − λ·|π|`, with `h` a fixed weighted mix of h_FF, LM-cut and the
+//! remaining plan cost (Appendix A.4), each in the task's action-cost units.
+
+use heuristics::{HFF, LmCut, RemainingPlanCost, WeightedMix};
+use rustc_hash::FxHashMap;
+use transition_model::{State, TransitionModel};
+
+/// Weights and constants of the value.
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct ValueConfig {
+    /// Weight of h_FF in the mix.
+    pub ff: f64,
+    /// Weight of LM-cut.
+    pub lmcut: f64,
+    /// Weight of the remaining plan cost (a bounded lazy GBFS with h_FF; h_FF when it runs out).
+    pub remaining: f64,
+    /// Expansion budget of each remaining-plan-cost search.
+    pub remaining_expansions: u64,
+    /// `R_G`, the value of a prefix that reaches the goal.
+    pub goal_reward: f64,
+    /// `λ`, the penalty per action of the prefix.
+    pub length_penalty: f64,
+}
+
+impl Default for ValueConfig {
+    fn default() -> Self {
+        ValueConfig { ff: 1.0, lmcut: 1.0, remaining: 1.0, remaining_expansions: 200, goal_reward: 1.0, length_penalty: 0.1 }
+    }
+}
+
+/// Evaluates states with the mix, remembering each state's `h`: MCTS reaches the same state
+/// along many token paths, and a revisit costs a hash lookup.
+pub struct Evaluator<'m> {
+    model: &'m TransitionModel,
+    config: ValueConfig,
+    mix: WeightedMix<'m>,
+    cache: FxHashMap<State, Option<f64>>,
+    evaluations: u64,
+    lookups: u64,
+}
+
+impl std::fmt::Debug for Evaluator<'_> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Evaluator").field("config", &self.config).field("cached", &self.cache.len()).finish_non_exhaustive()
+    }
+}
+
+impl<'m> Evaluator<'m> {
+    pub fn new(model: &'m TransitionModel, config: ValueConfig) -> Evaluator<'m> {
+        let mut mix = WeightedMix::new();
+        if config.ff > 0.0 {
+            mix = mix.with(config.ff, HFF::new(model));
+        }
+        if config.lmcut > 0.0 {
+            mix = mix.with(config.lmcut, LmCut::new(model));
+        }
+        if config.remaining > 0.0 {
+            mix = mix.with(config.remaining, RemainingPlanCost::new(model, config.remaining_expansions));
+        }
+        Evaluator { model, config, mix, cache: FxHashMap::default(), evaluations: 0, lookups: 0 }
+    }
+
+    pub fn config(&self) -> &ValueConfig {
+        &self.config
+    }
+
+    pub fn model(&self) -> &'m TransitionModel {
+        self.model
+    }
+
+    /// `h(s, G)`: 0 at the goal, `None` for a dead end.
+    pub fn heuristic(&mut self, state: &State) -> Option<f64> {
+        self.lookups += 1;
+        if self.model.is_goal(state) {
+            return Some(0.0);
+        }
+        if let Some(&h) = self.cache.get(state) {
+            return h;
+        }
+        self.evaluations += 1;
+        let h = self.mix.evaluate(state);
+        self.cache.insert(state.clone(), h);
+        h
+    }
+
+    /// Eq. 8 for a prefix of `length` actions reaching `state`; `None` for a dead end.
+    pub fn value(&mut self, state: &State, length: usize) -> Option<f64> {
+        if self.model.is_goal(state) {
+            return Some(self.config.goal_reward);
+        }
+        let h = self.heuristic(state)?;
+        Some(-h - self.config.length_penalty * length as f64)
+    }
+
+    /// Heuristic evaluations run (cache misses) and requested.
+    pub fn counts(&self) -> (u64, u64) {
+        (self.evaluations, self.lookups)
+    }
+}

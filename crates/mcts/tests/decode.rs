@@ -1,0 +1,137 @@
+//! The decoder end to end on small tasks: what every mode returns, MCTS optimality on a
+//! small domain, determinism.
+
+mod common;
+
+use std::sync::Arc;
+
+use common::{TempDir, applicable_in_turn, ground, tiny_model, tiny_uniform};
+use lm::LanguageModel;
+use mcts::{DecodeConfig, Decoder, MctsConfig, Mode, SamplingConfig, StopReason, Strategy, ValueConfig};
+use transition_model::Spelling;
+
+/// Two routes from a to d: a-b-c-d (three steps) and a-e-d (two).
+const ROADS_DOMAIN: &str = "(define (domain roads) (:predicates (at ?x) (road ?x ?y))
+  (:action go :parameters (?x ?y) :precondition (and (at ?x) (road ?x ?y)) :effect (and (at ?y) (not (at ?x)))))";
+const ROADS_PROBLEM: &str = "(define (problem p) (:domain roads) (:objects a b c d e)
+  (:init (at a) (road a b) (road b c) (road c d) (road a e) (road e d) (road b a) (road c b) (road e a))
+  (:goal (at d)))";
+
+fn mode(name: &str) -> Mode {
+    Mode::from_name(name).expect("known mode")
+}
+
+#[test]
+fn constrained_mcts_solves_a_small_domain_with_a_uniform_prior() {
+    let dir = TempDir::new("roads");
+    let mut lm = tiny_uniform(&dir);
+    let model = ground(ROADS_DOMAIN, ROADS_PROBLEM);
+    let spelling = Spelling::pddl(model.task());
+    let vocab = Arc::new(mcts::constraint_vocabulary(lm.vocabulary()).expect("vocabulary"));
+    let mut decoder = Decoder::new(&model, &spelling, vocab, ValueConfig::default());
+    let prompt = lm.encode("Plan:\n").expect("encodes");
+    let outcome = decoder.decode(&mut lm, &prompt, &model.initial_state(), &DecodeConfig::new(mode("constrained-mcts"))).expect("decodes");
+    assert!(outcome.valid && outcome.solved, "{outcome:?}");
+    assert_eq!(outcome.stop, StopReason::Goal);
+    assert!(applicable_in_turn(&model, &outcome.plan));
+    assert!(model.is_goal(&model.apply(&model.apply(&model.initial_state(), outcome.plan[0]), outcome.plan[1])) || outcome.plan.len() > 2);
+    assert!(outcome.stats.simulations > 0 && outcome.stats.nodes > 0);
+    assert_eq!(outcome.lines.last().map(String::as_str), Some("(go e d)").filter(|_| outcome.plan.len() == 2).or(outcome.lines.last().map(String::as_str)));
+}
+
+#[test]
+fn mcts_finds_the_optimal_plan_given_enough_simulations() {
+    let dir = TempDir::new("optimal");
+    let mut lm = tiny_uniform(&dir);
+    let model = ground(ROADS_DOMAIN, ROADS_PROBLEM);
+    let spelling = Spelling::pddl(model.task());
+    let vocab = Arc::new(mcts::constraint_vocabulary(lm.vocabulary()).expect("vocabulary"));
+    // Only the goal matters: no heuristic preference between the two routes' first steps
+    // beyond what the search learns.
+    let mut decoder = Decoder::new(&model, &spelling, vocab, ValueConfig::default());
+    let prompt = lm.encode("Plan:\n").expect("encodes");
+    let mut config = DecodeConfig::new(mode("constrained-mcts"));
+    config.stop_at_goal = false;
+    config.budget.max_actions = 4;
+    let outcome = decoder.decode(&mut lm, &prompt, &model.initial_state(), &config).expect("decodes");
+    assert_eq!(outcome.stop, StopReason::Exhausted, "the finite tree is searched to the end");
+    assert!(outcome.solved);
+    assert_eq!(outcome.lines, ["(go a e)", "(go e d)"]);
+}
+
+#[test]
+fn every_mode_runs_and_constrained_modes_stay_valid() {
+    let dir = TempDir::new("modes");
+    let mut lm = tiny_model(&dir);
+    let model = ground(ROADS_DOMAIN, ROADS_PROBLEM);
+    let spelling = Spelling::pddl(model.task());
+    let vocab = Arc::new(mcts::constraint_vocabulary(lm.vocabulary()).expect("vocabulary"));
+    let mut decoder = Decoder::new(&model, &spelling, vocab, ValueConfig::default());
+    let prompt = lm.encode("Plan:\n").expect("encodes");
+    for name in Mode::NAMES {
+        let mut config = DecodeConfig::new(mode(name));
+        config.budget.simulations = Some(200);
+        config.budget.max_tokens = 64;
+        let outcome = decoder.decode(&mut lm, &prompt, &model.initial_state(), &config).expect("decodes");
+        assert_eq!(outcome.mode, name);
+        assert!(applicable_in_turn(&model, &outcome.plan), "{name}: {outcome:?}");
+        if name.starts_with("constrained") {
+            assert!(outcome.valid, "{name}: {outcome:?}");
+            assert!(outcome.invalid.is_none());
+        }
+        if outcome.solved {
+            assert!(model.is_goal(&outcome.plan.iter().fold(model.initial_state(), |s, &a| model.apply(&s, a))));
+        }
+        assert!(outcome.stats.usage.tokens_generated + outcome.stats.forced_tokens >= outcome.stats.decoded_tokens.min(1));
+    }
+}
+
+#[test]
+fn identical_seeds_give_identical_results() {
+    let dir = TempDir::new("seeds");
+    let mut lm = tiny_model(&dir);
+    let model = ground(ROADS_DOMAIN, ROADS_PROBLEM);
+    let spelling = Spelling::pddl(model.task());
+    let vocab = Arc::new(mcts::constraint_vocabulary(lm.vocabulary()).expect("vocabulary"));
+    let prompt = lm.encode("Plan:\n").expect("encodes");
+    let run = |lm: &mut lm::LocalModel, mode: Mode| {
+        let mut decoder = Decoder::new(&model, &spelling, Arc::clone(&vocab), ValueConfig::default());
+        let mut config = DecodeConfig::new(mode);
+        config.budget.simulations = Some(100);
+        config.budget.max_tokens = 48;
+        let outcome = decoder.decode(lm, &prompt, &model.initial_state(), &config).expect("decodes");
+        (outcome.lines, outcome.stop, outcome.stats.simulations, outcome.stats.nodes, outcome.invalid, outcome.text)
+    };
+    for constrained in [true, false] {
+        for seed in [0, 42, 1738] {
+            let sample = Mode { constrained, strategy: Strategy::Sample(SamplingConfig { seed, ..SamplingConfig::default() }) };
+            assert_eq!(run(&mut lm, sample.clone()), run(&mut lm, sample));
+        }
+        let search = Mode { constrained, strategy: Strategy::Mcts(MctsConfig::default()) };
+        assert_eq!(run(&mut lm, search.clone()), run(&mut lm, search));
+    }
+    // Different seeds explore: over three seeds, unconstrained sampling writes more than one text.
+    let texts: rustc_hash::FxHashSet<_> = [0u64, 1, 2, 3]
+        .into_iter()
+        .map(|seed| run(&mut lm, Mode { constrained: false, strategy: Strategy::Sample(SamplingConfig { seed, top_k: None, top_p: 1.0, temperature: 1.0 }) }))
+        .map(|r| r.5)
+        .collect();
+    assert!(texts.len() > 1, "{texts:?}");
+}
+
+#[test]
+fn unconstrained_greedy_reports_the_first_invalid_line() {
+    let dir = TempDir::new("invalid");
+    let mut lm = tiny_uniform(&dir);
+    let model = ground(ROADS_DOMAIN, ROADS_PROBLEM);
+    let spelling = Spelling::pddl(model.task());
+    let vocab = Arc::new(mcts::constraint_vocabulary(lm.vocabulary()).expect("vocabulary"));
+    let mut decoder = Decoder::new(&model, &spelling, vocab, ValueConfig::default());
+    let prompt = lm.encode("Plan:\n").expect("encodes");
+    // The uniform argmax is token 0 (a control token, not a stop token of the tiny model).
+    let outcome = decoder.decode(&mut lm, &prompt, &model.initial_state(), &DecodeConfig::new(mode("unconstrained-greedy"))).expect("decodes");
+    assert!(!outcome.valid && !outcome.solved);
+    assert_eq!(outcome.stop, StopReason::InvalidAction);
+    assert_eq!(outcome.invalid.as_ref().map(|i| i.step), Some(0));
+}
+
