@@ -8,6 +8,7 @@ mod eval;
 mod input;
 mod lm;
 mod mask_bench;
+mod phase2;
 mod planning;
 
 use std::path::PathBuf;
@@ -49,8 +50,11 @@ enum Command {
         #[arg(long, value_parser = ["pddl", "alfworld", "virtualhome"])]
         spelling: Option<String>,
     },
-    /// Find a plan with a classical planner (A*, eager or lazy GBFS).
+    /// Find a plan: a classical planner (A*, eager or lazy GBFS), or Phase II (`--planner mcts`:
+    /// a language model under the PDDL constraint, with MCTS or greedy / sampled decoding).
     Plan(planning::PlanArgs),
+    /// Phase II on a benchmark set: per-task JSONL records and a summary.
+    Phase2(phase2::Phase2Args),
     /// The initial state's value under every heuristic.
     Heuristic(planning::HeuristicArgs),
     /// Evaluate an agent on the benchmarks in fixtures/ (the project's main job).
@@ -142,6 +146,7 @@ fn run(command: Command) -> anyhow::Result<ExitCode> {
             }
         }
         Command::Plan(args) => planning::plan(args),
+        Command::Phase2(args) => phase2::run(args),
         Command::Heuristic(args) => planning::heuristic(args),
         Command::Eval(args) => eval::run(args),
         Command::Bench(args) => bench::run(args),

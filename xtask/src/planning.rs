@@ -16,8 +16,8 @@ use crate::input::{self, TaskArgs};
 pub struct PlanArgs {
     #[command(flatten)]
     task: TaskArgs,
-    /// The search algorithm.
-    #[arg(long, default_value = "lazy-gbfs", value_parser = ["astar", "gbfs", "lazy-gbfs"])]
+    /// The planner: a classical search, or `mcts` (Phase II: see --mode and --lm).
+    #[arg(long, default_value = "lazy-gbfs", value_parser = ["astar", "gbfs", "lazy-gbfs", "mcts"])]
     planner: String,
     /// The heuristic.
     #[arg(long, default_value = "ff", value_parser = heuristics::NAMES)]
@@ -37,6 +37,10 @@ pub struct PlanArgs {
     /// Print one JSON object.
     #[arg(long)]
     json: bool,
+    #[command(flatten)]
+    lm: crate::phase2::LmArgs,
+    #[command(flatten)]
+    decode: crate::phase2::DecodeArgs,
 }
 
 pub fn algorithm(name: &str) -> Algorithm {
@@ -61,6 +65,10 @@ pub fn plan_text(model: &TransitionModel, plan: &[grounding::ActionId], cost: u6
 
 pub fn plan(args: PlanArgs) -> anyhow::Result<ExitCode> {
     let files = args.task.load()?;
+    if args.planner == "mcts" {
+        let limit = args.time_limit.unwrap_or(crate::phase2::DEFAULT_TIME_LIMIT);
+        return crate::phase2::plan_one(&files, &args.lm, &args.decode, limit, args.out.as_deref(), args.json);
+    }
     let model = TransitionModel::new(input::ground(&files)?);
     let mut heuristic = heuristics::by_name(&args.heuristic, &model).context("unknown heuristic")?;
     let mut config = SearchConfig::new(algorithm(&args.planner));

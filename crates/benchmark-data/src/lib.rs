@@ -4,6 +4,9 @@
 //! came from (for diagnostics), and what the benchmark adds (an ALFWorld game's TextWorld
 //! grammar and expert walkthrough; an EAI gold PDDL plan). The crate knows file layouts,
 //! nothing about PDDL.
+//!
+//! Subsets (`fixtures/subsets/*.txt`, one task id per line) name fixed samples of a
+//! benchmark; [`stratified_subset`] is the rule that made them, [`load_subset`] reads one.
 
 use std::path::{Path, PathBuf};
 
@@ -43,6 +46,10 @@ pub enum DataError {
     Field { path: PathBuf, field: &'static str, expected: &'static str },
     #[error("{path}: no problem file for gold plan `{id}`")]
     MissingProblem { path: PathBuf, id: String },
+    #[error("{path}:{line}: no task `{id}` in {benchmark}")]
+    UnknownSubsetTask { path: PathBuf, line: usize, id: String, benchmark: &'static str },
+    #[error("{path}:{line}: task `{id}` is listed twice")]
+    DuplicateSubsetTask { path: PathBuf, line: usize, id: String },
 }
 
 fn read(path: &Path) -> Result<String, DataError> {
@@ -226,4 +233,108 @@ pub fn load_from(fixtures: &Path, benchmark: Benchmark) -> Result<Vec<TaskFiles>
             Ok(tasks)
         }
     }
+}
+
+/// The family a task belongs to, for stratified subsets: ALFWorld's task type (the game
+/// folder's name up to its first `-`, e.g. `pick_and_place_simple`), the EAI category
+/// (`Extra::Virtualhome::category`), an IPC domain (the id up to `/`).
+pub fn task_family(task: &TaskFiles) -> &str {
+    match &task.extra {
+        Extra::Virtualhome { category, .. } => category,
+        Extra::Alfworld(_) => task.id.split(['/', '-']).next().unwrap_or(&task.id),
+        Extra::None => task.id.split('/').next().unwrap_or(&task.id),
+    }
+}
+
+/// A stratified sample of `size` tasks, deterministic, in id order.
+///
+/// Families ([`task_family`]) in name order, of sizes `n_f`, `N` tasks, `F` families:
+/// 1. every family gets one task; the other `R = size - F` go to families in proportion to
+///    `n_f - 1` (the tasks each has left) by largest remainder: family `f` first gets
+///    `floor(R (n_f - 1) / (N - F))`, and the seats left over go one each to the largest
+///    remainders `R (n_f - 1) mod (N - F)`, ties to the larger family, then to the family
+///    name first in order;
+/// 2. a family given `k` of its `n` tasks (sorted by id) contributes those at positions
+///    `floor((2j + 1) n / 2k)`, `j = 0..k`: the midpoints of `k` equal slices.
+///
+/// No family gets more tasks than it has. With `size < F` (not every family can be present)
+/// or `size >= N`, the whole set is returned.
+pub fn stratified_subset(tasks: &[TaskFiles], size: usize) -> Vec<&TaskFiles> {
+    let mut families: Vec<(&str, Vec<&TaskFiles>)> = Vec::new();
+    let mut sorted: Vec<&TaskFiles> = tasks.iter().collect();
+    sorted.sort_by(|a, b| task_family(a).cmp(task_family(b)).then_with(|| a.id.cmp(&b.id)));
+    for task in sorted {
+        match families.last_mut() {
+            Some((family, members)) if *family == task_family(task) => members.push(task),
+            _ => families.push((task_family(task), vec![task])),
+        }
+    }
+    let total = tasks.len();
+    if size < families.len() || size >= total {
+        let mut all: Vec<&TaskFiles> = tasks.iter().collect();
+        all.sort_by(|a, b| a.id.cmp(&b.id));
+        return all;
+    }
+    let rest = size - families.len();
+    let pool = total - families.len();
+    let mut seats: Vec<usize> = families.iter().map(|(_, m)| 1 + rest * (m.len() - 1) / pool.max(1)).collect();
+    let mut order: Vec<usize> = (0..families.len()).collect();
+    let remainder = |f: usize| rest * (families[f].1.len() - 1) % pool.max(1);
+    order.sort_by(|&a, &b| remainder(b).cmp(&remainder(a)).then(families[b].1.len().cmp(&families[a].1.len())).then(a.cmp(&b)));
+    let given: usize = seats.iter().sum();
+    for &f in order.iter().take(size - given) {
+        seats[f] += 1;
+    }
+    let mut chosen: Vec<&TaskFiles> = Vec::with_capacity(size);
+    for ((_, members), k) in families.iter().zip(seats) {
+        let n = members.len();
+        chosen.extend((0..k).map(|j| members[(2 * j + 1) * n / (2 * k)]));
+    }
+    chosen.sort_by(|a, b| a.id.cmp(&b.id));
+    chosen
+}
+
+/// Where a subset lives: `name_or_path` itself when it names a file (has a `/` or ends in
+/// `.txt`), else `fixtures/subsets/<name>.txt`.
+pub fn subset_path(name_or_path: &str) -> PathBuf {
+    if name_or_path.contains('/') || name_or_path.ends_with(".txt") {
+        PathBuf::from(name_or_path)
+    } else {
+        fixtures_dir().join("subsets").join(format!("{name_or_path}.txt"))
+    }
+}
+
+/// The task ids a subset file lists, with their line numbers: one id per line, white space
+/// trimmed; blank lines and lines starting with `#` are skipped. A repeated id is an error.
+pub fn subset_ids(path: &Path) -> Result<Vec<(usize, String)>, DataError> {
+    let text = read(path)?;
+    let mut ids: Vec<(usize, String)> = Vec::new();
+    for (index, line) in text.lines().enumerate() {
+        let id = line.trim();
+        if id.is_empty() || id.starts_with('#') {
+            continue;
+        }
+        if ids.iter().any(|(_, seen)| seen == id) {
+            return Err(DataError::DuplicateSubsetTask { path: path.to_path_buf(), line: index + 1, id: id.to_string() });
+        }
+        ids.push((index + 1, id.to_string()));
+    }
+    Ok(ids)
+}
+
+/// The tasks of a subset (see [`subset_path`], [`subset_ids`]) of `benchmark`, in the file's
+/// order; an id the benchmark does not have is an error naming its `path:line`.
+pub fn load_subset(benchmark: Benchmark, name_or_path: &str) -> Result<Vec<TaskFiles>, DataError> {
+    let path = subset_path(name_or_path);
+    let ids = subset_ids(&path)?;
+    let mut tasks: Vec<Option<TaskFiles>> = load(benchmark)?.into_iter().map(Some).collect();
+    let mut out = Vec::with_capacity(ids.len());
+    for (line, id) in ids {
+        let found = tasks.iter_mut().find(|t| t.as_ref().is_some_and(|t| t.id == id)).and_then(Option::take);
+        match found {
+            Some(task) => out.push(task),
+            None => return Err(DataError::UnknownSubsetTask { path, line, id, benchmark: benchmark.name() }),
+        }
+    }
+    Ok(out)
 }

@@ -5,6 +5,16 @@ use grounding::ActionId;
 use token_constraint::{PlanConstraint, PlanLanguages, PlanStep, TokenId, Vocabulary};
 use transition_model::{State, TransitionModel};
 
+use crate::canonical::{CanonicalCursor, CanonicalLanguages, CanonicalStep};
+
+/// The per-state languages a cursor steps through: byte-level (every tokenization of an
+/// allowed text) and, once made, canonical (one token sequence per text).
+#[derive(Debug)]
+pub struct Languages<'m> {
+    pub bytes: PlanLanguages<'m>,
+    pub canonical: Option<CanonicalLanguages<'m>>,
+}
+
 /// Lines longer than this (in bytes) without a line break end an unconstrained plan as invalid.
 pub const MAX_LINE_BYTES: usize = 256;
 
@@ -25,8 +35,11 @@ pub enum Event {
 /// The decoding position: the symbolic state, the partial action, the plan so far.
 #[derive(Debug, Clone)]
 pub enum Cursor {
-    /// Every token must extend an applicable action (paper Eq. 5).
+    /// Every token must extend some tokenization of an applicable action's text.
     Constrained(PlanConstraint),
+    /// Every token must extend the canonical tokenization of an applicable action's text
+    /// (paper Eq. 5 with `tok(a)` the tokenizer's encoding).
+    Canonical(CanonicalCursor),
     /// Any token; the text is parsed into actions at each line break.
     Free(FreeText),
 }
@@ -45,6 +58,10 @@ impl Cursor {
         Ok(Cursor::Constrained(PlanConstraint::new(languages, state)?))
     }
 
+    pub fn canonical(languages: &mut CanonicalLanguages<'_>, state: State) -> Cursor {
+        Cursor::Canonical(CanonicalCursor::new(languages, state))
+    }
+
     pub fn free(state: State) -> Cursor {
         Cursor::Free(FreeText { state, line: Vec::new(), plan: Vec::new(), finished: false })
     }
@@ -52,6 +69,7 @@ impl Cursor {
     pub fn state(&self) -> &State {
         match self {
             Cursor::Constrained(c) => c.state(),
+            Cursor::Canonical(c) => c.state(),
             Cursor::Free(f) => &f.state,
         }
     }
@@ -59,18 +77,20 @@ impl Cursor {
     pub fn plan(&self) -> &[ActionId] {
         match self {
             Cursor::Constrained(c) => c.plan(),
+            Cursor::Canonical(c) => c.plan(),
             Cursor::Free(f) => &f.plan,
         }
     }
 
     pub fn is_constrained(&self) -> bool {
-        matches!(self, Cursor::Constrained(_))
+        !matches!(self, Cursor::Free(_))
     }
 
     /// At the start of an action: nothing of the next action written yet.
     pub fn at_boundary(&self) -> bool {
         match self {
             Cursor::Constrained(c) => c.matcher().at_boundary(),
+            Cursor::Canonical(c) => c.at_boundary(),
             Cursor::Free(f) => f.line.iter().all(u8::is_ascii_whitespace),
         }
     }
@@ -78,6 +98,10 @@ impl Cursor {
     /// The allowed next tokens, or `None` when every token is (unconstrained decoding).
     pub fn allowed(&self, vocab: &Vocabulary, out: &mut Vec<TokenId>) -> Option<()> {
         match self {
+            Cursor::Canonical(c) => {
+                c.allowed(vocab.eos(), out);
+                Some(())
+            }
             Cursor::Constrained(c) => {
                 c.allowed(vocab, out);
                 Some(())
@@ -91,17 +115,31 @@ impl Cursor {
     pub fn advance(
         &mut self,
         model: &TransitionModel,
-        languages: &mut PlanLanguages<'_>,
+        languages: &mut Languages<'_>,
         vocab: &Vocabulary,
         token: TokenId,
     ) -> Result<Event, token_constraint::PlanTokenError> {
         match self {
-            Cursor::Constrained(c) => Ok(match c.advance(languages, vocab, token)? {
+            Cursor::Canonical(c) => {
+                let canonical = languages.canonical.as_mut().expect("a canonical cursor is made from canonical languages");
+                match c.advance(canonical, token) {
+                    Some(CanonicalStep::Partial) => Ok(Event::Partial),
+                    Some(CanonicalStep::Action) => Ok(Event::Action),
+                    Some(CanonicalStep::End) => Ok(Event::End),
+                    None => Err(token_constraint::TokenError::NotAllowed {
+                        token,
+                        text: String::from_utf8_lossy(vocab.token_bytes(token)).into_owned(),
+                        prefix: String::new(),
+                    }
+                    .into()),
+                }
+            }
+            Cursor::Constrained(c) => Ok(match c.advance(&mut languages.bytes, vocab, token)? {
                 PlanStep::Partial => Event::Partial,
                 PlanStep::Action { .. } => Event::Action,
                 PlanStep::End { .. } => Event::End,
             }),
-            Cursor::Free(f) => Ok(f.advance(model, languages.spelling(), vocab, token)),
+            Cursor::Free(f) => Ok(f.advance(model, languages.bytes.spelling(), vocab, token)),
         }
     }
 }

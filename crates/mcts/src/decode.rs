@@ -10,7 +10,8 @@ use serde::Serialize;
 use token_constraint::{EndPolicy, LanguageConfig, PlanLanguages, TokenId, Vocabulary};
 use transition_model::{Spelling, State, TransitionModel};
 
-use crate::cursor::{Cursor, Event};
+use crate::canonical::CanonicalLanguages;
+use crate::cursor::{Cursor, Event, Languages};
 use crate::sampling::{Sampler, SamplingConfig};
 use crate::search::{self, MctsConfig};
 use crate::value::{Evaluator, ValueConfig};
@@ -87,11 +88,25 @@ impl Default for Budget {
     }
 }
 
+/// Which token sequences spell an action under the constraint.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Tokenization {
+    /// The tokenizer's own encoding of each action's line (paper Eq. 5): one token path per
+    /// action. See [`crate::canonical`].
+    #[default]
+    Canonical,
+    /// Any token sequence whose bytes spell the line ([`token_constraint`]'s byte-level masks).
+    Any,
+}
+
 /// Everything one decoding run needs besides the task and the model.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct DecodeConfig {
     pub mode: Mode,
     pub budget: Budget,
+    /// Constrained modes: canonical tokenizations only, or any.
+    pub tokenization: Tokenization,
     /// Stop as soon as the goal holds after an action (the environment ends an episode at
     /// success, so a plan executed open-loop is judged at its first goal state).
     pub stop_at_goal: bool,
@@ -99,7 +114,7 @@ pub struct DecodeConfig {
 
 impl DecodeConfig {
     pub fn new(mode: Mode) -> DecodeConfig {
-        DecodeConfig { mode, budget: Budget::default(), stop_at_goal: true }
+        DecodeConfig { mode, budget: Budget::default(), tokenization: Tokenization::default(), stop_at_goal: true }
     }
 }
 
@@ -195,7 +210,8 @@ pub enum DecodeError {
 pub struct Decoder<'m> {
     pub(crate) model: &'m TransitionModel,
     pub(crate) vocab: Arc<Vocabulary>,
-    pub(crate) languages: PlanLanguages<'m>,
+    pub(crate) languages: Languages<'m>,
+    end: EndPolicy,
     pub(crate) evaluator: Evaluator<'m>,
     pub(crate) allowed: Vec<TokenId>,
 }
@@ -231,8 +247,9 @@ impl<'m> Decoder<'m> {
         value: ValueConfig,
         end: EndPolicy,
     ) -> Decoder<'m> {
-        let languages = PlanLanguages::with_config(model, spelling, LanguageConfig::default(), end);
-        Decoder { model, vocab, languages, evaluator: Evaluator::new(model, value), allowed: Vec::new() }
+        let bytes = PlanLanguages::with_config(model, spelling, LanguageConfig::default(), end);
+        let languages = Languages { bytes, canonical: None };
+        Decoder { model, vocab, languages, end, evaluator: Evaluator::new(model, value), allowed: Vec::new() }
     }
 
     pub fn model(&self) -> &'m TransitionModel {
@@ -240,7 +257,7 @@ impl<'m> Decoder<'m> {
     }
 
     pub fn spelling(&self) -> &'m Spelling {
-        self.languages.spelling()
+        self.languages.bytes.spelling()
     }
 
     pub fn evaluator(&mut self) -> &mut Evaluator<'m> {
@@ -248,7 +265,13 @@ impl<'m> Decoder<'m> {
     }
 
     /// Writes a plan from `start` after `prompt` (the rendered prompt's tokens).
-    pub fn decode(&mut self, lm: &mut dyn LanguageModel, prompt: &[TokenId], start: &State, config: &DecodeConfig) -> Result<Outcome, DecodeError> {
+    pub fn decode(
+        &mut self,
+        lm: &mut dyn LanguageModel,
+        prompt: &[TokenId],
+        start: &State,
+        config: &DecodeConfig,
+    ) -> Result<Outcome, DecodeError> {
         if lm.vocabulary().len() != self.vocab.len() {
             return Err(DecodeError::VocabularyMismatch { model: lm.vocabulary().len(), constraint: self.vocab.len() });
         }
@@ -258,15 +281,28 @@ impl<'m> Decoder<'m> {
         let started = Instant::now();
         let usage_before = lm.usage();
         let (evaluations_before, lookups_before) = self.evaluator.counts();
-        let root = if config.mode.constrained {
-            Cursor::constrained(&mut self.languages, start.clone())?
-        } else {
-            Cursor::free(start.clone())
+        let root = match (config.mode.constrained, config.tokenization) {
+            (false, _) => Cursor::free(start.clone()),
+            (true, Tokenization::Any) => Cursor::constrained(&mut self.languages.bytes, start.clone())?,
+            (true, Tokenization::Canonical) => {
+                if self.languages.canonical.is_none() {
+                    let spelling = self.languages.bytes.spelling();
+                    let marker = LanguageConfig::default().end_marker.map(|m| String::from_utf8_lossy(&m).into_owned());
+                    let tokenizer = lm.tokenizer();
+                    let canonical = CanonicalLanguages::new(self.model, spelling, self.end, self.vocab.eos(), marker.as_deref(), |t| {
+                        tokenizer.encode(t)
+                    })?;
+                    self.languages.canonical = Some(canonical);
+                }
+                Cursor::canonical(self.languages.canonical.as_mut().expect("made above"), start.clone())
+            }
         };
         let mut stats = Stats::default();
         let run = match &config.mode.strategy {
             Strategy::Greedy => self.linear(lm, prompt, root, config, None, &mut stats, started)?,
-            Strategy::Sample(sampling) => self.linear(lm, prompt, root, config, Some(Sampler::new(sampling.clone())), &mut stats, started)?,
+            Strategy::Sample(sampling) => {
+                self.linear(lm, prompt, root, config, Some(Sampler::new(sampling.clone())), &mut stats, started)?
+            }
             Strategy::Mcts(mcts) => search::run(self, lm, prompt, root, config, mcts, &mut stats, started)?,
         };
         let (evaluations, lookups) = self.evaluator.counts();
@@ -278,14 +314,25 @@ impl<'m> Decoder<'m> {
     }
 
     fn outcome(&mut self, config: &DecodeConfig, run: Run, stats: Stats) -> Outcome {
-        let spelling = self.languages.spelling();
+        let spelling = self.languages.bytes.spelling();
         let lines = run.plan.iter().map(|&a| spelling.spell(a).map_or_else(|| self.model.task().action_name(a), str::to_string)).collect();
         // Every action was applicable when applied (constrained: by construction; unconstrained:
         // the parser applies only applicable actions and stops at the first that is not).
         let valid = run.invalid.is_none();
         let solved = valid && self.model.is_goal(&run.end_state);
         let value = if valid { self.evaluator.value(&run.end_state, run.plan.len()) } else { None };
-        Outcome { mode: config.mode.name(), plan: run.plan, lines, valid, solved, invalid: run.invalid, stop: run.stop, text: run.text, value, stats }
+        Outcome {
+            mode: config.mode.name(),
+            plan: run.plan,
+            lines,
+            valid,
+            solved,
+            invalid: run.invalid,
+            stop: run.stop,
+            text: run.text,
+            value,
+            stats,
+        }
     }
 
     /// The next-token candidates at `cursor` after `sequence`, most likely first; at most
@@ -310,8 +357,12 @@ impl<'m> Decoder<'m> {
             match lm.next_logprobs(sequence)? {
                 Logprobs::Dense(values) => {
                     let max = values.iter().copied().fold(f32::NEG_INFINITY, f32::max);
-                    let mut all: Vec<(TokenId, f32)> =
-                        values.iter().enumerate().filter(|&(_, &l)| l >= max - NEGLIGIBLE_LOGPROB).map(|(i, &l)| (i as TokenId, l)).collect();
+                    let mut all: Vec<(TokenId, f32)> = values
+                        .iter()
+                        .enumerate()
+                        .filter(|&(_, &l)| l >= max - NEGLIGIBLE_LOGPROB)
+                        .map(|(i, &l)| (i as TokenId, l))
+                        .collect();
                     if all.len() > keep {
                         all.select_nth_unstable_by(keep - 1, by_probability);
                         all.truncate(keep);

@@ -19,6 +19,7 @@
 //! # Ok(()) }
 //! ```
 
+pub mod canonical;
 pub mod cursor;
 mod decode;
 pub mod prompt;
@@ -27,7 +28,7 @@ mod search;
 mod value;
 mod vocab;
 
-pub use decode::{Budget, DecodeConfig, DecodeError, Decoder, InvalidStep, Mode, Outcome, Stats, StopReason, Strategy};
+pub use decode::{Budget, DecodeConfig, DecodeError, Decoder, InvalidStep, Mode, Outcome, Stats, StopReason, Strategy, Tokenization};
 pub use sampling::{Sampler, SamplingConfig};
 pub use search::MctsConfig;
 pub use value::{Evaluator, ValueConfig};

@@ -47,7 +47,7 @@ impl Sampler {
         let inverse = 1.0 / self.config.temperature;
         let weights: Vec<f64> = kept.iter().map(|&(_, p)| f64::from(p).max(0.0).powf(inverse)).collect();
         let total: f64 = weights.iter().sum();
-        if !(total > 0.0) {
+        if total.is_nan() || total <= 0.0 {
             return Some(first);
         }
         let mut nucleus = 0;

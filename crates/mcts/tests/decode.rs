@@ -36,7 +36,10 @@ fn constrained_mcts_solves_a_small_domain_with_a_uniform_prior() {
     assert!(applicable_in_turn(&model, &outcome.plan));
     assert!(model.is_goal(&model.apply(&model.apply(&model.initial_state(), outcome.plan[0]), outcome.plan[1])) || outcome.plan.len() > 2);
     assert!(outcome.stats.simulations > 0 && outcome.stats.nodes > 0);
-    assert_eq!(outcome.lines.last().map(String::as_str), Some("(go e d)").filter(|_| outcome.plan.len() == 2).or(outcome.lines.last().map(String::as_str)));
+    assert_eq!(
+        outcome.lines.last().map(String::as_str),
+        Some("(go e d)").filter(|_| outcome.plan.len() == 2).or(outcome.lines.last().map(String::as_str))
+    );
 }
 
 #[test]
@@ -113,7 +116,12 @@ fn identical_seeds_give_identical_results() {
     // Different seeds explore: over three seeds, unconstrained sampling writes more than one text.
     let texts: rustc_hash::FxHashSet<_> = [0u64, 1, 2, 3]
         .into_iter()
-        .map(|seed| run(&mut lm, Mode { constrained: false, strategy: Strategy::Sample(SamplingConfig { seed, top_k: None, top_p: 1.0, temperature: 1.0 }) }))
+        .map(|seed| {
+            run(
+                &mut lm,
+                Mode { constrained: false, strategy: Strategy::Sample(SamplingConfig { seed, top_k: None, top_p: 1.0, temperature: 1.0 }) },
+            )
+        })
         .map(|r| r.5)
         .collect();
     assert!(texts.len() > 1, "{texts:?}");
@@ -129,9 +137,9 @@ fn unconstrained_greedy_reports_the_first_invalid_line() {
     let mut decoder = Decoder::new(&model, &spelling, vocab, ValueConfig::default());
     let prompt = lm.encode("Plan:\n").expect("encodes");
     // The uniform argmax is token 0 (a control token, not a stop token of the tiny model).
-    let outcome = decoder.decode(&mut lm, &prompt, &model.initial_state(), &DecodeConfig::new(mode("unconstrained-greedy"))).expect("decodes");
+    let outcome =
+        decoder.decode(&mut lm, &prompt, &model.initial_state(), &DecodeConfig::new(mode("unconstrained-greedy"))).expect("decodes");
     assert!(!outcome.valid && !outcome.solved);
     assert_eq!(outcome.stop, StopReason::InvalidAction);
     assert_eq!(outcome.invalid.as_ref().map(|i| i.step), Some(0));
 }
-

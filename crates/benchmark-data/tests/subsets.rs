@@ -1,0 +1,80 @@
+//! The stratified subsets in `fixtures/subsets/`: they load, cover every family, and are what
+//! the rule derives today, so a file cannot silently drift from the fixtures or the rule.
+
+use benchmark_data::{Benchmark, DataError, TaskFiles, load_subset, stratified_subset, subset_ids, subset_path, task_family};
+
+const SUBSETS: [(Benchmark, &str); 2] = [(Benchmark::AlfworldSeen, "alfworld-seen-50"), (Benchmark::VirtualhomeEai, "virtualhome-eai-50")];
+
+fn families(tasks: &[TaskFiles]) -> Vec<&str> {
+    let mut out: Vec<&str> = tasks.iter().map(task_family).collect();
+    out.sort();
+    out.dedup();
+    out
+}
+
+#[test]
+fn subset_files_list_fifty_known_tasks_from_every_family() {
+    for (benchmark, name) in SUBSETS {
+        let all = benchmark_data::load(benchmark).expect("benchmark loads");
+        let subset = load_subset(benchmark, name).unwrap_or_else(|e| panic!("{name}: {e}"));
+        assert_eq!(subset.len(), 50, "{name}");
+        let mut ids: Vec<&str> = subset.iter().map(|t| t.id.as_str()).collect();
+        ids.sort();
+        ids.dedup();
+        assert_eq!(ids.len(), 50, "{name}: ids are unique");
+        assert_eq!(families(&subset), families(&all), "{name}: every family is present");
+    }
+}
+
+#[test]
+fn subset_files_are_what_the_rule_derives() {
+    for (benchmark, name) in SUBSETS {
+        let all = benchmark_data::load(benchmark).expect("benchmark loads");
+        let derived: Vec<String> = stratified_subset(&all, 50).into_iter().map(|t| t.id.clone()).collect();
+        let listed: Vec<String> = subset_ids(&subset_path(name)).expect("subset file reads").into_iter().map(|(_, id)| id).collect();
+        assert_eq!(listed, derived, "{name} differs from `stratified_subset(load({}), 50)`", benchmark.name());
+    }
+}
+
+#[test]
+fn the_rule_gives_alfworld_families_seats_by_largest_remainder() {
+    // 140 games in 6 types (13, 35, 27, 25, 16, 24): one each, then 44 seats over the
+    // remaining 134 in proportion: floors 3, 11, 8, 7, 4, 7 leave 4 seats, which go to the
+    // largest remainders (look 0.94, heat 0.93, cool 0.88, two 0.55).
+    let all = benchmark_data::load(Benchmark::AlfworldSeen).expect("benchmark loads");
+    let subset = stratified_subset(&all, 50);
+    let count = |family: &str| subset.iter().filter(|t| task_family(t) == family).count();
+    let counts: Vec<usize> = families(&all).into_iter().map(count).collect();
+    assert_eq!(families(&all).len(), 6);
+    assert_eq!(counts, [5, 12, 9, 9, 6, 9]);
+}
+
+#[test]
+fn the_rule_spreads_picks_over_a_family_and_never_repeats_one() {
+    let all = benchmark_data::load(Benchmark::VirtualhomeEai).expect("benchmark loads");
+    for size in [26, 27, 50, 100, 337] {
+        let subset = stratified_subset(&all, size);
+        assert_eq!(subset.len(), size);
+        let mut ids: Vec<&str> = subset.iter().map(|t| t.id.as_str()).collect();
+        ids.dedup();
+        assert_eq!(ids.len(), size, "sorted and without repeats");
+        assert_eq!(families(&subset.into_iter().cloned().collect::<Vec<_>>()), families(&all));
+    }
+    assert_eq!(stratified_subset(&all, 10).len(), all.len(), "fewer seats than families: the whole set");
+}
+
+#[test]
+fn an_unknown_or_repeated_id_is_reported_at_its_line() {
+    let dir = std::env::temp_dir().join(format!("benchmark-data-subsets-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("temp dir");
+    let unknown = dir.join("unknown.txt");
+    std::fs::write(&unknown, "# header\n384_1\n\nno_such_task\n").expect("write");
+    let error = load_subset(Benchmark::VirtualhomeEai, unknown.to_str().expect("utf-8 path")).expect_err("unknown id");
+    assert!(matches!(&error, DataError::UnknownSubsetTask { line: 4, id, .. } if id == "no_such_task"), "{error}");
+    assert!(error.to_string().contains("unknown.txt:4: no task `no_such_task` in virtualhome-eai"), "{error}");
+    let repeated = dir.join("repeated.txt");
+    std::fs::write(&repeated, "384_1\n384_1\n").expect("write");
+    let error = load_subset(Benchmark::VirtualhomeEai, repeated.to_str().expect("utf-8 path")).expect_err("repeated id");
+    assert!(matches!(&error, DataError::DuplicateSubsetTask { line: 2, .. }), "{error}");
+    std::fs::remove_dir_all(&dir).ok();
+}

@@ -1,0 +1,446 @@
+//! Phase II from the command line: `cargo xtask plan --planner mcts ...` on one task, and
+//! `cargo xtask phase2` on a benchmark set (per-task JSONL records and a summary), with full
+//! observability: the problem's own initial state is ŝ0.
+
+use std::collections::BTreeSet;
+use std::io::{BufRead, Write};
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+use std::sync::Arc;
+use std::time::{Duration, Instant};
+
+use anyhow::Context;
+use benchmark_data::{Benchmark, Extra, TaskFiles};
+use lm::{LanguageModel, OpenAiConfig, OpenAiModel, Tokenizer, UniformModel};
+use mcts::prompt::{PromptOptions, Relevance, planning_prompt};
+use mcts::{DecodeConfig, Decoder, MctsConfig, Mode, Outcome, SamplingConfig, Strategy, Tokenization, ValueConfig};
+use serde::{Deserialize, Serialize};
+use transition_model::{Spelling, TransitionModel};
+
+use crate::input::{self, InputError};
+
+/// Which language model writes the plan.
+#[derive(Debug, Clone, clap::Args)]
+pub struct LmArgs {
+    /// `uniform` (every allowed token equally likely, over the Qwen3 tokenizer in fixtures/),
+    /// `smollm2` (the default model; `cargo xtask fetch-model` first), `openai:URL` (an
+    /// OpenAI-compatible completions server), or a path to a GGUF file.
+    #[arg(long, default_value = "uniform")]
+    pub lm: String,
+    /// Tokenizer for `uniform` and `openai:` (a `tokenizer.json`, or a GGUF file)
+    /// [default: fixtures/tokenizers/qwen3/tokenizer.json].
+    #[arg(long)]
+    pub tokenizer: Option<PathBuf>,
+    /// The model name an `openai:` server serves.
+    #[arg(long, default_value = "default")]
+    pub served_model: String,
+}
+
+/// How the plan is decoded (defaults: the paper's, Appendix A.4 and Table 6).
+#[derive(Debug, Clone, clap::Args)]
+pub struct DecodeArgs {
+    /// The Phase II condition.
+    #[arg(long, default_value = "constrained-mcts", value_parser = Mode::NAMES)]
+    pub mode: String,
+    /// MCTS simulations at most.
+    #[arg(long)]
+    pub simulations: Option<u64>,
+    /// Next-token distributions requested from the model, at most.
+    #[arg(long)]
+    pub model_calls: Option<u64>,
+    /// Tokens of one plan at most.
+    #[arg(long, default_value_t = 512)]
+    pub max_tokens: usize,
+    /// Actions of one plan at most.
+    #[arg(long, default_value_t = 64)]
+    pub max_actions: usize,
+    /// MCTS: children per node.
+    #[arg(long, default_value_t = 16)]
+    pub width: usize,
+    /// MCTS: exploration constant.
+    #[arg(long, default_value_t = 2.5)]
+    pub exploration: f64,
+    /// MCTS: base constant.
+    #[arg(long, default_value_t = 10.0)]
+    pub base: f64,
+    /// Value: penalty λ per action.
+    #[arg(long, default_value_t = 0.1)]
+    pub lambda: f64,
+    /// Sampling: temperature (0 is greedy).
+    #[arg(long, default_value_t = 1.0)]
+    pub temperature: f64,
+    /// Sampling: nucleus mass.
+    #[arg(long, default_value_t = 0.95)]
+    pub top_p: f64,
+    /// Sampling: keep the k most likely tokens (0: no cut-off).
+    #[arg(long, default_value_t = 20)]
+    pub top_k: usize,
+    /// Sampling: seed.
+    #[arg(long, default_value_t = 0)]
+    pub seed: u64,
+    /// Constrained modes: `canonical` (the tokenizer's encoding of each action, one token path
+    /// per action) or `any` (every tokenization of an allowed text).
+    #[arg(long, default_value = "canonical", value_parser = ["canonical", "any"])]
+    pub tokenization: String,
+    /// Prompt: show every true fact instead of those relevant to the goal.
+    #[arg(long)]
+    pub all_facts: bool,
+}
+
+impl DecodeArgs {
+    /// The decoding settings, with `time_limit` seconds per task.
+    pub fn config(&self, time_limit: f64) -> anyhow::Result<DecodeConfig> {
+        let mut mode = Mode::from_name(&self.mode).with_context(|| format!("unknown mode `{}`", self.mode))?;
+        match &mut mode.strategy {
+            Strategy::Mcts(mcts) => {
+                *mcts = MctsConfig { width: self.width, exploration: self.exploration, base: self.base, ..MctsConfig::default() };
+            }
+            Strategy::Sample(sampling) => {
+                *sampling = SamplingConfig {
+                    temperature: self.temperature,
+                    top_p: self.top_p,
+                    top_k: (self.top_k > 0).then_some(self.top_k),
+                    seed: self.seed,
+                };
+            }
+            Strategy::Greedy => {}
+        }
+        let mut config = DecodeConfig::new(mode);
+        config.budget.simulations = self.simulations;
+        config.budget.wall_clock = Some(Duration::from_secs_f64(time_limit.max(0.0)));
+        config.budget.model_calls = self.model_calls;
+        config.budget.max_tokens = self.max_tokens;
+        config.budget.max_actions = self.max_actions;
+        config.tokenization = if self.tokenization == "any" { Tokenization::Any } else { Tokenization::Canonical };
+        Ok(config)
+    }
+
+    pub fn value(&self) -> ValueConfig {
+        ValueConfig { length_penalty: self.lambda, ..ValueConfig::default() }
+    }
+
+    fn prompt_options(&self) -> PromptOptions {
+        let mut options = PromptOptions::default();
+        if self.all_facts {
+            options.relevance = Relevance::All;
+        }
+        options
+    }
+}
+
+fn default_tokenizer() -> PathBuf {
+    benchmark_data::fixtures_dir().join("tokenizers/qwen3/tokenizer.json")
+}
+
+fn tokenizer_at(path: &Path) -> anyhow::Result<Tokenizer> {
+    let result =
+        if path.extension().is_some_and(|e| e == "gguf") { Tokenizer::from_gguf_file(path) } else { Tokenizer::from_tokenizer_json(path) };
+    result.map_err(|e| InputError(format!("{}: {e}", path.display())).into())
+}
+
+/// The model `args` names, and a short name for records.
+pub fn load_lm(args: &LmArgs) -> anyhow::Result<Box<dyn LanguageModel>> {
+    let tokenizer_path = args.tokenizer.clone().unwrap_or_else(default_tokenizer);
+    if args.lm == "uniform" {
+        return Ok(Box::new(UniformModel::new(Arc::new(tokenizer_at(&tokenizer_path)?))));
+    }
+    if let Some(url) = args.lm.strip_prefix("openai:") {
+        let tokenizer = Arc::new(tokenizer_at(&tokenizer_path)?);
+        let model =
+            OpenAiModel::new(OpenAiConfig::new(url, &args.served_model), tokenizer).map_err(|e| InputError(format!("{url}: {e}")))?;
+        return Ok(Box::new(model));
+    }
+    let path = crate::lm::resolve_model(&args.lm)?;
+    let model = lm::LocalModel::load(&path).map_err(|e| InputError(format!("{}: {e}", path.display())))?;
+    Ok(Box::new(model))
+}
+
+/// The surface language a benchmark's plans are written in.
+pub fn spelling_for(files: &TaskFiles, model: &TransitionModel) -> anyhow::Result<Spelling> {
+    Ok(match &files.extra {
+        Extra::Alfworld(game) => {
+            Spelling::alfworld(model.task(), &game.grammar).map_err(|e| InputError(format!("{}: {e}", files.problem_path.display())))?
+        }
+        Extra::Virtualhome { .. } => Spelling::virtualhome(model.task()),
+        Extra::None => Spelling::pddl(model.task()),
+    })
+}
+
+/// One task's result, as a JSONL record.
+#[derive(Debug, Serialize, Deserialize)]
+pub struct Record {
+    pub benchmark: String,
+    pub task: String,
+    pub mode: String,
+    pub lm: String,
+    pub solved: bool,
+    pub valid: bool,
+    pub length: usize,
+    pub cost: u64,
+    pub stop: String,
+    pub invalid: Option<String>,
+    pub plan: Vec<String>,
+    pub simulations: u64,
+    pub nodes: u64,
+    pub lm_calls: u64,
+    pub generated_tokens: u64,
+    pub forced_tokens: u64,
+    pub decoded_tokens: u64,
+    pub prompt_tokens: usize,
+    pub heuristic_evaluations: u64,
+    /// Decoding time (search), without grounding and prompt.
+    pub millis: f64,
+    /// Everything for this task: grounding, prompt, decoding.
+    pub total_millis: f64,
+}
+
+/// Grounds, prompts and decodes one task.
+pub fn solve(
+    files: &TaskFiles,
+    lm: &mut dyn LanguageModel,
+    lm_name: &str,
+    vocab: &Arc<token_constraint::Vocabulary>,
+    args: &DecodeArgs,
+    time_limit: f64,
+) -> anyhow::Result<(Record, Outcome, TransitionModel)> {
+    let start = Instant::now();
+    let model = TransitionModel::new(input::ground(files)?);
+    let spelling = spelling_for(files, &model)?;
+    let initial = model.initial_state();
+    let prompt = planning_prompt(&model, &spelling, &initial, &args.prompt_options());
+    let text = prompt.render(lm).context("rendering the prompt")?;
+    let tokens = lm.tokenizer().encode_prompt(&text).context("tokenizing the prompt")?;
+    let config = args.config(time_limit)?;
+    let outcome = {
+        let mut decoder = Decoder::new(&model, &spelling, Arc::clone(vocab), args.value());
+        decoder.decode(lm, &tokens, &initial, &config).with_context(|| format!("decoding {}", files.id))?
+    };
+    let cost = transition_model::plan_cost(model.task(), &outcome.plan);
+    let record = Record {
+        benchmark: files.benchmark.name().to_string(),
+        task: files.id.clone(),
+        mode: outcome.mode.to_string(),
+        lm: lm_name.to_string(),
+        solved: outcome.solved,
+        valid: outcome.valid,
+        length: outcome.plan.len(),
+        cost,
+        stop: serde_json::to_value(outcome.stop)?.as_str().unwrap_or_default().to_string(),
+        invalid: outcome.invalid.as_ref().map(|i| format!("step {}: {:?}", i.step + 1, i.text)),
+        plan: outcome.lines.clone(),
+        simulations: outcome.stats.simulations,
+        nodes: outcome.stats.nodes,
+        lm_calls: outcome.stats.usage.forward_calls,
+        generated_tokens: outcome.stats.usage.tokens_generated,
+        forced_tokens: outcome.stats.forced_tokens,
+        decoded_tokens: outcome.stats.decoded_tokens,
+        prompt_tokens: tokens.len(),
+        heuristic_evaluations: outcome.stats.heuristic_evaluations,
+        millis: outcome.stats.millis,
+        total_millis: start.elapsed().as_secs_f64() * 1e3,
+    };
+    Ok((record, outcome, model))
+}
+
+/// `cargo xtask plan --planner mcts`.
+/// Seconds per task by default (the paper's MCTS budget).
+pub const DEFAULT_TIME_LIMIT: f64 = 250.0;
+
+pub fn plan_one(
+    files: &TaskFiles,
+    lm_args: &LmArgs,
+    args: &DecodeArgs,
+    time_limit: f64,
+    out: Option<&Path>,
+    json: bool,
+) -> anyhow::Result<ExitCode> {
+    let mut lm = load_lm(lm_args)?;
+    let vocab = Arc::new(mcts::constraint_vocabulary(lm.vocabulary()).context("the model's vocabulary")?);
+    let (record, outcome, model) = solve(files, lm.as_mut(), &lm_args.lm, &vocab, args, time_limit)?;
+    // The plan is checked once more by the validator, from the text as written.
+    let spelling = spelling_for(files, &model)?;
+    let verdict = model.validate_text(&spelling, &outcome.lines);
+    if outcome.solved && verdict.is_err() {
+        anyhow::bail!(
+            "internal error: a plan reported solved does not validate: {}",
+            verdict.err().map(|e| e.describe(model.task())).unwrap_or_default()
+        );
+    }
+    if let Some(out) = out {
+        let mut text = outcome.lines.join("\n");
+        text.push('\n');
+        std::fs::write(out, text).with_context(|| format!("cannot write {}", out.display()))?;
+    }
+    if json {
+        println!("{}", serde_json::to_string(&record)?);
+    } else {
+        for line in &outcome.lines {
+            println!("{line}");
+        }
+        let verdict = match (&outcome.invalid, outcome.solved) {
+            (Some(invalid), _) => format!("invalid at step {}: {:?}", invalid.step + 1, invalid.text),
+            (None, true) => "valid, reaches the goal".to_string(),
+            (None, false) => "valid, does not reach the goal".to_string(),
+        };
+        eprintln!(
+            "{verdict}; {} actions, stop: {}, {} simulations, {} lm calls, {} generated tokens, {:.1} ms",
+            record.length, record.stop, record.simulations, record.lm_calls, record.generated_tokens, record.millis
+        );
+    }
+    Ok(if outcome.solved { ExitCode::SUCCESS } else { ExitCode::from(1) })
+}
+
+#[derive(Debug, clap::Args)]
+pub struct Phase2Args {
+    /// The benchmark set.
+    #[arg(long, value_parser = ["alfworld-seen", "alfworld-train", "virtualhome-eai", "ipc"])]
+    benchmark: String,
+    /// Run only the tasks of a subset file (`fixtures/subsets/<NAME>.txt`, or a path), e.g.
+    /// `alfworld-seen-50`.
+    #[arg(long)]
+    subset: Option<String>,
+    /// Run at most this many tasks.
+    #[arg(long)]
+    limit: Option<usize>,
+    #[command(flatten)]
+    lm: LmArgs,
+    #[command(flatten)]
+    decode: DecodeArgs,
+    /// Seconds per task at most (the paper: 250).
+    #[arg(long, default_value_t = DEFAULT_TIME_LIMIT)]
+    time_limit: f64,
+    /// Folder for `<benchmark>-<mode>-<lm>.jsonl` records and the summary.
+    #[arg(long, default_value = "target/phase2")]
+    out: PathBuf,
+    /// Discard earlier records instead of resuming.
+    #[arg(long)]
+    fresh: bool,
+    /// Print the summary as one JSON object.
+    #[arg(long)]
+    json: bool,
+}
+
+fn read_records(path: &Path) -> anyhow::Result<Vec<Record>> {
+    let mut records = Vec::new();
+    if !path.exists() {
+        return Ok(records);
+    }
+    let file = std::fs::File::open(path).with_context(|| format!("cannot read {}", path.display()))?;
+    for (number, line) in std::io::BufReader::new(file).lines().enumerate() {
+        let line = line?;
+        if line.trim().is_empty() {
+            continue;
+        }
+        match serde_json::from_str::<Record>(&line) {
+            Ok(record) => records.push(record),
+            // A line cut short by a killed run: its task runs again.
+            Err(e) => eprintln!("{}:{}: unreadable record ({e}); its task will run again", path.display(), number + 1),
+        }
+    }
+    Ok(records)
+}
+
+fn file_safe(name: &str) -> String {
+    name.chars().map(|c| if c.is_ascii_alphanumeric() || c == '-' || c == '.' { c } else { '_' }).collect()
+}
+
+/// `cargo xtask phase2`.
+pub fn run(args: Phase2Args) -> anyhow::Result<ExitCode> {
+    let benchmark = Benchmark::from_name(&args.benchmark).context("unknown benchmark")?;
+    let mut tasks = match &args.subset {
+        Some(subset) => benchmark_data::load_subset(benchmark, subset).map_err(|e| InputError(e.to_string()))?,
+        None => benchmark_data::load(benchmark)?,
+    };
+    tasks.truncate(args.limit.unwrap_or(usize::MAX));
+    let lm_name = if args.lm.lm.contains('/') {
+        Path::new(&args.lm.lm).file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_else(|| args.lm.lm.clone())
+    } else {
+        args.lm.lm.clone()
+    };
+    let set = args.subset.clone().unwrap_or_else(|| args.benchmark.clone());
+    std::fs::create_dir_all(&args.out).with_context(|| format!("cannot create {}", args.out.display()))?;
+    let stem = file_safe(&format!("{set}-{}-{lm_name}", args.decode.mode));
+    let path = args.out.join(format!("{stem}.jsonl"));
+    if args.fresh && path.exists() {
+        std::fs::remove_file(&path).with_context(|| format!("cannot remove {}", path.display()))?;
+    }
+    let mut records = read_records(&path)?;
+    let done: BTreeSet<String> = records.iter().map(|r| r.task.clone()).collect();
+    let todo: Vec<&TaskFiles> = tasks.iter().filter(|t| !done.contains(&t.id)).collect();
+
+    let mut lm = load_lm(&args.lm)?;
+    let vocab = Arc::new(mcts::constraint_vocabulary(lm.vocabulary()).context("the model's vocabulary")?);
+    let mut out =
+        std::fs::OpenOptions::new().create(true).append(true).open(&path).with_context(|| format!("cannot write {}", path.display()))?;
+    let bar = indicatif::ProgressBar::new(tasks.len() as u64);
+    bar.set_style(
+        indicatif::ProgressStyle::with_template("{prefix} [{bar:30}] {pos}/{len} {msg} ({elapsed}, eta {eta})")
+            .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar())
+            .progress_chars("=> "),
+    );
+    bar.set_prefix(format!("{set} {}", args.decode.mode));
+    bar.set_position((tasks.len() - todo.len()) as u64);
+    let mut solved = records.iter().filter(|r| r.solved).count();
+    for files in todo {
+        let (record, _, _) =
+            solve(files, lm.as_mut(), &lm_name, &vocab, &args.decode, args.time_limit).with_context(|| format!("task {}", files.id))?;
+        writeln!(out, "{}", serde_json::to_string(&record)?)?;
+        out.flush()?;
+        solved += usize::from(record.solved);
+        records.push(record);
+        bar.set_message(format!("solved {solved}"));
+        bar.inc(1);
+    }
+    bar.finish_and_clear();
+
+    let keep: BTreeSet<&str> = tasks.iter().map(|t| t.id.as_str()).collect();
+    records.retain(|r| keep.contains(r.task.as_str()));
+    let summary = summarize(&records, &set, &args.decode.mode, &lm_name, &path);
+    std::fs::write(args.out.join(format!("{stem}.summary.json")), serde_json::to_string_pretty(&summary)? + "\n")?;
+    if args.json {
+        println!("{summary}");
+    } else {
+        println!(
+            "{set} {} lm={lm_name}: solved {}/{} ({:.1}%), valid {:.1}%, mean generated tokens {:.1}, mean {:.0} ms, {:.0} simulations/s  records: {}",
+            args.decode.mode,
+            summary["solved"],
+            summary["tasks"],
+            summary["success_rate"].as_f64().unwrap_or(0.0) * 100.0,
+            summary["valid_rate"].as_f64().unwrap_or(0.0) * 100.0,
+            summary["mean_generated_tokens"].as_f64().unwrap_or(0.0),
+            summary["mean_millis"].as_f64().unwrap_or(0.0),
+            summary["simulations_per_second"].as_f64().unwrap_or(0.0),
+            path.display()
+        );
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+fn summarize(records: &[Record], set: &str, mode: &str, lm: &str, path: &Path) -> serde_json::Value {
+    let n = records.len().max(1) as f64;
+    let mean = |f: &dyn Fn(&Record) -> f64| records.iter().map(f).sum::<f64>() / n;
+    let solved = records.iter().filter(|r| r.solved).count();
+    let valid = records.iter().filter(|r| r.valid).count();
+    let search_seconds: f64 = records.iter().map(|r| r.millis).sum::<f64>() / 1e3;
+    let simulations: u64 = records.iter().map(|r| r.simulations).sum();
+    let mut stops = std::collections::BTreeMap::<&str, usize>::new();
+    for r in records {
+        *stops.entry(r.stop.as_str()).or_default() += 1;
+    }
+    let solved_lengths: Vec<f64> = records.iter().filter(|r| r.solved).map(|r| r.length as f64).collect();
+    serde_json::json!({
+        "set": set, "mode": mode, "lm": lm, "tasks": records.len(),
+        "solved": solved, "success_rate": solved as f64 / n, "valid": valid, "valid_rate": valid as f64 / n,
+        "mean_generated_tokens": mean(&|r| r.generated_tokens as f64),
+        "mean_lm_calls": mean(&|r| r.lm_calls as f64),
+        "mean_decoded_tokens": mean(&|r| r.decoded_tokens as f64),
+        "mean_simulations": mean(&|r| r.simulations as f64),
+        "mean_millis": mean(&|r| r.millis),
+        "max_millis": records.iter().map(|r| r.millis).fold(0.0, f64::max),
+        "mean_total_millis": mean(&|r| r.total_millis),
+        "mean_solved_length": if solved_lengths.is_empty() { 0.0 } else { solved_lengths.iter().sum::<f64>() / solved_lengths.len() as f64 },
+        "simulations_per_second": if search_seconds > 0.0 { simulations as f64 / search_seconds } else { 0.0 },
+        "stops": stops,
+        "records": path.display().to_string(),
+    })
+}
