@@ -63,6 +63,12 @@ pub struct DecodeArgs {
     /// MCTS: base constant.
     #[arg(long, default_value_t = 10.0)]
     pub base: f64,
+    /// Value: weights of h_FF, LM-cut and the remaining plan cost in h (paper Appendix A.4).
+    #[arg(long, default_value = "1,1,1", value_parser = parse_weights)]
+    pub weights: (f64, f64, f64),
+    /// Value: expansions of each remaining-plan-cost search.
+    #[arg(long, default_value_t = 200)]
+    pub remaining_expansions: u64,
     /// Value: penalty λ per action.
     #[arg(long, default_value_t = 0.1)]
     pub lambda: f64,
@@ -116,7 +122,15 @@ impl DecodeArgs {
     }
 
     pub fn value(&self) -> ValueConfig {
-        ValueConfig { length_penalty: self.lambda, ..ValueConfig::default() }
+        let (ff, lmcut, remaining) = self.weights;
+        ValueConfig {
+            ff,
+            lmcut,
+            remaining,
+            remaining_expansions: self.remaining_expansions,
+            length_penalty: self.lambda,
+            ..ValueConfig::default()
+        }
     }
 
     fn prompt_options(&self) -> PromptOptions {
@@ -125,6 +139,15 @@ impl DecodeArgs {
             options.relevance = Relevance::All;
         }
         options
+    }
+}
+
+fn parse_weights(text: &str) -> Result<(f64, f64, f64), String> {
+    let parts: Vec<f64> =
+        text.split(',').map(|p| p.trim().parse::<f64>()).collect::<Result<_, _>>().map_err(|e| format!("{text:?}: {e}"))?;
+    match parts[..] {
+        [ff, lmcut, remaining] if parts.iter().all(|w| w.is_finite() && *w >= 0.0) => Ok((ff, lmcut, remaining)),
+        _ => Err(format!("{text:?}: give three non-negative weights, `FF,LMCUT,REMAINING`")),
     }
 }
 
