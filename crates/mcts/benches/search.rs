@@ -1,0 +1,68 @@
+//! Token-level MCTS with the uniform prior over the Qwen3 tokenizer (no model cost) on real
+//! ALFWorld and VirtualHome tasks from fixtures/: a fixed number of simulations per
+//! iteration, without early stop, with the paper's value (h_FF + LM-cut + remaining plan
+//! cost) and with h_FF alone (the search's own cost). Each iteration starts a fresh decoder,
+//! so heuristic values are computed, not cached from the previous iteration.
+
+use std::sync::Arc;
+
+use benchmark_data::{Benchmark, Extra};
+use criterion::{Criterion, Throughput, criterion_group, criterion_main};
+use lm::{LanguageModel, Tokenizer, UniformModel};
+use mcts::{DecodeConfig, Decoder, Mode, ValueConfig};
+use transition_model::{Spelling, TransitionModel};
+
+const SIMULATIONS: u64 = 1000;
+
+fn tasks(benchmark: Benchmark, count: usize) -> Vec<(String, TransitionModel, Extra)> {
+    let mut all = benchmark_data::load(benchmark).expect("fixtures");
+    all.sort_by(|a, b| a.id.cmp(&b.id));
+    let step = all.len() / count;
+    all.iter()
+        .step_by(step)
+        .take(count)
+        .map(|files| {
+            let domain = pddl_syntax::parse_domain(&files.domain).expect("domain");
+            let problem = pddl_syntax::parse_problem(&files.problem).expect("problem");
+            (files.id.clone(), TransitionModel::new(grounding::ground(&domain, &problem).expect("grounds")), files.extra.clone())
+        })
+        .collect()
+}
+
+fn bench(c: &mut Criterion) {
+    let tokenizer =
+        Tokenizer::from_tokenizer_json(&benchmark_data::fixtures_dir().join("tokenizers/qwen3/tokenizer.json")).expect("tokenizer");
+    let mut lm = UniformModel::new(Arc::new(tokenizer));
+    let vocab = Arc::new(mcts::constraint_vocabulary(lm.vocabulary()).expect("vocabulary"));
+    let prompt = lm.encode("Plan:\n").expect("encodes");
+    let mut group = c.benchmark_group("constrained-mcts-uniform");
+    group.sample_size(10);
+    group.throughput(Throughput::Elements(SIMULATIONS));
+    let mut all = tasks(Benchmark::AlfworldSeen, 2);
+    all.extend(tasks(Benchmark::VirtualhomeEai, 2));
+    for (id, model, extra) in &all {
+        let spelling = match extra {
+            Extra::Alfworld(game) => Spelling::alfworld(model.task(), &game.grammar).expect("grammar"),
+            _ => Spelling::virtualhome(model.task()),
+        };
+        let short: String = id.split('/').next().unwrap_or(id).chars().take(40).collect();
+        for (label, value) in
+            [("mix", ValueConfig::default()), ("ff", ValueConfig { lmcut: 0.0, remaining: 0.0, ..ValueConfig::default() })]
+        {
+            let mut config = DecodeConfig::new(Mode::from_name("constrained-mcts").expect("mode"));
+            config.stop_at_goal = false;
+            config.budget.simulations = Some(SIMULATIONS);
+            config.budget.wall_clock = None;
+            group.bench_function(format!("{short}/{label}"), |b| {
+                b.iter(|| {
+                    let mut decoder = Decoder::new(model, &spelling, Arc::clone(&vocab), value.clone());
+                    decoder.decode(&mut lm, &prompt, &model.initial_state(), &config).expect("decodes")
+                })
+            });
+        }
+    }
+    group.finish();
+}
+
+criterion_group!(benches, bench);
+criterion_main!(benches);
