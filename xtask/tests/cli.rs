@@ -188,3 +188,47 @@ fn bench_mask_reports_the_issue_figures_and_agrees_with_llguidance() {
     assert_eq!(report["masks_disagree"], 0, "every mask equals llguidance's on the same grammar");
     assert_eq!(report["vocab_bytes_agree"], true, "our tokenizer.json reading equals llguidance's");
 }
+
+#[test]
+fn phase2_writes_records_resumes_and_plan_mcts_prints_json() {
+    let out = std::env::temp_dir().join(format!("xtask-phase2-{}", std::process::id()));
+    let out_text = out.display().to_string();
+    let args = [
+        "phase2",
+        "--benchmark",
+        "virtualhome-eai",
+        "--subset",
+        "virtualhome-eai-50",
+        "--limit",
+        "2",
+        "--lm",
+        "uniform",
+        "--out",
+        &out_text,
+        "--json",
+    ];
+    let first = xtask(&args);
+    assert!(first.status.success(), "{}", String::from_utf8_lossy(&first.stderr));
+    let summary: serde_json::Value = serde_json::from_str(stdout(&first).trim()).expect("one JSON object");
+    assert_eq!(summary["tasks"], 2);
+    let records = std::fs::read_to_string(out.join("virtualhome-eai-50-constrained-mcts-uniform.jsonl")).expect("records");
+    assert_eq!(records.lines().count(), 2);
+    for line in records.lines() {
+        let record: serde_json::Value = serde_json::from_str(line).expect("record");
+        assert_eq!(record["valid"], true, "{record}");
+    }
+    // A second run finds both tasks done and adds nothing.
+    let again = xtask(&args);
+    assert!(again.status.success());
+    assert_eq!(std::fs::read_to_string(out.join("virtualhome-eai-50-constrained-mcts-uniform.jsonl")).expect("records").lines().count(), 2);
+    std::fs::remove_dir_all(&out).ok();
+
+    let (domain, problem) = household();
+    let plan = xtask(&["plan", "--domain", &domain, "--problem", &problem, "--planner", "mcts", "--mode", "constrained-mcts", "--json"]);
+    assert!(plan.status.success(), "{}", String::from_utf8_lossy(&plan.stderr));
+    let record: serde_json::Value = serde_json::from_str(stdout(&plan).trim()).expect("one JSON object");
+    for key in ["solved", "valid", "length", "simulations", "lm_calls", "generated_tokens", "millis"] {
+        assert!(record.get(key).is_some(), "{key} missing: {record}");
+    }
+    assert_eq!(record["solved"], true);
+}
