@@ -161,7 +161,7 @@ fn tokenizer_at(path: &Path) -> anyhow::Result<Tokenizer> {
     result.map_err(|e| InputError(format!("{}: {e}", path.display())).into())
 }
 
-/// The model `args` names, and a short name for records.
+/// The model `args` names.
 pub fn load_lm(args: &LmArgs) -> anyhow::Result<Box<dyn LanguageModel>> {
     let tokenizer_path = args.tokenizer.clone().unwrap_or_else(default_tokenizer);
     if args.lm == "uniform" {

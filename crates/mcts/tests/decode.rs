@@ -34,12 +34,12 @@ fn constrained_mcts_solves_a_small_domain_with_a_uniform_prior() {
     assert!(outcome.valid && outcome.solved, "{outcome:?}");
     assert_eq!(outcome.stop, StopReason::Goal);
     assert!(applicable_in_turn(&model, &outcome.plan));
-    assert!(model.is_goal(&model.apply(&model.apply(&model.initial_state(), outcome.plan[0]), outcome.plan[1])) || outcome.plan.len() > 2);
+    let end = outcome.plan.iter().fold(model.initial_state(), |state, &action| model.apply(&state, action));
+    assert!(model.is_goal(&end), "the plan as returned reaches the goal");
     assert!(outcome.stats.simulations > 0 && outcome.stats.nodes > 0);
-    assert_eq!(
-        outcome.lines.last().map(String::as_str),
-        Some("(go e d)").filter(|_| outcome.plan.len() == 2).or(outcome.lines.last().map(String::as_str))
-    );
+    if outcome.plan.len() == 2 {
+        assert_eq!(outcome.lines, ["(go a e)", "(go e d)"], "the only two-action plan");
+    }
 }
 
 #[test]
