@@ -13,7 +13,7 @@ use anyhow::Context;
 use benchmark_data::{Benchmark, Extra, TaskFiles};
 use lm::{LanguageModel, OpenAiConfig, OpenAiModel, Tokenizer, UniformModel};
 use mcts::prompt::{PromptOptions, Relevance, planning_prompt};
-use mcts::{DecodeConfig, Decoder, MctsConfig, Mode, Outcome, SamplingConfig, Strategy, Tokenization, ValueConfig};
+use mcts::{Backup, DecodeConfig, Decoder, MctsConfig, Mode, Normalization, Outcome, SamplingConfig, Strategy, Tokenization, ValueConfig};
 use serde::{Deserialize, Serialize};
 use transition_model::{Spelling, TransitionModel};
 
@@ -63,6 +63,16 @@ pub struct DecodeArgs {
     /// MCTS: base constant.
     #[arg(long, default_value_t = 10.0)]
     pub base: f64,
+    /// MCTS: a node's value is the best of the values backed up through it, or their mean.
+    #[arg(long, default_value = "max", value_parser = ["max", "mean"])]
+    pub backup: String,
+    /// MCTS: normalise Q over the children of each node (`siblings`) or over the whole tree.
+    #[arg(long, default_value = "siblings", value_parser = ["siblings", "tree"])]
+    pub normalization: String,
+    /// MCTS: keep prefixes whose state another prefix reached first with no more actions
+    /// (by default they are closed; cycles are closed either way).
+    #[arg(long)]
+    pub keep_transpositions: bool,
     /// Value: weights of h_FF, LM-cut and the remaining plan cost in h (paper Appendix A.4).
     #[arg(long, default_value = "1,1,1", value_parser = parse_weights)]
     pub weights: (f64, f64, f64),
@@ -99,7 +109,15 @@ impl DecodeArgs {
         let mut mode = Mode::from_name(&self.mode).with_context(|| format!("unknown mode `{}`", self.mode))?;
         match &mut mode.strategy {
             Strategy::Mcts(mcts) => {
-                *mcts = MctsConfig { width: self.width, exploration: self.exploration, base: self.base, ..MctsConfig::default() };
+                *mcts = MctsConfig {
+                    width: self.width,
+                    exploration: self.exploration,
+                    base: self.base,
+                    prune_transpositions: !self.keep_transpositions,
+                    backup: if self.backup == "mean" { Backup::Mean } else { Backup::Max },
+                    normalization: if self.normalization == "tree" { Normalization::Tree } else { Normalization::Siblings },
+                    ..MctsConfig::default()
+                };
             }
             Strategy::Sample(sampling) => {
                 *sampling = SamplingConfig {

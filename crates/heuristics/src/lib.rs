@@ -25,6 +25,7 @@
 //! ```
 
 mod lmcut;
+mod memo;
 mod mix;
 pub mod relaxation;
 pub mod relaxed;
@@ -33,6 +34,7 @@ pub mod search;
 mod simple;
 
 pub use lmcut::LmCut;
+pub use memo::Memo;
 pub use mix::WeightedMix;
 pub use relaxation::{HAdd, HFF, HMax};
 pub use remaining::RemainingPlanCost;

@@ -3,6 +3,7 @@
 
 use transition_model::{State, TransitionModel};
 
+use crate::memo::Memo;
 use crate::relaxation::HFF;
 use crate::search::{Algorithm, SearchConfig, SearchStatus, search};
 use crate::{Heuristic, INFINITE};
@@ -13,7 +14,7 @@ use crate::{Heuristic, INFINITE};
 #[derive(Debug)]
 pub struct RemainingPlanCost<'m> {
     model: &'m TransitionModel,
-    ff: HFF<'m>,
+    ff: Memo<HFF<'m>>,
     config: SearchConfig,
 }
 
@@ -22,7 +23,7 @@ impl<'m> RemainingPlanCost<'m> {
         let mut config = SearchConfig::new(Algorithm::LazyGbfs);
         config.preferred_operators = true;
         config.max_expansions = Some(max_expansions);
-        RemainingPlanCost { model, ff: HFF::new(model), config }
+        RemainingPlanCost { model, ff: Memo::new(HFF::new(model)), config }
     }
 }
 

@@ -30,6 +30,6 @@ mod vocab;
 
 pub use decode::{Budget, DecodeConfig, DecodeError, Decoder, InvalidStep, Mode, Outcome, Stats, StopReason, Strategy, Tokenization};
 pub use sampling::{Sampler, SamplingConfig};
-pub use search::MctsConfig;
+pub use search::{Backup, MctsConfig, Normalization};
 pub use value::{Evaluator, ValueConfig};
 pub use vocab::constraint_vocabulary;

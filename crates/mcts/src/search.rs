@@ -42,6 +42,7 @@
 use std::time::Instant;
 
 use lm::LanguageModel;
+use rustc_hash::FxHashMap;
 use serde::Serialize;
 use token_constraint::TokenId;
 use transition_model::State;
@@ -63,11 +64,50 @@ pub struct MctsConfig {
     /// Close a prefix whose state repeats an earlier state of the same prefix: with
     /// non-negative costs such a plan is never needed.
     pub prune_cycles: bool,
+    /// Close a prefix whose state another prefix of the tree reached first with no more
+    /// actions (a transposition): every continuation of it is open to the other prefix at no
+    /// higher cost. Implies `prune_cycles`.
+    pub prune_transpositions: bool,
+    /// How a node's value summarises the values backed up through it.
+    pub backup: Backup,
+    /// Over which values `Q` is min-max normalised into `[0, 1]`.
+    pub normalization: Normalization,
+}
+
+/// The range `Q` is min-max normalised over, so that it and the prior term are on one scale.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Normalization {
+    /// Every value the tree has backed up (MuZero).
+    Tree,
+    /// The visited open children of the node being selected from: the best is 1, the worst
+    /// 0, whatever the spread of values elsewhere in the tree.
+    Siblings,
+}
+
+/// The statistic a node keeps of the values backed up through it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Backup {
+    /// The mean (Monte-Carlo backup, as AlphaZero).
+    Mean,
+    /// The best value seen below the node (a Bellman backup for a deterministic model: the
+    /// value of a prefix is the value of its best continuation found so far).
+    Max,
 }
 
 impl Default for MctsConfig {
     fn default() -> Self {
-        MctsConfig { width: 16, exploration: 2.5, base: 10.0, tokens_per_expansion: 128, prune_cycles: true }
+        MctsConfig {
+            width: 16,
+            exploration: 2.5,
+            base: 10.0,
+            tokens_per_expansion: 128,
+            prune_cycles: true,
+            prune_transpositions: true,
+            backup: Backup::Max,
+            normalization: Normalization::Siblings,
+        }
     }
 }
 
@@ -76,7 +116,8 @@ const CLOSED: u8 = 2;
 
 #[derive(Debug, Clone, Copy)]
 struct Node {
-    value_sum: f64,
+    /// The sum of backed-up values (mean backup) or the best of them (max backup).
+    value: f64,
     token: TokenId,
     prior: f32,
     visits: u32,
@@ -87,7 +128,7 @@ struct Node {
 
 impl Node {
     fn new(token: TokenId, prior: f32) -> Node {
-        Node { value_sum: 0.0, token, prior, visits: 0, first_child: 0, child_count: 0, flags: 0 }
+        Node { value: 0.0, token, prior, visits: 0, first_child: 0, child_count: 0, flags: 0 }
     }
 
     fn expanded(&self) -> bool {
@@ -109,15 +150,30 @@ struct Tree {
     nodes: Vec<Node>,
     min: f64,
     max: f64,
+    backup: Backup,
+    normalization: Normalization,
 }
 
 impl Tree {
-    fn new() -> Tree {
-        Tree { nodes: vec![Node::new(0, 1.0)], min: f64::INFINITY, max: f64::NEG_INFINITY }
+    fn new(config: &MctsConfig) -> Tree {
+        Tree {
+            nodes: vec![Node::new(0, 1.0)],
+            min: f64::INFINITY,
+            max: f64::NEG_INFINITY,
+            backup: config.backup,
+            normalization: config.normalization,
+        }
+    }
+
+    fn raw(&self, node: &Node) -> f64 {
+        match self.backup {
+            Backup::Mean => node.value / f64::from(node.visits),
+            Backup::Max => node.value,
+        }
     }
 
     fn normalize(&self, value: f64) -> f64 {
-        if self.max > self.min { (value - self.min) / (self.max - self.min) } else { 0.5 }
+        if self.max > self.min { ((value - self.min) / (self.max - self.min)).clamp(0.0, 1.0) } else { 0.5 }
     }
 
     fn expand(&mut self, node: usize, candidates: &[(TokenId, f32)]) {
@@ -139,14 +195,26 @@ impl Tree {
         let visits = f64::from(n.visits);
         let coefficient = config.exploration + ((visits + config.base + 1.0) / config.base).ln();
         let scale = coefficient * visits.sqrt();
-        let first_play = if n.visits > 0 { self.normalize(n.value_sum / visits) } else { 0.5 };
+        let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
+        if self.normalization == Normalization::Siblings {
+            for child in n.children().map(|c| &self.nodes[c]).filter(|c| c.visits > 0 && !c.closed()) {
+                lo = lo.min(self.raw(child));
+                hi = hi.max(self.raw(child));
+            }
+        }
+        let norm = |node: &Node| match self.normalization {
+            Normalization::Tree => self.normalize(self.raw(node)),
+            Normalization::Siblings if hi > lo => ((self.raw(node) - lo) / (hi - lo)).clamp(0.0, 1.0),
+            Normalization::Siblings => 0.5,
+        };
+        let first_play = if n.visits > 0 { norm(n) } else { 0.5 };
         let mut best: Option<(usize, f64)> = None;
         for c in n.children() {
             let child = &self.nodes[c];
             if child.closed() {
                 continue;
             }
-            let q = if child.visits > 0 { self.normalize(child.value_sum / f64::from(child.visits)) } else { first_play };
+            let q = if child.visits > 0 { norm(child) } else { first_play };
             let score = q + scale * f64::from(child.prior) / (1.0 + f64::from(child.visits));
             if best.is_none_or(|(_, b)| score > b) {
                 best = Some((c, score));
@@ -160,8 +228,12 @@ impl Tree {
         self.max = self.max.max(value);
         for &n in path {
             let node = &mut self.nodes[n];
+            node.value = match self.backup {
+                Backup::Mean => node.value + value,
+                Backup::Max if node.visits == 0 => value,
+                Backup::Max => node.value.max(value),
+            };
             node.visits += 1;
-            node.value_sum += value;
         }
     }
 
@@ -245,6 +317,8 @@ struct Arrival<'a, 'm> {
     best: &'a mut Best,
     config: &'a DecodeConfig,
     prune_cycles: bool,
+    /// With transposition pruning: the fewest actions any prefix reached each state with.
+    reached: Option<&'a mut FxHashMap<State, u32>>,
     dead_value: f64,
 }
 
@@ -275,7 +349,21 @@ fn arrival(a: &mut Arrival<'_, '_>, cursor: &Cursor, event: Event, depth: usize)
     }
     if !ended {
         a.states.push(state);
-        if a.prune_cycles && a.states.last_repeats() {
+        let repeated = match a.reached.as_deref_mut() {
+            Some(reached) => match reached.get_mut(state) {
+                Some(fewest) if *fewest as usize <= length => true,
+                Some(fewest) => {
+                    *fewest = length as u32;
+                    false
+                }
+                None => {
+                    reached.insert(state.clone(), length as u32);
+                    false
+                }
+            },
+            None => a.prune_cycles && a.states.last_repeats(),
+        };
+        if repeated {
             return Some(Leaf::Terminal(a.evaluator.value(state, length).unwrap_or(a.dead_value)));
         }
     }
@@ -313,10 +401,12 @@ pub(crate) fn run(
     let dead_value = -(h0 + lambda * budget.max_actions as f64 + 1.0);
     let width = mcts.width.clamp(1, u16::MAX as usize);
 
-    let mut tree = Tree::new();
+    let mut tree = Tree::new(mcts);
     let mut sequence = prompt.to_vec();
     let mut path: Vec<usize> = Vec::new();
     let mut states = PathStates { states: Vec::new(), depth: 0 };
+    let mut reached: FxHashMap<State, u32> = FxHashMap::default();
+    reached.insert(start.clone(), 0);
     macro_rules! arrival_context {
         () => {
             Arrival {
@@ -326,6 +416,7 @@ pub(crate) fn run(
                 best: &mut best,
                 config,
                 prune_cycles: mcts.prune_cycles,
+                reached: if mcts.prune_transpositions { Some(&mut reached) } else { None },
                 dead_value,
             }
         };
