@@ -73,8 +73,9 @@ pub struct DecodeArgs {
     /// (by default they are closed; cycles are closed either way).
     #[arg(long)]
     pub keep_transpositions: bool,
-    /// Value: weights of h_FF, LM-cut and the remaining plan cost in h (paper Appendix A.4).
-    #[arg(long, default_value = "1,1,1", value_parser = parse_weights)]
+    /// Value: weights of h_FF, LM-cut and the remaining plan cost in h (paper Appendix A.4;
+    /// the remaining plan cost is off by default, see `mcts::value`).
+    #[arg(long, default_value = "1,1,0", value_parser = parse_weights)]
     pub weights: (f64, f64, f64),
     /// Value: expansions of each remaining-plan-cost search.
     #[arg(long, default_value_t = 200)]
@@ -215,6 +216,10 @@ pub struct Record {
     pub mode: String,
     pub lm: String,
     pub solved: bool,
+    /// `false` when no plan exists: the delete relaxation cannot reach the goal from the
+    /// initial state (h_max = ∞), a proof of unsolvability.
+    #[serde(default = "yes")]
+    pub solvable: bool,
     pub valid: bool,
     pub length: usize,
     pub cost: u64,
@@ -233,6 +238,10 @@ pub struct Record {
     pub millis: f64,
     /// Everything for this task: grounding, prompt, decoding.
     pub total_millis: f64,
+}
+
+fn yes() -> bool {
+    true
 }
 
 /// Grounds, prompts and decodes one task.
@@ -263,6 +272,7 @@ pub fn solve(
         mode: outcome.mode.to_string(),
         lm: lm_name.to_string(),
         solved: outcome.solved,
+        solvable: heuristics::Heuristic::evaluate(&mut heuristics::HMax::new(&model), &initial).is_some(),
         valid: outcome.valid,
         length: outcome.plan.len(),
         cost,
@@ -398,7 +408,14 @@ pub fn run(args: Phase2Args) -> anyhow::Result<ExitCode> {
     } else {
         args.lm.lm.clone()
     };
-    let set = args.subset.clone().unwrap_or_else(|| args.benchmark.clone());
+    // A subset given as a path is named by its file stem (`/tmp/hard.txt` → `hard`).
+    let set = match &args.subset {
+        Some(subset) if subset.contains('/') || subset.ends_with(".txt") => {
+            Path::new(subset).file_stem().map_or_else(|| subset.clone(), |s| s.to_string_lossy().into_owned())
+        }
+        Some(subset) => subset.clone(),
+        None => args.benchmark.clone(),
+    };
     std::fs::create_dir_all(&args.out).with_context(|| format!("cannot create {}", args.out.display()))?;
     let stem = file_safe(&format!("{set}-{}-{lm_name}", args.decode.mode));
     let path = args.out.join(format!("{stem}.jsonl"));
@@ -442,11 +459,13 @@ pub fn run(args: Phase2Args) -> anyhow::Result<ExitCode> {
         println!("{summary}");
     } else {
         println!(
-            "{set} {} lm={lm_name}: solved {}/{} ({:.1}%), valid {:.1}%, mean generated tokens {:.1}, mean {:.0} ms, {:.0} simulations/s  records: {}",
+            "{set} {} lm={lm_name}: solved {}/{} ({:.1}%; {:.1}% of the {} solvable), valid {:.1}%, mean generated tokens {:.1}, mean {:.0} ms, {:.0} simulations/s  records: {}",
             args.decode.mode,
             summary["solved"],
             summary["tasks"],
             summary["success_rate"].as_f64().unwrap_or(0.0) * 100.0,
+            summary["success_rate_solvable"].as_f64().unwrap_or(0.0) * 100.0,
+            summary["solvable"],
             summary["valid_rate"].as_f64().unwrap_or(0.0) * 100.0,
             summary["mean_generated_tokens"].as_f64().unwrap_or(0.0),
             summary["mean_millis"].as_f64().unwrap_or(0.0),
@@ -461,6 +480,7 @@ fn summarize(records: &[Record], set: &str, mode: &str, lm: &str, path: &Path) -
     let n = records.len().max(1) as f64;
     let mean = |f: &dyn Fn(&Record) -> f64| records.iter().map(f).sum::<f64>() / n;
     let solved = records.iter().filter(|r| r.solved).count();
+    let solvable = records.iter().filter(|r| r.solvable).count();
     let valid = records.iter().filter(|r| r.valid).count();
     let search_seconds: f64 = records.iter().map(|r| r.millis).sum::<f64>() / 1e3;
     let simulations: u64 = records.iter().map(|r| r.simulations).sum();
@@ -471,7 +491,8 @@ fn summarize(records: &[Record], set: &str, mode: &str, lm: &str, path: &Path) -
     let solved_lengths: Vec<f64> = records.iter().filter(|r| r.solved).map(|r| r.length as f64).collect();
     serde_json::json!({
         "set": set, "mode": mode, "lm": lm, "tasks": records.len(),
-        "solved": solved, "success_rate": solved as f64 / n, "valid": valid, "valid_rate": valid as f64 / n,
+        "solved": solved, "success_rate": solved as f64 / n,
+        "solvable": solvable, "success_rate_solvable": solved as f64 / solvable.max(1) as f64, "valid": valid, "valid_rate": valid as f64 / n,
         "mean_generated_tokens": mean(&|r| r.generated_tokens as f64),
         "mean_lm_calls": mean(&|r| r.lm_calls as f64),
         "mean_decoded_tokens": mean(&|r| r.decoded_tokens as f64),
