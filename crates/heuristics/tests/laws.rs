@@ -4,7 +4,7 @@
 //! cannot reach the goal (checked by a naive fixpoint here); every returned plan validates.
 
 use heuristics::search::{Algorithm, SearchConfig, SearchStatus, search};
-use heuristics::{Blind, GoalCount, HAdd, HFF, HMax, Heuristic, LmCut, RemainingPlanCost, WeightedMix};
+use heuristics::{Blind, GoalCount, HAdd, HFF, HMax, Heuristic, LmCut, Memo, RemainingPlanCost, WeightedMix};
 use proptest::prelude::*;
 use transition_model::{State, TransitionModel};
 
@@ -153,6 +153,28 @@ proptest! {
         } else if !relaxed_solvable(&model, &model.initial_state()) {
             prop_assert_eq!(remaining_cost, None);
         }
+        // Along the optimal plan, a remembered suffix never undercuts h* either.
+        if optimal.status == SearchStatus::Solved {
+            let mut remaining = RemainingPlanCost::new(&model, 10_000);
+            let mut h_star = optimal.cost;
+            for (i, state) in states.iter().enumerate() {
+                let value = remaining.evaluate(state);
+                prop_assert!(value.is_some_and(|c| u64::from(c) >= h_star), "remaining {:?} < h* {}", value, h_star);
+                if let Some(&action) = optimal.plan.get(i) {
+                    h_star -= u64::from(model.task().action(action).cost);
+                }
+            }
+        }
+        // Memo answers as the heuristic it wraps, values and preferred operators, also when
+        // its cache fills up (capacity 2) and starts again.
+        let mut memo = Memo::with_capacity(HFF::new(&model), 2);
+        let mut plain = HFF::new(&model);
+        for state in states.iter().chain(states.iter().rev()) {
+            prop_assert_eq!(memo.evaluate(state), plain.evaluate(state));
+            prop_assert_eq!(memo.preferred_operators(), plain.preferred_operators());
+        }
+        prop_assert!(memo.counts().0 + memo.counts().1 == 2 * states.len() as u64);
+        prop_assert!(memo.counts().0 >= 1, "the last state, asked twice in a row, is a hit");
         // The mix is the weighted average of its parts; a dead end for one is a dead end for it.
         let state = model.initial_state();
         let (ff_value, cut_value) = (HFF::new(&model).evaluate(&state), LmCut::new(&model).evaluate(&state));

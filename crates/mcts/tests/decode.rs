@@ -7,7 +7,7 @@ use std::sync::Arc;
 
 use common::{TempDir, applicable_in_turn, ground, tiny_model, tiny_uniform};
 use lm::LanguageModel;
-use mcts::{DecodeConfig, Decoder, MctsConfig, Mode, SamplingConfig, StopReason, Strategy, ValueConfig};
+use mcts::{Backup, DecodeConfig, Decoder, MctsConfig, Mode, Normalization, SamplingConfig, StopReason, Strategy, ValueConfig};
 use transition_model::Spelling;
 
 /// Two routes from a to d: a-b-c-d (three steps) and a-e-d (two).
@@ -60,6 +60,69 @@ fn mcts_finds_the_optimal_plan_given_enough_simulations() {
     assert_eq!(outcome.stop, StopReason::Exhausted, "the finite tree is searched to the end");
     assert!(outcome.solved);
     assert_eq!(outcome.lines, ["(go a e)", "(go e d)"]);
+}
+
+#[test]
+fn every_backup_and_normalization_finds_the_optimal_plan_when_the_tree_is_exhausted() {
+    let dir = TempDir::new("variants");
+    let mut lm = tiny_uniform(&dir);
+    let model = ground(ROADS_DOMAIN, ROADS_PROBLEM);
+    let spelling = Spelling::pddl(model.task());
+    let vocab = Arc::new(mcts::constraint_vocabulary(lm.vocabulary()).expect("vocabulary"));
+    let prompt = lm.encode("Plan:\n").expect("encodes");
+    for backup in [Backup::Max, Backup::Mean] {
+        for normalization in [Normalization::Siblings, Normalization::Tree] {
+            for prune_transpositions in [true, false] {
+                let search = MctsConfig { backup, normalization, prune_transpositions, ..MctsConfig::default() };
+                let mut config = DecodeConfig::new(Mode { constrained: true, strategy: Strategy::Mcts(search) });
+                config.stop_at_goal = false;
+                config.budget.max_actions = 4;
+                let mut decoder = Decoder::new(&model, &spelling, Arc::clone(&vocab), ValueConfig::default());
+                let outcome = decoder.decode(&mut lm, &prompt, &model.initial_state(), &config).expect("decodes");
+                let label = format!("{backup:?} {normalization:?} transpositions pruned: {prune_transpositions}");
+                assert_eq!(outcome.stop, StopReason::Exhausted, "{label}");
+                assert_eq!(outcome.lines, ["(go a e)", "(go e d)"], "{label}");
+            }
+        }
+    }
+}
+
+/// Three independent switches: every order of switching reaches the same states.
+const SWITCHES_DOMAIN: &str = "(define (domain switches) (:predicates (on ?x))
+  (:action switch :parameters (?x) :precondition (and) :effect (on ?x)))";
+const SWITCHES_PROBLEM: &str = "(define (problem p) (:domain switches) (:objects a b c) (:init) (:goal (and (on a) (on b) (on c))))";
+
+#[test]
+fn transposition_pruning_keeps_one_prefix_per_state() {
+    let dir = TempDir::new("transpositions");
+    let mut lm = tiny_uniform(&dir);
+    let model = ground(SWITCHES_DOMAIN, SWITCHES_PROBLEM);
+    let spelling = Spelling::pddl(model.task());
+    let vocab = Arc::new(mcts::constraint_vocabulary(lm.vocabulary()).expect("vocabulary"));
+    let prompt = lm.encode("Plan:\n").expect("encodes");
+    let mut run = |prune_transpositions: bool| {
+        let search = MctsConfig { prune_transpositions, ..MctsConfig::default() };
+        let mut config = DecodeConfig::new(Mode { constrained: true, strategy: Strategy::Mcts(search) });
+        config.stop_at_goal = false;
+        config.budget.max_actions = 3;
+        let mut decoder = Decoder::new(&model, &spelling, Arc::clone(&vocab), ValueConfig::default());
+        decoder.decode(&mut lm, &prompt, &model.initial_state(), &config).expect("decodes")
+    };
+    let pruned = run(true);
+    let kept = run(false);
+    for outcome in [&pruned, &kept] {
+        assert_eq!(outcome.stop, StopReason::Exhausted);
+        assert!(outcome.solved && outcome.plan.len() == 3, "{outcome:?}");
+    }
+    // Kept, the tree holds every order of the switches (3! = 6 goal prefixes); pruned, a
+    // state reached a second time with as many actions is a closed leaf, so far fewer
+    // simulations exhaust the tree.
+    assert!(
+        pruned.stats.simulations < kept.stats.simulations,
+        "pruned {} simulations, kept {}",
+        pruned.stats.simulations,
+        kept.stats.simulations
+    );
 }
 
 #[test]
