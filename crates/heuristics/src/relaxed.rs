@@ -10,7 +10,9 @@
 //!   fact, achieved at zero cost by any of its literals;
 //! - the goal becomes one auxiliary goal fact, achieved at zero cost by one operator per goal
 //!   disjunct. Fast Downward compiles complex goals the same way (an artificial goal reached
-//!   by zero-cost actions); for a conjunctive goal every heuristic value is unchanged by it.
+//!   by zero-cost actions); for a conjunctive goal every heuristic value is unchanged by it;
+//! - only operators relevant to the goal (backward from it through preconditions) are kept,
+//!   which changes no heuristic value and no tie-break (see `Builder::prune_irrelevant`).
 
 use grounding::{ActionId, Condition, FactId, Literal, Task};
 use rustc_hash::FxHashMap;
@@ -165,7 +167,62 @@ impl Builder {
         });
     }
 
+    /// Drops every operator that cannot contribute to the goal: one is kept when it adds a
+    /// *relevant* fact (the goal fact, or a precondition of a kept operator), found by a
+    /// backward fixpoint from the goal. h_max, h_add, the relaxed plan and LM-cut's cuts only
+    /// ever look at the goal's supporters, transitively, which are all kept; and a dropped
+    /// operator adds only dropped facts, so the order in which the kept facts leave the
+    /// queue, and with it every tie-break, is unchanged. On ALFWorld this keeps a third to
+    /// a half of the operators, on EAI VirtualHome about half.
+    fn prune_irrelevant(&mut self) {
+        let relaxed = &mut self.relaxed;
+        let mut adders_start = vec![0u32; relaxed.num_facts + 1];
+        for op in &relaxed.ops {
+            for &f in &relaxed.add[op.add_start as usize..op.add_end as usize] {
+                adders_start[f as usize + 1] += 1;
+            }
+        }
+        for i in 1..adders_start.len() {
+            adders_start[i] += adders_start[i - 1];
+        }
+        let mut fill = adders_start.clone();
+        let mut adders = vec![0u32; relaxed.add.len()];
+        for (index, op) in relaxed.ops.iter().enumerate() {
+            for &f in &relaxed.add[op.add_start as usize..op.add_end as usize] {
+                adders[fill[f as usize] as usize] = index as u32;
+                fill[f as usize] += 1;
+            }
+        }
+        let mut relevant_fact = vec![false; relaxed.num_facts];
+        let mut kept = vec![false; relaxed.ops.len()];
+        let mut stack = vec![relaxed.goal];
+        relevant_fact[relaxed.goal as usize] = true;
+        while let Some(fact) = stack.pop() {
+            for &op in &adders[adders_start[fact as usize] as usize..adders_start[fact as usize + 1] as usize] {
+                if std::mem::replace(&mut kept[op as usize], true) {
+                    continue;
+                }
+                let op = relaxed.ops[op as usize];
+                for &pre in &relaxed.pre[op.pre_start as usize..op.pre_end as usize] {
+                    if !std::mem::replace(&mut relevant_fact[pre as usize], true) {
+                        stack.push(pre);
+                    }
+                }
+            }
+        }
+        let (mut pre, mut add, mut ops) = (Vec::new(), Vec::new(), Vec::new());
+        for (op, _) in relaxed.ops.iter().zip(&kept).filter(|(_, k)| **k) {
+            let pre_start = pre.len() as u32;
+            pre.extend_from_slice(&relaxed.pre[op.pre_start as usize..op.pre_end as usize]);
+            let add_start = add.len() as u32;
+            add.extend_from_slice(&relaxed.add[op.add_start as usize..op.add_end as usize]);
+            ops.push(RelaxedOp { pre_start, pre_end: pre.len() as u32, add_start, add_end: add.len() as u32, ..*op });
+        }
+        (relaxed.pre, relaxed.add, relaxed.ops) = (pre, add, ops);
+    }
+
     fn finish(mut self) -> RelaxedTask {
+        self.prune_irrelevant();
         let relaxed = &mut self.relaxed;
         let mut counts = vec![0u32; relaxed.num_facts + 1];
         for op in &relaxed.ops {
