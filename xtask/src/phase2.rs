@@ -230,6 +230,10 @@ pub struct Record {
     pub nodes: u64,
     pub lm_calls: u64,
     pub generated_tokens: u64,
+    /// Token positions the model computed (prompt and branch suffixes the prefix cache did
+    /// not hold).
+    #[serde(default)]
+    pub prefilled_tokens: u64,
     pub forced_tokens: u64,
     pub decoded_tokens: u64,
     pub prompt_tokens: usize,
@@ -283,6 +287,7 @@ pub fn solve(
         nodes: outcome.stats.nodes,
         lm_calls: outcome.stats.usage.forward_calls,
         generated_tokens: outcome.stats.usage.tokens_generated,
+        prefilled_tokens: outcome.stats.usage.tokens_prefilled,
         forced_tokens: outcome.stats.forced_tokens,
         decoded_tokens: outcome.stats.decoded_tokens,
         prompt_tokens: tokens.len(),
@@ -495,6 +500,7 @@ fn summarize(records: &[Record], set: &str, mode: &str, lm: &str, path: &Path) -
         "solvable": solvable, "success_rate_solvable": solved as f64 / solvable.max(1) as f64, "valid": valid, "valid_rate": valid as f64 / n,
         "mean_generated_tokens": mean(&|r| r.generated_tokens as f64),
         "mean_lm_calls": mean(&|r| r.lm_calls as f64),
+        "mean_prefilled_tokens": mean(&|r| r.prefilled_tokens as f64),
         "mean_decoded_tokens": mean(&|r| r.decoded_tokens as f64),
         "mean_simulations": mean(&|r| r.simulations as f64),
         "mean_millis": mean(&|r| r.millis),

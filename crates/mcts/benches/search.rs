@@ -1,7 +1,7 @@
 //! Token-level MCTS with the uniform prior over the Qwen3 tokenizer (no model cost) on real
 //! ALFWorld and VirtualHome tasks from fixtures/: a fixed number of simulations per
-//! iteration, without early stop, with the paper's value (h_FF + LM-cut + remaining plan
-//! cost) and with h_FF alone (the search's own cost). Each iteration starts a fresh decoder,
+//! iteration, without early stop, with the default value (h_FF + LM-cut; `mcts::value` says
+//! why not the remaining plan cost) and with h_FF alone (the search's own cost). Each iteration starts a fresh decoder,
 //! so heuristic values are computed, not cached from the previous iteration.
 
 use std::sync::Arc;
