@@ -221,8 +221,7 @@ impl Exploration {
                 }
                 let mut supporter = fact;
                 for &pre in relaxed.ops[i].pre(relaxed) {
-                    let (c, best) = (self.fact_cost[pre as usize], self.fact_cost[supporter as usize]);
-                    if c > best || (c == best && self.stamp[pre as usize] > self.stamp[supporter as usize]) {
+                    if self.fact_cost[pre as usize] > self.fact_cost[supporter as usize] {
                         supporter = pre;
                     }
                 }

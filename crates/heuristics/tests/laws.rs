@@ -103,18 +103,18 @@ proptest! {
                 states.push(next);
             }
         }
-        let mut lmcut_incremental = LmCut::incremental(&model);
+        let mut lmcut_full = LmCut::full(&model);
         let (mut hmax, mut hadd, mut ff, mut lmcut, mut goalcount) =
             (HMax::new(&model), HAdd::new(&model), HFF::new(&model), LmCut::new(&model), GoalCount::new(&model));
         let mut remaining = optimal.cost;
         for (i, state) in states.iter().enumerate() {
             let values = [hmax.evaluate(state), hadd.evaluate(state), ff.evaluate(state), lmcut.evaluate(state)];
-            let incremental = lmcut_incremental.evaluate(state);
-            prop_assert_eq!(incremental.is_some(), values[3].is_some());
-            if let (Some(value), Some(max)) = (incremental, values[0]) {
-                prop_assert!(max <= value, "incremental LM-cut {} < h_max {}", value, max);
+            let full = lmcut_full.evaluate(state);
+            prop_assert_eq!(full.is_some(), values[3].is_some());
+            if let (Some(value), Some(max)) = (full, values[0]) {
+                prop_assert!(max <= value, "full-recompute LM-cut {} < h_max {}", value, max);
                 if optimal.status == SearchStatus::Solved {
-                    prop_assert!(u64::from(value) <= remaining, "incremental LM-cut {} > h* {}", value, remaining);
+                    prop_assert!(u64::from(value) <= remaining, "full-recompute LM-cut {} > h* {}", value, remaining);
                 }
             }
             let solvable = relaxed_solvable(&model, state);
