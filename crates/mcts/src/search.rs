@@ -26,7 +26,7 @@
 //! the search spread its visits almost by the prior: with a uniform prior it solved 231 of
 //! the first 240 EAI tasks in 60 s and failed 11-step table-setting plans that A* with
 //! LM-cut solves in 11 expansions. Max backup with sibling normalisation (and transposition
-//! pruning, below) solves 329 of the 330 solvable EAI tasks and all 140 ALFWorld tasks
+//! pruning, below) solves all 330 solvable EAI tasks and all 140 ALFWorld tasks
 //! (docs/ARCHITECTURE.md has the figures).
 //! *Expansion* asks the model once at the leaf and keeps the `width` (16) most likely
 //! allowed tokens as children, with their priors as given (not renormalised over the 16).
