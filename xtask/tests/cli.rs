@@ -216,11 +216,29 @@ fn phase2_writes_records_resumes_and_plan_mcts_prints_json() {
     for line in records.lines() {
         let record: serde_json::Value = serde_json::from_str(line).expect("record");
         assert_eq!(record["valid"], true, "{record}");
+        assert_eq!(record["solvable"], true, "{record}");
     }
+    assert_eq!(summary["solvable"], 2);
     // A second run finds both tasks done and adds nothing.
     let again = xtask(&args);
     assert!(again.status.success());
     assert_eq!(std::fs::read_to_string(out.join("virtualhome-eai-50-constrained-mcts-uniform.jsonl")).expect("records").lines().count(), 2);
+
+    // A subset given as a file is named by its stem; a task whose goal the delete relaxation
+    // cannot reach is recorded as unsolvable and left out of the solvable success rate.
+    let subset = out.join("unsolvable.txt");
+    std::fs::write(&subset, "407_1\n").expect("subset file");
+    let subset_text = subset.display().to_string();
+    let run =
+        xtask(&["phase2", "--benchmark", "virtualhome-eai", "--subset", &subset_text, "--lm", "uniform", "--out", &out_text, "--json"]);
+    assert!(run.status.success(), "{}", String::from_utf8_lossy(&run.stderr));
+    let summary: serde_json::Value = serde_json::from_str(stdout(&run).trim()).expect("one JSON object");
+    assert_eq!((summary["tasks"].as_u64(), summary["solvable"].as_u64(), summary["solved"].as_u64()), (Some(1), Some(0), Some(0)));
+    let record: serde_json::Value = serde_json::from_str(
+        std::fs::read_to_string(out.join("unsolvable-constrained-mcts-uniform.jsonl")).expect("records named by the stem").trim(),
+    )
+    .expect("record");
+    assert_eq!((record["solvable"].as_bool(), record["stop"].as_str()), (Some(false), Some("dead-end")));
     std::fs::remove_dir_all(&out).ok();
 
     let (domain, problem) = household();
