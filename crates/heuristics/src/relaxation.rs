@@ -84,8 +84,13 @@ pub struct Exploration {
     pub supporter: Vec<u32>,
     op_cost: Vec<u32>,
     /// Per operator: the precondition whose arrival made it applicable (the last one
-    /// popped, so one of maximal cost), `u32::MAX` if none.
+    /// popped, so one of maximal cost), `u32::MAX` if none. Change it with
+    /// [`Exploration::set_supporter`] so that `supported` follows.
     pub op_supporter: Vec<u32>,
+    /// With [`Exploration::track_supported`]: the operators each fact supports.
+    pub supported: Supported,
+    track: bool,
+    scratch: Vec<u32>,
     /// When each fact was last taken from the queue (a global clock): among preconditions
     /// of equal cost, the supporter is the one taken last.
     stamp: Vec<u32>,
@@ -109,6 +114,9 @@ impl Exploration {
             supporter: vec![u32::MAX; facts],
             op_cost: vec![0; ops],
             op_supporter: vec![u32::MAX; ops],
+            supported: Supported { head: vec![u32::MAX; facts], next: vec![u32::MAX; ops], prev: vec![u32::MAX; ops] },
+            track: false,
+            scratch: Vec::new(),
             stamp: vec![0; facts],
             clock: 0,
             unsatisfied: vec![0; ops],
@@ -126,6 +134,9 @@ impl Exploration {
         self.fact_cost.fill(INFINITE);
         self.unsatisfied.copy_from_slice(&self.pre_count);
         self.op_supporter.fill(u32::MAX);
+        if self.track {
+            self.supported.head.fill(u32::MAX);
+        }
         if additive {
             // Only h_add needs operator costs (for h_max an operator costs what its last
             // precondition popped at) and fact supporters (for h_FF's relaxed plan).
@@ -168,6 +179,9 @@ impl Exploration {
                 self.unsatisfied[i] -= 1;
                 if self.unsatisfied[i] == 0 {
                     self.op_supporter[i] = fact;
+                    if self.track {
+                        self.supported.link(op, fact);
+                    }
                     // Facts leave the queue in cost order, so for h_max the operator costs
                     // what its last precondition cost.
                     let pre_cost = if additive { self.op_cost[i] } else { cost };
@@ -188,7 +202,76 @@ impl Exploration {
     }
 }
 
+/// The operators each fact supports, as intrusive doubly linked lists over operator ids:
+/// LM-cut walks a fact's supported operators instead of every operator it is a precondition
+/// of, and a supporter change costs O(1).
+#[derive(Debug, Clone)]
+pub struct Supported {
+    head: Vec<u32>,
+    next: Vec<u32>,
+    prev: Vec<u32>,
+}
+
+impl Supported {
+    #[inline]
+    fn link(&mut self, op: u32, fact: u32) {
+        let head = self.head[fact as usize];
+        self.next[op as usize] = head;
+        self.prev[op as usize] = u32::MAX;
+        if head != u32::MAX {
+            self.prev[head as usize] = op;
+        }
+        self.head[fact as usize] = op;
+    }
+
+    #[inline]
+    fn unlink(&mut self, op: u32, fact: u32) {
+        let (prev, next) = (self.prev[op as usize], self.next[op as usize]);
+        if prev == u32::MAX {
+            self.head[fact as usize] = next;
+        } else {
+            self.next[prev as usize] = next;
+        }
+        if next != u32::MAX {
+            self.prev[next as usize] = prev;
+        }
+    }
+
+    /// The operators `fact` supports.
+    #[inline]
+    pub fn of(&self, fact: u32) -> impl Iterator<Item = u32> + '_ {
+        let mut op = self.head[fact as usize];
+        std::iter::from_fn(move || {
+            (op != u32::MAX).then(|| {
+                let current = op;
+                op = self.next[op as usize];
+                current
+            })
+        })
+    }
+}
+
 impl Exploration {
+    /// Keep [`Exploration::supported`] up to date (LM-cut); off by default.
+    pub fn track_supported(&mut self) {
+        self.track = true;
+    }
+
+    /// Makes `fact` the supporter of `op`.
+    pub fn set_supporter(&mut self, op: u32, fact: u32) {
+        let old = self.op_supporter[op as usize];
+        if old == fact {
+            return;
+        }
+        if self.track {
+            if old != u32::MAX {
+                self.supported.unlink(op, old);
+            }
+            self.supported.link(op, fact);
+        }
+        self.op_supporter[op as usize] = fact;
+    }
+
     /// After a run with `costs` (which must be `Combine::Max`), the operators in `lowered`
     /// got cheaper: update h_max incrementally (costs only fall, so only what lies
     /// downstream of those operators changes) and return the goal's new cost. An operator's
@@ -214,18 +297,27 @@ impl Exploration {
             }
             self.clock = self.clock.wrapping_add(1);
             self.stamp[fact as usize] = self.clock;
-            for &op in relaxed.pre_of(fact) {
+            self.scratch.clear();
+            if self.track {
+                self.scratch.extend(self.supported.of(fact));
+            } else {
+                self.scratch.extend(relaxed.pre_of(fact).iter().copied().filter(|&op| self.op_supporter[op as usize] == fact));
+            }
+            for &op in &self.scratch {
                 let i = op as usize;
-                if self.op_supporter[i] != fact {
-                    continue;
-                }
                 let mut supporter = fact;
                 for &pre in relaxed.ops[i].pre(relaxed) {
                     if self.fact_cost[pre as usize] > self.fact_cost[supporter as usize] {
                         supporter = pre;
                     }
                 }
-                self.op_supporter[i] = supporter;
+                if supporter != fact {
+                    self.op_supporter[i] = supporter;
+                    if self.track {
+                        self.supported.unlink(op, fact);
+                        self.supported.link(op, supporter);
+                    }
+                }
                 let target = self.fact_cost[supporter as usize].saturating_add(costs[i]);
                 for &added in relaxed.ops[i].add(relaxed) {
                     if target < self.fact_cost[added as usize] {
