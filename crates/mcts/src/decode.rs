@@ -264,6 +264,21 @@ impl<'m> Decoder<'m> {
         &mut self.evaluator
     }
 
+    /// Encodes every action text of the task with the model's tokenizer, once per decoder
+    /// (the canonical constraint's one-time set-up; `decode` does it on first use). Callers
+    /// that time the search alone call it first.
+    pub fn prepare(&mut self, lm: &dyn LanguageModel) -> Result<(), DecodeError> {
+        if self.languages.canonical.is_none() {
+            let spelling = self.languages.bytes.spelling();
+            let marker = LanguageConfig::default().end_marker.map(|m| String::from_utf8_lossy(&m).into_owned());
+            let tokenizer = lm.tokenizer();
+            let canonical =
+                CanonicalLanguages::new(self.model, spelling, self.end, self.vocab.eos(), marker.as_deref(), |t| tokenizer.encode(t))?;
+            self.languages.canonical = Some(canonical);
+        }
+        Ok(())
+    }
+
     /// Writes a plan from `start` after `prompt` (the rendered prompt's tokens).
     pub fn decode(
         &mut self,
@@ -285,16 +300,8 @@ impl<'m> Decoder<'m> {
             (false, _) => Cursor::free(start.clone()),
             (true, Tokenization::Any) => Cursor::constrained(&mut self.languages.bytes, start.clone())?,
             (true, Tokenization::Canonical) => {
-                if self.languages.canonical.is_none() {
-                    let spelling = self.languages.bytes.spelling();
-                    let marker = LanguageConfig::default().end_marker.map(|m| String::from_utf8_lossy(&m).into_owned());
-                    let tokenizer = lm.tokenizer();
-                    let canonical = CanonicalLanguages::new(self.model, spelling, self.end, self.vocab.eos(), marker.as_deref(), |t| {
-                        tokenizer.encode(t)
-                    })?;
-                    self.languages.canonical = Some(canonical);
-                }
-                Cursor::canonical(self.languages.canonical.as_mut().expect("made above"), start.clone())
+                self.prepare(lm)?;
+                Cursor::canonical(self.languages.canonical.as_mut().expect("made by prepare"), start.clone())
             }
         };
         let mut stats = Stats::default();
