@@ -8,7 +8,7 @@ use std::sync::Arc;
 use common::{TempDir, applicable_in_turn, ground, tiny_model, tiny_uniform};
 use lm::LanguageModel;
 use mcts::{Backup, DecodeConfig, Decoder, MctsConfig, Mode, Normalization, SamplingConfig, StopReason, Strategy, ValueConfig};
-use transition_model::Spelling;
+use transition_model::{Spelling, TransitionModel};
 
 /// Two routes from a to d: a-b-c-d (three steps) and a-e-d (two).
 const ROADS_DOMAIN: &str = "(define (domain roads) (:predicates (at ?x) (road ?x ?y))
@@ -16,6 +16,22 @@ const ROADS_DOMAIN: &str = "(define (domain roads) (:predicates (at ?x) (road ?x
 const ROADS_PROBLEM: &str = "(define (problem p) (:domain roads) (:objects a b c d e)
   (:init (at a) (road a b) (road b c) (road c d) (road a e) (road e d) (road b a) (road c b) (road e a))
   (:goal (at d)))";
+
+/// A task in the PDDL spelling, with `lm`'s constraint vocabulary and the prompt `Plan:`.
+struct Setup {
+    model: TransitionModel,
+    spelling: Spelling,
+    vocab: Arc<token_constraint::Vocabulary>,
+    prompt: Vec<lm::TokenId>,
+}
+
+fn setup(lm: &dyn LanguageModel, domain: &str, problem: &str) -> Setup {
+    let model = ground(domain, problem);
+    let spelling = Spelling::pddl(model.task());
+    let vocab = Arc::new(mcts::constraint_vocabulary(lm.vocabulary()).expect("vocabulary"));
+    let prompt = lm.encode("Plan:\n").expect("encodes");
+    Setup { model, spelling, vocab, prompt }
+}
 
 fn mode(name: &str) -> Mode {
     Mode::from_name(name).expect("known mode")
@@ -25,11 +41,8 @@ fn mode(name: &str) -> Mode {
 fn constrained_mcts_solves_a_small_domain_with_a_uniform_prior() {
     let dir = TempDir::new("roads");
     let mut lm = tiny_uniform(&dir);
-    let model = ground(ROADS_DOMAIN, ROADS_PROBLEM);
-    let spelling = Spelling::pddl(model.task());
-    let vocab = Arc::new(mcts::constraint_vocabulary(lm.vocabulary()).expect("vocabulary"));
+    let Setup { model, spelling, vocab, prompt } = setup(&lm, ROADS_DOMAIN, ROADS_PROBLEM);
     let mut decoder = Decoder::new(&model, &spelling, vocab, ValueConfig::default());
-    let prompt = lm.encode("Plan:\n").expect("encodes");
     let outcome = decoder.decode(&mut lm, &prompt, &model.initial_state(), &DecodeConfig::new(mode("constrained-mcts"))).expect("decodes");
     assert!(outcome.valid && outcome.solved, "{outcome:?}");
     assert_eq!(outcome.stop, StopReason::Goal);
@@ -46,13 +59,10 @@ fn constrained_mcts_solves_a_small_domain_with_a_uniform_prior() {
 fn mcts_finds_the_optimal_plan_given_enough_simulations() {
     let dir = TempDir::new("optimal");
     let mut lm = tiny_uniform(&dir);
-    let model = ground(ROADS_DOMAIN, ROADS_PROBLEM);
-    let spelling = Spelling::pddl(model.task());
-    let vocab = Arc::new(mcts::constraint_vocabulary(lm.vocabulary()).expect("vocabulary"));
+    let Setup { model, spelling, vocab, prompt } = setup(&lm, ROADS_DOMAIN, ROADS_PROBLEM);
     // Only the goal matters: no heuristic preference between the two routes' first steps
     // beyond what the search learns.
     let mut decoder = Decoder::new(&model, &spelling, vocab, ValueConfig::default());
-    let prompt = lm.encode("Plan:\n").expect("encodes");
     let mut config = DecodeConfig::new(mode("constrained-mcts"));
     config.stop_at_goal = false;
     config.budget.max_actions = 4;
@@ -66,10 +76,7 @@ fn mcts_finds_the_optimal_plan_given_enough_simulations() {
 fn every_backup_and_normalization_finds_the_optimal_plan_when_the_tree_is_exhausted() {
     let dir = TempDir::new("variants");
     let mut lm = tiny_uniform(&dir);
-    let model = ground(ROADS_DOMAIN, ROADS_PROBLEM);
-    let spelling = Spelling::pddl(model.task());
-    let vocab = Arc::new(mcts::constraint_vocabulary(lm.vocabulary()).expect("vocabulary"));
-    let prompt = lm.encode("Plan:\n").expect("encodes");
+    let Setup { model, spelling, vocab, prompt } = setup(&lm, ROADS_DOMAIN, ROADS_PROBLEM);
     for backup in [Backup::Max, Backup::Mean] {
         for normalization in [Normalization::Siblings, Normalization::Tree] {
             for prune_transpositions in [true, false] {
@@ -96,10 +103,7 @@ const SWITCHES_PROBLEM: &str = "(define (problem p) (:domain switches) (:objects
 fn transposition_pruning_keeps_one_prefix_per_state() {
     let dir = TempDir::new("transpositions");
     let mut lm = tiny_uniform(&dir);
-    let model = ground(SWITCHES_DOMAIN, SWITCHES_PROBLEM);
-    let spelling = Spelling::pddl(model.task());
-    let vocab = Arc::new(mcts::constraint_vocabulary(lm.vocabulary()).expect("vocabulary"));
-    let prompt = lm.encode("Plan:\n").expect("encodes");
+    let Setup { model, spelling, vocab, prompt } = setup(&lm, SWITCHES_DOMAIN, SWITCHES_PROBLEM);
     let mut run = |prune_transpositions: bool| {
         let search = MctsConfig { prune_transpositions, ..MctsConfig::default() };
         let mut config = DecodeConfig::new(Mode { constrained: true, strategy: Strategy::Mcts(search) });
@@ -129,11 +133,8 @@ fn transposition_pruning_keeps_one_prefix_per_state() {
 fn every_mode_runs_and_constrained_modes_stay_valid() {
     let dir = TempDir::new("modes");
     let mut lm = tiny_model(&dir);
-    let model = ground(ROADS_DOMAIN, ROADS_PROBLEM);
-    let spelling = Spelling::pddl(model.task());
-    let vocab = Arc::new(mcts::constraint_vocabulary(lm.vocabulary()).expect("vocabulary"));
+    let Setup { model, spelling, vocab, prompt } = setup(&lm, ROADS_DOMAIN, ROADS_PROBLEM);
     let mut decoder = Decoder::new(&model, &spelling, vocab, ValueConfig::default());
-    let prompt = lm.encode("Plan:\n").expect("encodes");
     for name in Mode::NAMES {
         let mut config = DecodeConfig::new(mode(name));
         config.budget.simulations = Some(200);
@@ -156,10 +157,7 @@ fn every_mode_runs_and_constrained_modes_stay_valid() {
 fn identical_seeds_give_identical_results() {
     let dir = TempDir::new("seeds");
     let mut lm = tiny_model(&dir);
-    let model = ground(ROADS_DOMAIN, ROADS_PROBLEM);
-    let spelling = Spelling::pddl(model.task());
-    let vocab = Arc::new(mcts::constraint_vocabulary(lm.vocabulary()).expect("vocabulary"));
-    let prompt = lm.encode("Plan:\n").expect("encodes");
+    let Setup { model, spelling, vocab, prompt } = setup(&lm, ROADS_DOMAIN, ROADS_PROBLEM);
     let run = |lm: &mut lm::LocalModel, mode: Mode| {
         let mut decoder = Decoder::new(&model, &spelling, Arc::clone(&vocab), ValueConfig::default());
         let mut config = DecodeConfig::new(mode);
@@ -194,11 +192,8 @@ fn identical_seeds_give_identical_results() {
 fn unconstrained_greedy_reports_the_first_invalid_line() {
     let dir = TempDir::new("invalid");
     let mut lm = tiny_uniform(&dir);
-    let model = ground(ROADS_DOMAIN, ROADS_PROBLEM);
-    let spelling = Spelling::pddl(model.task());
-    let vocab = Arc::new(mcts::constraint_vocabulary(lm.vocabulary()).expect("vocabulary"));
+    let Setup { model, spelling, vocab, prompt } = setup(&lm, ROADS_DOMAIN, ROADS_PROBLEM);
     let mut decoder = Decoder::new(&model, &spelling, vocab, ValueConfig::default());
-    let prompt = lm.encode("Plan:\n").expect("encodes");
     // The uniform argmax is token 0 (a control token, not a stop token of the tiny model).
     let outcome =
         decoder.decode(&mut lm, &prompt, &model.initial_state(), &DecodeConfig::new(mode("unconstrained-greedy"))).expect("decodes");
