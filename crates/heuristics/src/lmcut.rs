@@ -33,9 +33,6 @@ use crate::{Heuristic, INFINITE};
 pub struct LmCut {
     exploration: Exploration,
     costs: Vec<u32>,
-    /// Operators achieving each fact (reverse of adds).
-    achievers_start: Vec<u32>,
-    achievers: Vec<u32>,
     goal_zone: Vec<bool>,
     reached: Vec<bool>,
     queue: VecDeque<u32>,
@@ -52,28 +49,9 @@ impl LmCut {
         let mut exploration = Exploration::new(model.task());
         exploration.track_supported();
         let relaxed = &exploration.relaxed;
-        let mut counts = vec![0u32; relaxed.num_facts + 1];
-        for op in &relaxed.ops {
-            for &f in op.add(relaxed) {
-                counts[f as usize + 1] += 1;
-            }
-        }
-        for i in 1..counts.len() {
-            counts[i] += counts[i - 1];
-        }
-        let mut fill = counts.clone();
-        let mut achievers = vec![0u32; relaxed.add.len()];
-        for (index, op) in relaxed.ops.iter().enumerate() {
-            for &f in op.add(relaxed) {
-                achievers[fill[f as usize] as usize] = index as u32;
-                fill[f as usize] += 1;
-            }
-        }
         let facts = relaxed.num_facts;
         LmCut {
             costs: relaxed.ops.iter().map(|o| o.cost).collect(),
-            achievers_start: counts,
-            achievers,
             goal_zone: vec![false; facts],
             reached: vec![false; facts],
             queue: VecDeque::new(),
@@ -107,9 +85,7 @@ impl LmCut {
             if exploration.fact_cost[pre as usize] != cost {
                 continue;
             }
-            let start = self.achievers_start[pre as usize] as usize;
-            let end = self.achievers_start[pre as usize + 1] as usize;
-            if self.achievers[start..end].iter().all(|&a| self.costs[a as usize] != 0) {
+            if relaxed.achievers.of(pre).iter().all(|&a| self.costs[a as usize] != 0) {
                 exploration.set_supporter(op, pre);
                 return pre;
             }
@@ -151,8 +127,8 @@ impl Heuristic for LmCut {
             self.queue.clear();
             self.queue.push_back(goal);
             while let Some(fact) = self.queue.pop_front() {
-                for i in self.achievers_start[fact as usize]..self.achievers_start[fact as usize + 1] {
-                    let op = self.achievers[i as usize];
+                for i in 0..self.exploration.relaxed.achievers.of(fact).len() {
+                    let op = self.exploration.relaxed.achievers.of(fact)[i];
                     if self.costs[op as usize] != 0 || self.exploration.op_supporter[op as usize] == NONE {
                         continue;
                     }

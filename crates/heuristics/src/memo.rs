@@ -16,7 +16,7 @@ pub struct Memo<H> {
     inner: H,
     cache: FxHashMap<State, (Option<u32>, Box<[ActionId]>)>,
     capacity: usize,
-    preferred: Box<[ActionId]>,
+    preferred: Vec<ActionId>,
     hits: u64,
     misses: u64,
 }
@@ -42,7 +42,7 @@ impl<H: Heuristic> Memo<H> {
     }
 
     pub fn with_capacity(inner: H, capacity: usize) -> Memo<H> {
-        Memo { inner, cache: FxHashMap::default(), capacity: capacity.max(1), preferred: Box::default(), hits: 0, misses: 0 }
+        Memo { inner, cache: FxHashMap::default(), capacity: capacity.max(1), preferred: Vec::new(), hits: 0, misses: 0 }
     }
 
     /// Evaluations answered from the cache, and evaluations run.
@@ -63,16 +63,18 @@ impl<H: Heuristic> Heuristic for Memo<H> {
     fn evaluate(&mut self, state: &State) -> Option<u32> {
         if let Some((h, preferred)) = self.cache.get(state) {
             self.hits += 1;
-            self.preferred.clone_from(preferred);
+            self.preferred.clear();
+            self.preferred.extend_from_slice(preferred);
             return *h;
         }
         self.misses += 1;
         let h = self.inner.evaluate(state);
-        self.preferred = self.inner.preferred_operators().into();
+        self.preferred.clear();
+        self.preferred.extend_from_slice(self.inner.preferred_operators());
         if self.cache.len() >= self.capacity {
             self.cache.clear();
         }
-        self.cache.insert(state.clone(), (h, self.preferred.clone()));
+        self.cache.insert(state.clone(), (h, self.preferred.as_slice().into()));
         h
     }
 

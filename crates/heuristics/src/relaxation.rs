@@ -91,10 +91,6 @@ pub struct Exploration {
     pub supported: Supported,
     track: bool,
     scratch: Vec<u32>,
-    /// When each fact was last taken from the queue (a global clock): among preconditions
-    /// of equal cost, the supporter is the one taken last.
-    stamp: Vec<u32>,
-    clock: u32,
     unsatisfied: Vec<u32>,
     /// Precondition count of each operator, copied into `unsatisfied` per run.
     pre_count: Vec<u32>,
@@ -117,8 +113,6 @@ impl Exploration {
             supported: Supported { head: vec![u32::MAX; facts], next: vec![u32::MAX; ops], prev: vec![u32::MAX; ops] },
             track: false,
             scratch: Vec::new(),
-            stamp: vec![0; facts],
-            clock: 0,
             unsatisfied: vec![0; ops],
             queue: FactQueue::default(),
         }
@@ -169,8 +163,6 @@ impl Exploration {
             if fact == goal && costs.is_none() {
                 break;
             }
-            self.clock = self.clock.wrapping_add(1);
-            self.stamp[fact as usize] = self.clock;
             for &op in relaxed.pre_of(fact) {
                 let i = op as usize;
                 if additive {
@@ -272,12 +264,14 @@ impl Exploration {
         self.op_supporter[op as usize] = fact;
     }
 
-    /// After a run with `costs` (which must be `Combine::Max`), the operators in `lowered`
-    /// got cheaper: update h_max incrementally (costs only fall, so only what lies
-    /// downstream of those operators changes) and return the goal's new cost. An operator's
-    /// supporter changes only when that fact got cheaper; it is then chosen as in a full run,
-    /// a precondition of maximal cost and, among those, the one taken from the queue last.
+    /// After a run with `costs` (which must be `Combine::Max`, with
+    /// [`Exploration::track_supported`] on), the operators in `lowered` got cheaper: update
+    /// h_max incrementally (costs only fall, so only what lies downstream of those operators
+    /// changes) and return the goal's new cost. An operator's supporter is looked at only when
+    /// that fact got cheaper; the first precondition of strictly greater h_max then takes
+    /// over, if any (Fast Downward's rule).
     pub fn lower(&mut self, lowered: &[u32], costs: &[u32]) -> u32 {
+        assert!(self.track, "Exploration::lower walks the supported-operator lists: call track_supported first");
         let relaxed = &self.relaxed;
         self.queue.clear();
         for &op in lowered {
@@ -295,14 +289,8 @@ impl Exploration {
             if cost > self.fact_cost[fact as usize] {
                 continue;
             }
-            self.clock = self.clock.wrapping_add(1);
-            self.stamp[fact as usize] = self.clock;
             self.scratch.clear();
-            if self.track {
-                self.scratch.extend(self.supported.of(fact));
-            } else {
-                self.scratch.extend(relaxed.pre_of(fact).iter().copied().filter(|&op| self.op_supporter[op as usize] == fact));
-            }
+            self.scratch.extend(self.supported.of(fact));
             for &op in &self.scratch {
                 let i = op as usize;
                 let mut supporter = fact;
@@ -313,10 +301,8 @@ impl Exploration {
                 }
                 if supporter != fact {
                     self.op_supporter[i] = supporter;
-                    if self.track {
-                        self.supported.unlink(op, fact);
-                        self.supported.link(op, supporter);
-                    }
+                    self.supported.unlink(op, fact);
+                    self.supported.link(op, supporter);
                 }
                 let target = self.fact_cost[supporter as usize].saturating_add(costs[i]);
                 for &added in relaxed.ops[i].add(relaxed) {

@@ -38,9 +38,10 @@ pub struct RelaxedTask {
     pub ops: Vec<RelaxedOp>,
     pub pre: Vec<u32>,
     pub add: Vec<u32>,
-    /// Operators that have `f` as a precondition: `pre_of[pre_of_start[f]..pre_of_start[f+1]]`.
-    pub pre_of_start: Vec<u32>,
-    pub pre_of: Vec<u32>,
+    /// Operators that have each fact as a precondition.
+    pub preconditions_of: FactIndex,
+    /// Operators that add each fact.
+    pub achievers: FactIndex,
     /// Operators without preconditions.
     pub no_pre: Vec<u32>,
     pub goal: u32,
@@ -68,8 +69,8 @@ impl RelaxedTask {
                 ops: Vec::new(),
                 pre: Vec::new(),
                 add: Vec::new(),
-                pre_of_start: Vec::new(),
-                pre_of: Vec::new(),
+                preconditions_of: FactIndex::default(),
+                achievers: FactIndex::default(),
                 no_pre: Vec::new(),
                 goal: 0,
                 task_facts: task.facts.len(),
@@ -105,9 +106,10 @@ impl RelaxedTask {
         builder.finish()
     }
 
+    /// Operators that have `fact` as a precondition.
     #[inline]
     pub fn pre_of(&self, fact: u32) -> &[u32] {
-        &self.pre_of[self.pre_of_start[fact as usize] as usize..self.pre_of_start[fact as usize + 1] as usize]
+        self.preconditions_of.of(fact)
     }
 
     pub fn action_of(&self, op: u32) -> Option<ActionId> {
@@ -176,29 +178,13 @@ impl Builder {
     /// a half of the operators, on EAI VirtualHome about half.
     fn prune_irrelevant(&mut self) {
         let relaxed = &mut self.relaxed;
-        let mut adders_start = vec![0u32; relaxed.num_facts + 1];
-        for op in &relaxed.ops {
-            for &f in &relaxed.add[op.add_start as usize..op.add_end as usize] {
-                adders_start[f as usize + 1] += 1;
-            }
-        }
-        for i in 1..adders_start.len() {
-            adders_start[i] += adders_start[i - 1];
-        }
-        let mut fill = adders_start.clone();
-        let mut adders = vec![0u32; relaxed.add.len()];
-        for (index, op) in relaxed.ops.iter().enumerate() {
-            for &f in &relaxed.add[op.add_start as usize..op.add_end as usize] {
-                adders[fill[f as usize] as usize] = index as u32;
-                fill[f as usize] += 1;
-            }
-        }
+        let adders = FactIndex::new(relaxed.num_facts, &relaxed.ops, |op| &relaxed.add[op.add_start as usize..op.add_end as usize]);
         let mut relevant_fact = vec![false; relaxed.num_facts];
         let mut kept = vec![false; relaxed.ops.len()];
         let mut stack = vec![relaxed.goal];
         relevant_fact[relaxed.goal as usize] = true;
         while let Some(fact) = stack.pop() {
-            for &op in &adders[adders_start[fact as usize] as usize..adders_start[fact as usize + 1] as usize] {
+            for &op in adders.of(fact) {
                 if std::mem::replace(&mut kept[op as usize], true) {
                     continue;
                 }
@@ -224,28 +210,48 @@ impl Builder {
     fn finish(mut self) -> RelaxedTask {
         self.prune_irrelevant();
         let relaxed = &mut self.relaxed;
-        let mut counts = vec![0u32; relaxed.num_facts + 1];
-        for op in &relaxed.ops {
-            for &f in &relaxed.pre[op.pre_start as usize..op.pre_end as usize] {
-                counts[f as usize + 1] += 1;
+        relaxed.no_pre =
+            (0..relaxed.ops.len() as u32).filter(|&i| relaxed.ops[i as usize].pre_start == relaxed.ops[i as usize].pre_end).collect();
+        relaxed.preconditions_of =
+            FactIndex::new(relaxed.num_facts, &relaxed.ops, |op| &relaxed.pre[op.pre_start as usize..op.pre_end as usize]);
+        relaxed.achievers = FactIndex::new(relaxed.num_facts, &relaxed.ops, |op| &relaxed.add[op.add_start as usize..op.add_end as usize]);
+        self.relaxed
+    }
+}
+
+/// For each fact, a list of operators (compressed rows: the lists of all facts in one vector).
+#[derive(Debug, Clone, Default)]
+pub struct FactIndex {
+    start: Vec<u32>,
+    ops: Vec<u32>,
+}
+
+impl FactIndex {
+    /// Lists each operator under every fact of `facts(op)`, operators in index order.
+    fn new<'a>(num_facts: usize, ops: &[RelaxedOp], facts: impl Fn(&RelaxedOp) -> &'a [u32]) -> FactIndex {
+        let mut start = vec![0u32; num_facts + 1];
+        for op in ops {
+            for &f in facts(op) {
+                start[f as usize + 1] += 1;
             }
         }
-        for i in 1..counts.len() {
-            counts[i] += counts[i - 1];
+        for i in 1..start.len() {
+            start[i] += start[i - 1];
         }
-        let mut fill = counts.clone();
-        let mut pre_of = vec![0u32; relaxed.pre.len()];
-        for (index, op) in relaxed.ops.iter().enumerate() {
-            if op.pre_start == op.pre_end {
-                relaxed.no_pre.push(index as u32);
-            }
-            for &f in &relaxed.pre[op.pre_start as usize..op.pre_end as usize] {
-                pre_of[fill[f as usize] as usize] = index as u32;
+        let mut fill = start.clone();
+        let mut listed = vec![0u32; start[num_facts] as usize];
+        for (index, op) in ops.iter().enumerate() {
+            for &f in facts(op) {
+                listed[fill[f as usize] as usize] = index as u32;
                 fill[f as usize] += 1;
             }
         }
-        relaxed.pre_of_start = counts;
-        relaxed.pre_of = pre_of;
-        self.relaxed
+        FactIndex { start, ops: listed }
+    }
+
+    /// The operators listed under `fact`.
+    #[inline]
+    pub fn of(&self, fact: u32) -> &[u32] {
+        &self.ops[self.start[fact as usize] as usize..self.start[fact as usize + 1] as usize]
     }
 }

@@ -366,7 +366,6 @@ fn arrival(a: &mut Arrival<'_, '_>, cursor: &Cursor, event: Event, depth: usize)
         return Some(if a.config.stop_at_goal { Leaf::Goal } else { Leaf::Terminal(reward) });
     }
     if !ended {
-        a.states.push(state);
         let repeated = match a.reached.as_deref_mut() {
             Some(reached) => match reached.get_mut(state) {
                 Some(fewest) if *fewest as usize <= length => true,
@@ -379,7 +378,11 @@ fn arrival(a: &mut Arrival<'_, '_>, cursor: &Cursor, event: Event, depth: usize)
                     false
                 }
             },
-            None => a.prune_cycles && a.states.last_repeats(),
+            None if a.prune_cycles => {
+                a.states.push(state);
+                a.states.last_repeats()
+            }
+            None => false,
         };
         if repeated {
             return Some(Leaf::Terminal(a.evaluator.value(state, length).unwrap_or(a.dead_value)));
@@ -423,6 +426,9 @@ pub(crate) fn run(
     let mut sequence = prompt.to_vec();
     let mut path: Vec<usize> = Vec::new();
     let mut states = PathStates { states: Vec::new(), depth: 0 };
+    // The path's states are kept only to close cycles without transposition pruning, which
+    // closes them too.
+    let path_cycles = mcts.prune_cycles && !mcts.prune_transpositions;
     let mut reached: FxHashMap<State, u32> = FxHashMap::default();
     reached.insert(start.clone(), 0);
     macro_rules! arrival_context {
@@ -477,7 +483,7 @@ pub(crate) fn run(
                 arrived = arrival(&mut arrival_context!(), &cursor, event, sequence.len() - prompt.len());
                 break;
             }
-            if event == Event::Action {
+            if event == Event::Action && path_cycles {
                 states.push(cursor.state());
             }
         }
