@@ -32,6 +32,7 @@ impl<'m> RemainingPlanCost<'m> {
         let mut config = SearchConfig::new(Algorithm::LazyGbfs);
         config.preferred_operators = true;
         config.max_expansions = Some(max_expansions);
+        config.relevant = Some(crate::search::relevant_facts(model.task()).into());
         RemainingPlanCost { model, ff: Memo::new(HFF::new(model)), config, found: FxHashMap::default() }
     }
 

@@ -2,20 +2,23 @@
 //! lazy, optionally with preferred operators), with budgets on expansions and time.
 //!
 //! Used for "remaining plan cost" from a state, and as a symbolic planner in its own right.
-//! Open lists break ties like Fast Downward's: A* orders by (f, h) then insertion order;
+//! States are registered projected onto the goal-relevant facts ([`relevant_facts`]), as
+//! Fast Downward's translator drops irrelevant variables: the plans are the same, the space
+//! can be much smaller. Open lists break ties like Fast Downward's: A* orders by (f, h) then insertion order;
 //! GBFS by h then insertion order. Dead ends (h = ∞) are never inserted.
 
 mod registry;
 
 use std::cmp::Reverse;
 use std::collections::BinaryHeap;
+use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 use grounding::ActionId;
 use transition_model::{State, TransitionModel};
 
 use crate::Heuristic;
-pub use registry::{StateId, StateRegistry};
+pub use registry::{StateId, StateRegistry, relevant_facts};
 
 /// Which search.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -38,11 +41,14 @@ pub struct SearchConfig {
     pub preferred_operators: bool,
     pub max_expansions: Option<u64>,
     pub time_limit: Option<Duration>,
+    /// The goal-relevant facts states are projected onto ([`relevant_facts`]); computed by
+    /// each search when `None`. Set it to share one analysis across many searches.
+    pub relevant: Option<Arc<[u64]>>,
 }
 
 impl SearchConfig {
     pub fn new(algorithm: Algorithm) -> SearchConfig {
-        SearchConfig { algorithm, preferred_operators: false, max_expansions: None, time_limit: None }
+        SearchConfig { algorithm, preferred_operators: false, max_expansions: None, time_limit: None, relevant: None }
     }
 }
 
@@ -84,8 +90,9 @@ struct Space {
 }
 
 impl Space {
-    fn new(facts: usize) -> Space {
-        Space { registry: StateRegistry::new(facts), nodes: Vec::new() }
+    fn new(task: &grounding::Task, config: &SearchConfig) -> Space {
+        let mask = config.relevant.as_deref().map_or_else(|| relevant_facts(task), <[u64]>::to_vec);
+        Space { registry: StateRegistry::projected(mask), nodes: Vec::new() }
     }
 
     fn insert(&mut self, state: &State) -> (StateId, bool) {
@@ -146,7 +153,7 @@ fn finish(
 
 fn astar(model: &TransitionModel, heuristic: &mut dyn Heuristic, budget: &Budget, initial: State) -> SearchResult {
     let task = model.task();
-    let mut space = Space::new(task.facts.len());
+    let mut space = Space::new(task, &budget.config);
     let (mut expanded, mut evaluated, mut generated) = (0u64, 0u64, 0u64);
     let mut open: BinaryHeap<Reverse<(u64, u32, u64, StateId)>> = BinaryHeap::new();
     let mut sequence = 0u64;
@@ -257,7 +264,7 @@ impl<T: Ord> Alternation<T> {
 
 fn eager_greedy(model: &TransitionModel, heuristic: &mut dyn Heuristic, budget: &Budget, initial: State) -> SearchResult {
     let task = model.task();
-    let mut space = Space::new(task.facts.len());
+    let mut space = Space::new(task, &budget.config);
     let (mut expanded, mut evaluated, mut generated) = (0u64, 0u64, 0u64);
     let mut open: Alternation<(u32, u64, StateId)> = Alternation::new(budget.config.preferred_operators);
     let mut sequence = 0u64;
@@ -320,7 +327,7 @@ fn eager_greedy(model: &TransitionModel, heuristic: &mut dyn Heuristic, budget: 
 
 fn lazy_greedy(model: &TransitionModel, heuristic: &mut dyn Heuristic, budget: &Budget, initial: State) -> SearchResult {
     let task = model.task();
-    let mut space = Space::new(task.facts.len());
+    let mut space = Space::new(task, &budget.config);
     let (mut expanded, mut evaluated, mut generated) = (0u64, 0u64, 0u64);
     // Entries: (parent's h, insertion order, parent, action).
     let mut open: Alternation<(u32, u64, StateId, u32)> = Alternation::new(budget.config.preferred_operators);
