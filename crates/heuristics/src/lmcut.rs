@@ -13,9 +13,9 @@
 //!   detection);
 //! - an operator with an effect in the goal zone ends the forward exploration there.
 //!
-//! The forward exploration walks each fact's supported operators (intrusive lists kept by
-//! the exploration, `Exploration::supported`) rather than every operator the fact is a
-//! precondition of.
+//! The forward exploration walks each fact's supported operators (its one-precondition
+//! operators, then the intrusive lists the exploration keeps for the others,
+//! `Exploration::supported`) rather than every operator the fact is a precondition of.
 //!
 //! On the IPC fixtures the per-domain means are within 4.1% of Fast Downward's 26.6 (0.969
 //! on elevators, 1.041 on driverlog, within 0.6% elsewhere; `tests/fast_downward.rs`).
@@ -33,8 +33,10 @@ use crate::{Heuristic, INFINITE};
 pub struct LmCut {
     exploration: Exploration,
     costs: Vec<u32>,
-    goal_zone: Vec<bool>,
-    reached: Vec<bool>,
+    /// Per fact, this round: [`IN_GOAL_ZONE`], [`REACHED`] (by the forward exploration,
+    /// before the goal zone) or 0. One byte array rather than two flag arrays: the forward
+    /// exploration reads both flags of every effect it meets, and this halves its cache misses.
+    status: Vec<u8>,
     queue: VecDeque<u32>,
     cut: Vec<u32>,
     /// Update h_max incrementally between rounds (the default) instead of recomputing it.
@@ -42,6 +44,8 @@ pub struct LmCut {
 }
 
 const NONE: u32 = u32::MAX;
+const IN_GOAL_ZONE: u8 = 1;
+const REACHED: u8 = 2;
 
 impl LmCut {
     /// LM-cut as Fast Downward computes it (see the module docs).
@@ -52,8 +56,7 @@ impl LmCut {
         let facts = relaxed.num_facts;
         LmCut {
             costs: relaxed.ops.iter().map(|o| o.cost).collect(),
-            goal_zone: vec![false; facts],
-            reached: vec![false; facts],
+            status: vec![0; facts],
             queue: VecDeque::new(),
             cut: Vec::new(),
             incremental: true,
@@ -89,7 +92,7 @@ impl LmCut {
                 exploration.set_supporter(op, pre);
                 return pre;
             }
-            if in_zone.is_none() && self.goal_zone[pre as usize] {
+            if in_zone.is_none() && self.status[pre as usize] == IN_GOAL_ZONE {
                 in_zone = Some(pre);
             }
         }
@@ -121,9 +124,9 @@ impl Heuristic for LmCut {
             // A zero-cost operator's supporter is re-chosen among its preconditions of equal
             // h_max (Fast Downward's border and goal-zone detection): first one that no
             // zero-cost operator achieves, else one already in the goal zone.
-            self.goal_zone.fill(false);
+            self.status.fill(0);
             let goal = self.exploration.relaxed.goal;
-            self.goal_zone[goal as usize] = true;
+            self.status[goal as usize] = IN_GOAL_ZONE;
             self.queue.clear();
             self.queue.push_back(goal);
             while let Some(fact) = self.queue.pop_front() {
@@ -133,8 +136,8 @@ impl Heuristic for LmCut {
                         continue;
                     }
                     let supporter = self.break_ties(op);
-                    if !self.goal_zone[supporter as usize] {
-                        self.goal_zone[supporter as usize] = true;
+                    if self.status[supporter as usize] != IN_GOAL_ZONE {
+                        self.status[supporter as usize] = IN_GOAL_ZONE;
                         self.queue.push_back(supporter);
                     }
                 }
@@ -145,36 +148,39 @@ impl Heuristic for LmCut {
             // among ties, the one reached last (the bucket queue is last-in-first-out).
             let supported = &self.exploration.supported;
             // Forward from the state along supporter edges until the goal zone: the cut.
-            self.reached.fill(false);
             self.cut.clear();
             self.queue.clear();
             for fact in state.facts() {
-                self.reached[fact.index()] = true;
+                // A state fact is never in the goal zone: the goal would cost 0.
+                self.status[fact.index()] = REACHED;
                 self.queue.push_back(fact.0);
             }
             // An operator with an effect in the goal zone is in the cut, and its other
             // effects are not explored further (as in Fast Downward): the cut stays a
             // landmark, since reaching those effects needs the operator itself, and smaller
             // cuts leave more landmarks for later rounds.
-            let triggered = |op: u32, reached: &mut Vec<bool>, queue: &mut VecDeque<u32>, cut: &mut Vec<u32>| {
+            let triggered = |op: u32, status: &mut Vec<u8>, queue: &mut VecDeque<u32>, cut: &mut Vec<u32>| {
                 let adds = relaxed.ops[op as usize].add(relaxed);
-                if adds.iter().any(|&added| self.goal_zone[added as usize]) {
+                if adds.iter().any(|&added| status[added as usize] == IN_GOAL_ZONE) {
                     cut.push(op);
                     return;
                 }
                 for &added in adds {
-                    if !reached[added as usize] {
-                        reached[added as usize] = true;
+                    if status[added as usize] == 0 {
+                        status[added as usize] = REACHED;
                         queue.push_back(added);
                     }
                 }
             };
             for &op in &relaxed.no_pre {
-                triggered(op, &mut self.reached, &mut self.queue, &mut self.cut);
+                triggered(op, &mut self.status, &mut self.queue, &mut self.cut);
             }
             while let Some(fact) = self.queue.pop_front() {
+                for &op in relaxed.sole_pre_of.of(fact) {
+                    triggered(op, &mut self.status, &mut self.queue, &mut self.cut);
+                }
                 for op in supported.of(fact) {
-                    triggered(op, &mut self.reached, &mut self.queue, &mut self.cut);
+                    triggered(op, &mut self.status, &mut self.queue, &mut self.cut);
                 }
             }
             // Each fact is reached once and each operator triggered by its supporter only,

@@ -171,7 +171,7 @@ impl Exploration {
                 self.unsatisfied[i] -= 1;
                 if self.unsatisfied[i] == 0 {
                     self.op_supporter[i] = fact;
-                    if self.track {
+                    if self.track && self.pre_count[i] > 1 {
                         self.supported.link(op, fact);
                     }
                     // Facts leave the queue in cost order, so for h_max the operator costs
@@ -194,9 +194,12 @@ impl Exploration {
     }
 }
 
-/// The operators each fact supports, as intrusive doubly linked lists over operator ids:
-/// LM-cut walks a fact's supported operators instead of every operator it is a precondition
-/// of, and a supporter change costs O(1).
+/// The operators of two or more preconditions each fact supports, as intrusive doubly
+/// linked lists over operator ids: LM-cut walks a fact's supported operators instead of
+/// every operator it is a precondition of, and a supporter change costs O(1). Operators of
+/// one precondition are not listed (their supporter never changes): walk
+/// [`RelaxedTask::sole_pre_of`] beside these lists. That keeps list upkeep off the common
+/// case and walks those operators from a contiguous array instead of by pointer chasing.
 #[derive(Debug, Clone)]
 pub struct Supported {
     head: Vec<u32>,
@@ -229,7 +232,7 @@ impl Supported {
         }
     }
 
-    /// The operators `fact` supports.
+    /// The operators of two or more preconditions that `fact` supports.
     #[inline]
     pub fn of(&self, fact: u32) -> impl Iterator<Item = u32> + '_ {
         let mut op = self.head[fact as usize];
@@ -255,7 +258,7 @@ impl Exploration {
         if old == fact {
             return;
         }
-        if self.track {
+        if self.track && self.pre_count[op as usize] > 1 {
             if old != u32::MAX {
                 self.supported.unlink(op, old);
             }
@@ -288,6 +291,15 @@ impl Exploration {
         while let Some((cost, fact)) = self.queue.pop() {
             if cost > self.fact_cost[fact as usize] {
                 continue;
+            }
+            for &op in relaxed.sole_pre_of.of(fact) {
+                let target = cost.saturating_add(costs[op as usize]);
+                for &added in relaxed.ops[op as usize].add(relaxed) {
+                    if target < self.fact_cost[added as usize] {
+                        self.fact_cost[added as usize] = target;
+                        self.queue.push(target, added);
+                    }
+                }
             }
             self.scratch.clear();
             self.scratch.extend(self.supported.of(fact));

@@ -42,6 +42,9 @@ pub struct RelaxedTask {
     pub preconditions_of: FactIndex,
     /// Operators that add each fact.
     pub achievers: FactIndex,
+    /// Operators whose only precondition is each fact: their h_max supporter can only be it,
+    /// so the explorations keep no supporter lists for them.
+    pub sole_pre_of: FactIndex,
     /// Operators without preconditions.
     pub no_pre: Vec<u32>,
     pub goal: u32,
@@ -71,6 +74,7 @@ impl RelaxedTask {
                 add: Vec::new(),
                 preconditions_of: FactIndex::default(),
                 achievers: FactIndex::default(),
+                sole_pre_of: FactIndex::default(),
                 no_pre: Vec::new(),
                 goal: 0,
                 task_facts: task.facts.len(),
@@ -215,6 +219,10 @@ impl Builder {
         relaxed.preconditions_of =
             FactIndex::new(relaxed.num_facts, &relaxed.ops, |op| &relaxed.pre[op.pre_start as usize..op.pre_end as usize]);
         relaxed.achievers = FactIndex::new(relaxed.num_facts, &relaxed.ops, |op| &relaxed.add[op.add_start as usize..op.add_end as usize]);
+        relaxed.sole_pre_of = FactIndex::new(relaxed.num_facts, &relaxed.ops, |op| {
+            let pre = &relaxed.pre[op.pre_start as usize..op.pre_end as usize];
+            if pre.len() == 1 { pre } else { &[] }
+        });
         self.relaxed
     }
 }
