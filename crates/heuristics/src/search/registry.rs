@@ -43,9 +43,8 @@ pub fn relevant_facts(task: &Task) -> Vec<u64> {
     while changed {
         changed = false;
         for action in &task.actions {
-            let touches = |adds: &[grounding::FactId], dels: &[grounding::FactId], mask: &[u64]| {
-                adds.iter().chain(dels).any(|f| is_set(mask, f.0))
-            };
+            let touches =
+                |adds: &[grounding::FactId], dels: &[grounding::FactId], mask: &[u64]| adds.iter().chain(dels).any(|f| is_set(mask, f.0));
             let mut any = touches(&action.add, &action.del, &mask);
             for effect in &action.conditional {
                 if touches(&effect.add, &effect.del, &mask) {
