@@ -14,13 +14,14 @@ fn model(files: &benchmark_data::TaskFiles) -> TransitionModel {
     TransitionModel::new(grounding::ground(&domain, &problem).expect("grounds"))
 }
 
-/// (domain, instance file) → (expanded, plan cost) of Fast Downward's solved A*/LM-cut runs.
-fn astar_reference() -> Vec<(String, String, u64, u64)> {
+/// (domain, instance file, expanded, plan cost) of Fast Downward's solved runs of one
+/// configuration of `fixtures/ipc/fd-reference.tsv`.
+fn fd_reference(config: &str) -> Vec<(String, String, u64, u64)> {
     let text = std::fs::read_to_string(benchmark_data::fixtures_dir().join("ipc/fd-reference.tsv")).expect("tsv");
     text.lines()
         .filter(|l| !l.starts_with('#'))
         .map(|l| l.split('\t').collect::<Vec<_>>())
-        .filter(|f| f.len() >= 8 && f[2] == "fd-astar-lmcut" && f[3] == "ok")
+        .filter(|f| f.len() >= 8 && f[2] == config && f[3] == "ok")
         .map(|f| (f[0].to_string(), f[1].to_string(), f[6].parse().expect("expanded"), f[7].parse().expect("cost")))
         .collect()
 }
@@ -29,7 +30,7 @@ fn astar_reference() -> Vec<(String, String, u64, u64)> {
 fn astar_lmcut_matches_fast_downward_costs_and_expansions() {
     let tasks = load(Benchmark::Ipc).expect("fixtures");
     let mut compared = 0;
-    for (domain, instance, fd_expanded, fd_cost) in astar_reference() {
+    for (domain, instance, fd_expanded, fd_cost) in fd_reference("fd-astar-lmcut") {
         // Keep the test quick: the larger searches are measured by `cargo xtask bench plan`.
         if fd_expanded > 2000 {
             continue;
@@ -66,17 +67,6 @@ fn greedy_searches_return_valid_plans() {
     }
 }
 
-/// (domain, instance file, expanded) of Fast Downward's solved runs of one configuration.
-fn fd_reference(config: &str) -> Vec<(String, String, u64)> {
-    let text = std::fs::read_to_string(benchmark_data::fixtures_dir().join("ipc/fd-reference.tsv")).expect("tsv");
-    text.lines()
-        .filter(|l| !l.starts_with('#'))
-        .map(|l| l.split('\t').collect::<Vec<_>>())
-        .filter(|f| f.len() >= 8 && f[2] == config && f[3] == "ok")
-        .map(|f| (f[0].to_string(), f[1].to_string(), f[6].parse().expect("expanded")))
-        .collect()
-}
-
 /// Lazy GBFS with h_FF against Fast Downward's `lazy_greedy([ff()])` on the instances it
 /// solves in at most 3,000 expansions: every one is solved within 20x Fast Downward's
 /// expansions (+1,000), and on visitall, where both order operators by name and break ties
@@ -87,7 +77,7 @@ fn fd_reference(config: &str) -> Vec<(String, String, u64)> {
 fn lazy_greedy_ff_beside_fast_downward() {
     let tasks = load(Benchmark::Ipc).expect("fixtures");
     let mut visitall = 0;
-    for (domain, instance, fd_expanded) in fd_reference("fd-lazy-ff").into_iter().filter(|r| r.2 <= 3000) {
+    for (domain, instance, fd_expanded, _) in fd_reference("fd-lazy-ff").into_iter().filter(|r| r.2 <= 3000) {
         let id = format!("{domain}/{}", instance.trim_end_matches(".pddl"));
         let files = tasks.iter().find(|t| t.id == id).expect("instance");
         let model = model(files);

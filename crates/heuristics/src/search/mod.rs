@@ -4,8 +4,10 @@
 //! Used for "remaining plan cost" from a state, and as a symbolic planner in its own right.
 //! States are registered projected onto the goal-relevant facts ([`relevant_facts`]), as
 //! Fast Downward's translator drops irrelevant variables: the plans are the same, the space
-//! can be much smaller. Open lists break ties like Fast Downward's: A* orders by (f, h) then insertion order;
-//! GBFS by h then insertion order. Dead ends (h = ∞) are never inserted.
+//! can be much smaller. Heuristics see projected states too, with unchanged values: the delete
+//! relaxation keeps only goal-relevant operators, whose preconditions are all relevant facts.
+//! Open lists break ties like Fast Downward's: A* orders by (f, h) then insertion order; GBFS
+//! by h then insertion order. Dead ends (h = ∞) are never inserted.
 
 mod registry;
 

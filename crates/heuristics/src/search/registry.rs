@@ -22,7 +22,11 @@ use transition_model::State;
 /// irrelevant facts alone, so dropping it from states loses no plan and merges states
 /// that are the same for the goal. (Fast Downward's translator does the same over its
 /// causal graph; this is the fact-level version of that analysis, written by hand since
-/// no crate does it on our task type.)
+/// no crate does it on our task type.) `mcts::prompt::relevant_facts` is a different
+/// analysis for a different purpose: it regresses literals (an action enters only through
+/// the literal it achieves), which is right for choosing prompt lines but would leave out
+/// the preconditions of an action that only deletes relevant facts, and a projection must
+/// keep those for applicability to stay exact.
 pub fn relevant_facts(task: &Task) -> Vec<u64> {
     let mut mask = vec![0u64; task.facts.len().div_ceil(64)];
     let is_set = |mask: &[u64], f: u32| mask[f as usize / 64] >> (f % 64) & 1 == 1;
