@@ -15,6 +15,7 @@ use lm::{LanguageModel, OpenAiConfig, OpenAiModel, Tokenizer, UniformModel};
 use mcts::prompt::{PromptOptions, Relevance, planning_prompt};
 use mcts::{Backup, DecodeConfig, Decoder, MctsConfig, Mode, Normalization, Outcome, SamplingConfig, Strategy, Tokenization, ValueConfig};
 use serde::{Deserialize, Serialize};
+use token_constraint::EndPolicy;
 use transition_model::{Spelling, TransitionModel};
 
 use crate::input::{self, InputError};
@@ -102,6 +103,10 @@ pub struct DecodeArgs {
     /// Prompt: show every true fact instead of those relevant to the goal.
     #[arg(long)]
     pub all_facts: bool,
+    /// Constrained modes: where the plan may end: `anywhere` (at every action boundary; the
+    /// plan is judged afterwards) or `at-goal` (only where the goal holds or no action applies).
+    #[arg(long, default_value = "anywhere", value_parser = ["anywhere", "at-goal"])]
+    pub end: String,
 }
 
 impl DecodeArgs {
@@ -138,6 +143,10 @@ impl DecodeArgs {
         config.budget.max_actions = self.max_actions;
         config.tokenization = if self.tokenization == "any" { Tokenization::Any } else { Tokenization::Canonical };
         Ok(config)
+    }
+
+    pub fn end_policy(&self) -> EndPolicy {
+        if self.end == "at-goal" { EndPolicy::AtGoal } else { EndPolicy::Anywhere }
     }
 
     pub fn value(&self) -> ValueConfig {
@@ -266,7 +275,7 @@ pub fn solve(
     let tokens = lm.tokenizer().encode_prompt(&text).context("tokenizing the prompt")?;
     let config = args.config(time_limit)?;
     let outcome = {
-        let mut decoder = Decoder::new(&model, &spelling, Arc::clone(vocab), args.value());
+        let mut decoder = Decoder::with_end_policy(&model, &spelling, Arc::clone(vocab), args.value(), args.end_policy());
         decoder.decode(lm, &tokens, &initial, &config).with_context(|| format!("decoding {}", files.id))?
     };
     let cost = transition_model::plan_cost(model.task(), &outcome.plan);
@@ -422,7 +431,9 @@ pub fn run(args: Phase2Args) -> anyhow::Result<ExitCode> {
         None => args.benchmark.clone(),
     };
     std::fs::create_dir_all(&args.out).with_context(|| format!("cannot create {}", args.out.display()))?;
-    let stem = file_safe(&format!("{set}-{}-{lm_name}", args.decode.mode));
+    // A non-default end policy is part of the name, so that its records do not resume another's.
+    let end = if args.decode.end == "anywhere" { String::new() } else { format!("-end-{}", args.decode.end) };
+    let stem = file_safe(&format!("{set}-{}{end}-{lm_name}", args.decode.mode));
     let path = args.out.join(format!("{stem}.jsonl"));
     if args.fresh && path.exists() {
         std::fs::remove_file(&path).with_context(|| format!("cannot remove {}", path.display()))?;
@@ -458,7 +469,7 @@ pub fn run(args: Phase2Args) -> anyhow::Result<ExitCode> {
 
     let keep: BTreeSet<&str> = tasks.iter().map(|t| t.id.as_str()).collect();
     records.retain(|r| keep.contains(r.task.as_str()));
-    let summary = summarize(&records, &set, &args.decode.mode, &lm_name, &path);
+    let summary = summarize(&records, &set, &args.decode.mode, &args.decode.end, &lm_name, &path);
     std::fs::write(args.out.join(format!("{stem}.summary.json")), serde_json::to_string_pretty(&summary)? + "\n")?;
     if args.json {
         println!("{summary}");
@@ -481,7 +492,7 @@ pub fn run(args: Phase2Args) -> anyhow::Result<ExitCode> {
     Ok(ExitCode::SUCCESS)
 }
 
-fn summarize(records: &[Record], set: &str, mode: &str, lm: &str, path: &Path) -> serde_json::Value {
+fn summarize(records: &[Record], set: &str, mode: &str, end: &str, lm: &str, path: &Path) -> serde_json::Value {
     let n = records.len().max(1) as f64;
     let mean = |f: &dyn Fn(&Record) -> f64| records.iter().map(f).sum::<f64>() / n;
     let solved = records.iter().filter(|r| r.solved).count();
@@ -495,7 +506,7 @@ fn summarize(records: &[Record], set: &str, mode: &str, lm: &str, path: &Path) -
     }
     let solved_lengths: Vec<f64> = records.iter().filter(|r| r.solved).map(|r| r.length as f64).collect();
     serde_json::json!({
-        "set": set, "mode": mode, "lm": lm, "tasks": records.len(),
+        "set": set, "mode": mode, "end": end, "lm": lm, "tasks": records.len(),
         "solved": solved, "success_rate": solved as f64 / n,
         "solvable": solvable, "success_rate_solvable": solved as f64 / solvable.max(1) as f64, "valid": valid, "valid_rate": valid as f64 / n,
         "mean_generated_tokens": mean(&|r| r.generated_tokens as f64),

@@ -224,6 +224,35 @@ fn phase2_writes_records_resumes_and_plan_mcts_prints_json() {
     assert!(again.status.success());
     assert_eq!(std::fs::read_to_string(out.join("virtualhome-eai-50-constrained-mcts-uniform.jsonl")).expect("records").lines().count(), 2);
 
+    // A non-default end policy is recorded and names its own records (no resuming another's).
+    let greedy = xtask(&[
+        "phase2",
+        "--benchmark",
+        "virtualhome-eai",
+        "--subset",
+        "virtualhome-eai-50",
+        "--limit",
+        "2",
+        "--lm",
+        "uniform",
+        "--mode",
+        "constrained-greedy",
+        "--end",
+        "at-goal",
+        "--out",
+        &out_text,
+        "--json",
+    ]);
+    assert!(greedy.status.success(), "{}", String::from_utf8_lossy(&greedy.stderr));
+    let summary: serde_json::Value = serde_json::from_str(stdout(&greedy).trim()).expect("one JSON object");
+    assert_eq!((summary["end"].as_str(), summary["tasks"].as_u64()), (Some("at-goal"), Some(2)));
+    let records = std::fs::read_to_string(out.join("virtualhome-eai-50-constrained-greedy-end-at-goal-uniform.jsonl")).expect("records");
+    for line in records.lines() {
+        let record: serde_json::Value = serde_json::from_str(line).expect("record");
+        // The plan may end only at the goal: a plan that stopped is either solved or cut by a limit.
+        assert!(record["solved"] == true || record["stop"] != "end-of-plan", "{record}");
+    }
+
     // A subset given as a file is named by its stem; a task whose goal the delete relaxation
     // cannot reach is recorded as unsolvable and left out of the solvable success rate.
     let subset = out.join("unsolvable.txt");
