@@ -78,11 +78,18 @@ impl Q4_1Matrix {
                 let mut row = first;
                 #[cfg(all(target_arch = "x86_64", target_feature = "avx2"))]
                 while row + 8 <= end {
-                    for r in 0..m {
-                        let values = avx2::eight_row_dots(self, row, &activations, r);
-                        for (k, v) in values.into_iter().enumerate() {
-                            out[(row - first + k) * m + r] = v;
+                    // Up to ACTIVATION_ROWS activation rows per pass: the eight weight rows'
+                    // nibbles are unpacked once per block for all of them.
+                    let mut r = 0;
+                    while r < m {
+                        let count = (m - r).min(avx2::ACTIVATION_ROWS);
+                        let values = avx2::eight_row_dots(self, row, &activations, r, count);
+                        for (i, row_values) in values.iter().take(count).enumerate() {
+                            for (k, &v) in row_values.iter().enumerate() {
+                                out[(row - first + k) * m + r + i] = v;
+                            }
                         }
+                        r += count;
                     }
                     row += 8;
                 }
@@ -154,7 +161,8 @@ impl Q4_1Matrix {
     }
 }
 
-/// The AVX2 kernel: eight weight rows against one activation row, one f32 lane per row.
+/// The AVX2 kernel: eight weight rows against up to four activation rows, one f32 lane per
+/// weight row.
 #[cfg(all(target_arch = "x86_64", target_feature = "avx2"))]
 #[allow(unsafe_code)]
 mod avx2 {
@@ -167,69 +175,80 @@ mod avx2 {
         [i64::from_le_bytes(lo.try_into().unwrap_or_default()), i64::from_le_bytes(hi.try_into().unwrap_or_default())]
     }
 
-    /// `row_dot` for the group of rows `row..row + 8` (`row` a multiple of 8).
-    pub(super) fn eight_row_dots(matrix: &Q4_1Matrix, row: usize, x: &Q8_1Rows, r: usize) -> [f32; 8] {
+    /// Activation rows one call handles.
+    pub(super) const ACTIVATION_ROWS: usize = 4;
+
+    /// `row_dot` for the group of rows `row..row + 8` (`row` a multiple of 8) against the
+    /// activation rows `r..r + count` (`count` ≤ [`ACTIVATION_ROWS`]); entry `i` of the result
+    /// is for activation row `r + i` (entries past `count` are zero).
+    pub(super) fn eight_row_dots(matrix: &Q4_1Matrix, row: usize, x: &Q8_1Rows, r: usize, count: usize) -> [[f32; 8]; ACTIVATION_ROWS] {
         debug_assert_eq!(row % super::GROUP, 0);
+        debug_assert!(count >= 1 && count <= ACTIVATION_ROWS);
         // SAFETY: this module is compiled only when the whole build enables AVX2
         // (`cfg(target_feature = "avx2")`, e.g. `-C target-cpu=native` on this machine), so
         // the CPU running it has the instructions; the intrinsics touch no memory through
         // pointers (values go in and out by `set`/`extract`), so there is nothing else to uphold.
-        unsafe { eight_row_dots_avx2(matrix, row, x, r) }
+        unsafe { eight_row_dots_avx2(matrix, row, x, r, count.min(ACTIVATION_ROWS)) }
     }
 
     #[target_feature(enable = "avx2")]
-    fn eight_row_dots_avx2(matrix: &Q4_1Matrix, row: usize, x: &Q8_1Rows, r: usize) -> [f32; 8] {
+    fn eight_row_dots_avx2(matrix: &Q4_1Matrix, row: usize, x: &Q8_1Rows, r: usize, count: usize) -> [[f32; 8]; ACTIVATION_ROWS] {
         let blocks = matrix.blocks;
-        let a_base = r * blocks;
         let low_nibbles = _mm_set1_epi8(0x0F);
         let ones = _mm256_set1_epi16(1);
-        let mut acc = _mm256_setzero_ps();
+        let mut acc = [_mm256_setzero_ps(); ACTIVATION_ROWS];
         for b in 0..blocks {
-            let aq = &x.quants[a_base + b];
-            let mut words = [0i64; 4];
-            for (w, chunk) in words.iter_mut().zip(aq.chunks_exact(8)) {
-                let mut bytes = [0u8; 8];
-                for (dst, &src) in bytes.iter_mut().zip(chunk) {
-                    *dst = src as u8;
-                }
-                *w = i64::from_le_bytes(bytes);
-            }
-            let a = _mm256_set_epi64x(words[3], words[2], words[1], words[0]);
             let base = matrix.index(row, b);
             let nibbles: &[[u8; 16]; 8] = matrix.nibbles[base..base + 8].try_into().unwrap_or(&[[0; 16]; 8]);
             let scales: &[f32; 8] = matrix.scales[base..base + 8].try_into().unwrap_or(&[0.0; 8]);
             let minimums: &[f32; 8] = matrix.minimums[base..base + 8].try_into().unwrap_or(&[0.0; 8]);
-            let mut sums = [_mm256_setzero_si256(); 8];
-            for (sum, block) in sums.iter_mut().zip(nibbles) {
+            // The eight rows' 32 weights of this block, unpacked once for every activation row.
+            let mut weights = [_mm256_setzero_si256(); 8];
+            for (w, block) in weights.iter_mut().zip(nibbles) {
                 let [lo, hi] = m128(block);
                 let q = _mm_set_epi64x(hi, lo);
                 let low = _mm_and_si128(q, low_nibbles);
                 let high = _mm_and_si128(_mm_srli_epi16::<4>(q), low_nibbles);
                 // Lanes 0..16 hold the low nibbles (elements 0..16), 16..32 the high ones.
-                let weights = _mm256_set_m128i(high, low);
-                *sum = _mm256_madd_epi16(_mm256_maddubs_epi16(weights, a), ones);
+                *w = _mm256_set_m128i(high, low);
             }
-            // Eight vectors of eight partial sums → one vector of the eight block sums.
-            let t0 = _mm256_hadd_epi32(sums[0], sums[1]);
-            let t1 = _mm256_hadd_epi32(sums[2], sums[3]);
-            let t2 = _mm256_hadd_epi32(sums[4], sums[5]);
-            let t3 = _mm256_hadd_epi32(sums[6], sums[7]);
-            let u0 = _mm256_hadd_epi32(t0, t1);
-            let u1 = _mm256_hadd_epi32(t2, t3);
-            let integer = _mm256_add_epi32(_mm256_permute2x128_si256::<0x20>(u0, u1), _mm256_permute2x128_si256::<0x31>(u0, u1));
             let scales = _mm256_set_ps(scales[7], scales[6], scales[5], scales[4], scales[3], scales[2], scales[1], scales[0]);
             let minimums =
                 _mm256_set_ps(minimums[7], minimums[6], minimums[5], minimums[4], minimums[3], minimums[2], minimums[1], minimums[0]);
-            // candle's order: ((sumi · d_w) · d_x) + (m_w · s_x), then added to the running sum;
-            // separate multiplies and adds (no fused multiply-add), as the scalar code compiles.
-            let term = _mm256_add_ps(
-                _mm256_mul_ps(_mm256_mul_ps(_mm256_cvtepi32_ps(integer), scales), _mm256_set1_ps(x.scales[a_base + b])),
-                _mm256_mul_ps(minimums, _mm256_set1_ps(x.sums[a_base + b])),
-            );
-            acc = _mm256_add_ps(acc, term);
+            for (i, acc) in acc.iter_mut().enumerate().take(count) {
+                let a_at = (r + i) * blocks + b;
+                let aq = &x.quants[a_at];
+                let mut words = [0i64; 4];
+                for (w, chunk) in words.iter_mut().zip(aq.chunks_exact(8)) {
+                    let mut bytes = [0u8; 8];
+                    for (dst, &src) in bytes.iter_mut().zip(chunk) {
+                        *dst = src as u8;
+                    }
+                    *w = i64::from_le_bytes(bytes);
+                }
+                let a = _mm256_set_epi64x(words[3], words[2], words[1], words[0]);
+                let mut sums = [_mm256_setzero_si256(); 8];
+                for (sum, &w) in sums.iter_mut().zip(&weights) {
+                    *sum = _mm256_madd_epi16(_mm256_maddubs_epi16(w, a), ones);
+                }
+                // Eight vectors of eight partial sums → one vector of the eight block sums.
+                let t0 = _mm256_hadd_epi32(sums[0], sums[1]);
+                let t1 = _mm256_hadd_epi32(sums[2], sums[3]);
+                let t2 = _mm256_hadd_epi32(sums[4], sums[5]);
+                let t3 = _mm256_hadd_epi32(sums[6], sums[7]);
+                let u0 = _mm256_hadd_epi32(t0, t1);
+                let u1 = _mm256_hadd_epi32(t2, t3);
+                let integer = _mm256_add_epi32(_mm256_permute2x128_si256::<0x20>(u0, u1), _mm256_permute2x128_si256::<0x31>(u0, u1));
+                // candle's order: ((sumi · d_w) · d_x) + (m_w · s_x), then added to the running
+                // sum; separate multiplies and adds (no fused multiply-add), as the scalar code
+                // compiles.
+                let term = _mm256_add_ps(
+                    _mm256_mul_ps(_mm256_mul_ps(_mm256_cvtepi32_ps(integer), scales), _mm256_set1_ps(x.scales[a_at])),
+                    _mm256_mul_ps(minimums, _mm256_set1_ps(x.sums[a_at])),
+                );
+                *acc = _mm256_add_ps(*acc, term);
+            }
         }
-        let low = _mm256_castps256_ps128(acc);
-        let high = _mm256_extractf128_ps::<1>(acc);
         let lane = |v: __m128, i: i32| -> f32 {
             f32::from_bits(match i {
                 0 => _mm_extract_ps::<0>(v),
@@ -238,7 +257,13 @@ mod avx2 {
                 _ => _mm_extract_ps::<3>(v),
             } as u32)
         };
-        [lane(low, 0), lane(low, 1), lane(low, 2), lane(low, 3), lane(high, 0), lane(high, 1), lane(high, 2), lane(high, 3)]
+        let mut out = [[0f32; 8]; ACTIVATION_ROWS];
+        for (values, &acc) in out.iter_mut().zip(&acc).take(count) {
+            let low = _mm256_castps256_ps128(acc);
+            let high = _mm256_extractf128_ps::<1>(acc);
+            *values = [lane(low, 0), lane(low, 1), lane(low, 2), lane(low, 3), lane(high, 0), lane(high, 1), lane(high, 2), lane(high, 3)];
+        }
+        out
     }
 }
 
