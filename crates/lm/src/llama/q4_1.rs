@@ -183,7 +183,7 @@ mod avx2 {
     /// is for activation row `r + i` (entries past `count` are zero).
     pub(super) fn eight_row_dots(matrix: &Q4_1Matrix, row: usize, x: &Q8_1Rows, r: usize, count: usize) -> [[f32; 8]; ACTIVATION_ROWS] {
         debug_assert_eq!(row % super::GROUP, 0);
-        debug_assert!(count >= 1 && count <= ACTIVATION_ROWS);
+        debug_assert!((1..=ACTIVATION_ROWS).contains(&count));
         // SAFETY: this module is compiled only when the whole build enables AVX2
         // (`cfg(target_feature = "avx2")`, e.g. `-C target-cpu=native` on this machine), so
         // the CPU running it has the instructions; the intrinsics touch no memory through
