@@ -57,7 +57,7 @@ pub use chat::ChatTemplate;
 pub use error::{HttpError, HttpErrorKind, LmError};
 pub use gguf::{GgufFile, Metadata};
 pub use llama::{Architecture, KvCache, LlamaModel, ModelConfig, RopeConfig};
-pub use local::LocalModel;
+pub use local::{DEFAULT_BRANCH_STORE_BYTES, LocalModel};
 pub use model::{LanguageModel, Logprobs, Prior, Usage, generate_greedy};
 pub use openai::{OpenAiConfig, OpenAiModel, ServerDialect};
 pub use tokenizer::{BpeParts, COMMON_BOS_TOKENS, COMMON_STOP_TOKENS, PreTokenizer, Tokenizer};

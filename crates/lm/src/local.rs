@@ -1,6 +1,13 @@
 //! The local backend: a GGUF model run by this crate's forward pass, with a prefix cache over
 //! its KV cache. The cache holds the token sequence whose keys and values it has; a request
 //! keeps the longest common prefix, truncates the rest, and runs only the new suffix.
+//!
+//! Beside it, a *branch store* keeps the keys and values of every position computed so far,
+//! in a trie by token prefix (within a memory budget). A search that returns to a branch it
+//! left (MCTS selecting a sibling's subtree again) gets that branch's positions copied back
+//! into the cache instead of recomputed: only positions never computed before (and the last
+//! one, whose logits are needed) go through the model. Keys and values depend only on the
+//! tokens up to their position, so a copied position is the one computed then.
 
 use std::path::Path;
 use std::sync::Arc;
@@ -23,7 +30,87 @@ pub struct LocalModel {
     cached: Vec<TokenId>,
     /// The logits after `cached`, when the last forward pass ended there.
     last_logits: Option<Vec<f32>>,
+    store: BranchStore,
     usage: Usage,
+}
+
+/// Bytes of keys and values the branch store may hold by default.
+pub const DEFAULT_BRANCH_STORE_BYTES: usize = 512 << 20;
+
+const ROOT: u32 = u32::MAX;
+
+/// Keys and values of positions computed before, by token prefix: a trie from position 0 whose
+/// node `i` (the prefix ending at some token) owns row `i` of `rows`. A hash map of edges is
+/// all the trie needs (lookups only walk down), so it is written here rather than taken from
+/// a crate. When full it is emptied and refills with what the search computes next.
+#[derive(Debug, Default)]
+struct BranchStore {
+    children: rustc_hash::FxHashMap<(u32, TokenId), u32>,
+    rows: Vec<f32>,
+    row_len: usize,
+    max_nodes: usize,
+    /// Scratch: the nodes along the request's stored prefix.
+    path: Vec<u32>,
+}
+
+impl BranchStore {
+    fn new(row_len: usize, max_bytes: usize) -> BranchStore {
+        let max_nodes = max_bytes / (row_len.max(1) * std::mem::size_of::<f32>());
+        BranchStore { row_len, max_nodes, ..BranchStore::default() }
+    }
+
+    fn nodes(&self) -> usize {
+        self.rows.len() / self.row_len.max(1)
+    }
+
+    fn clear(&mut self) {
+        self.children.clear();
+        self.rows.clear();
+    }
+
+    /// Fills `path` with the nodes of the longest stored prefix of `tokens`.
+    fn walk(&mut self, tokens: &[TokenId]) {
+        self.path.clear();
+        let mut node = ROOT;
+        for &token in tokens {
+            match self.children.get(&(node, token)) {
+                Some(&child) => {
+                    self.path.push(child);
+                    node = child;
+                }
+                None => break,
+            }
+        }
+    }
+
+    fn row(&self, node: u32) -> &[f32] {
+        &self.rows[node as usize * self.row_len..(node as usize + 1) * self.row_len]
+    }
+
+    /// Stores positions `path.len()..tokens.len()` of `tokens` from `cache` (which holds at
+    /// least `tokens.len()` positions), after the stored prefix found by the last `walk`.
+    fn insert(&mut self, tokens: &[TokenId], cache: &KvCache) {
+        if self.max_nodes == 0 {
+            return;
+        }
+        let mut from = self.path.len().min(tokens.len());
+        if self.nodes() + (tokens.len() - from) > self.max_nodes {
+            self.clear();
+            self.path.clear();
+            from = 0;
+            if tokens.len() > self.max_nodes {
+                return;
+            }
+        }
+        let mut node = from.checked_sub(1).map_or(ROOT, |i| self.path[i]);
+        for (pos, &token) in tokens.iter().enumerate().skip(from) {
+            let child = self.nodes() as u32;
+            cache.copy_position(pos, &mut self.rows);
+            self.children.insert((node, token), child);
+            self.path.push(child);
+            node = child;
+        }
+    }
 }
 
 impl LocalModel {
@@ -45,7 +132,18 @@ impl LocalModel {
     /// A model over already-loaded weights, with an empty cache of its own.
     pub fn with_shared_weights(model: Arc<LlamaModel>, tokenizer: Arc<Tokenizer>) -> Self {
         let cache = model.new_cache();
-        LocalModel { model, tokenizer, cache, cached: Vec::new(), last_logits: None, usage: Usage::default() }
+        let store = BranchStore::new(cache.position_len(), DEFAULT_BRANCH_STORE_BYTES);
+        LocalModel { model, tokenizer, cache, cached: Vec::new(), last_logits: None, store, usage: Usage::default() }
+    }
+
+    /// Sets the branch store's budget in bytes (0 turns it off); empties it.
+    pub fn set_branch_store_bytes(&mut self, bytes: usize) {
+        self.store = BranchStore::new(self.cache.position_len(), bytes);
+    }
+
+    /// Bytes held by the branch store.
+    pub fn branch_store_bytes(&self) -> usize {
+        self.store.rows.len() * std::mem::size_of::<f32>()
     }
 
     pub fn weights(&self) -> &Arc<LlamaModel> {
@@ -66,11 +164,13 @@ impl LocalModel {
         self.cache.memory_bytes()
     }
 
-    /// Empties the cache (the next request recomputes from the first token).
+    /// Empties the cache and the branch store (the next request recomputes from the first
+    /// token).
     pub fn clear_cache(&mut self) {
         self.cache.clear();
         self.cached.clear();
         self.last_logits = None;
+        self.store.clear();
     }
 
     /// The raw logits of the token after `tokens`, through the prefix cache.
@@ -92,11 +192,22 @@ impl LocalModel {
             return Ok(self.last_logits.as_deref().unwrap_or_default());
         }
         // At least the last token is run, so that its logits exist.
-        let keep = common.min(tokens.len() - 1);
+        let mut keep = common.min(tokens.len() - 1);
         self.cache.truncate(keep);
         self.cached.truncate(keep);
         self.last_logits = None;
+        // Positions past the common prefix that an earlier request computed: copied back.
+        self.store.walk(tokens);
+        let restore = self.store.path.len().min(tokens.len() - 1);
+        if restore > keep {
+            for pos in keep..restore {
+                self.cache.push_position(self.store.row(self.store.path[pos]));
+            }
+            self.cached.extend_from_slice(&tokens[keep..restore]);
+            keep = restore;
+        }
         let logits = self.model.forward(&mut self.cache, &tokens[keep..])?;
+        self.store.insert(tokens, &self.cache);
         self.cached.extend_from_slice(&tokens[keep..]);
         self.usage.forward_calls += 1;
         self.usage.tokens_prefilled += (tokens.len() - keep) as u64;

@@ -107,11 +107,31 @@ fn check_branching(spec: &TinySpec) {
     );
     assert!(max_abs_diff(&b, &fresh_logprobs(&path, &branch_b)) < 1e-4, "sibling after rewind == fresh");
 
-    // Back to branch a: again only its suffix is computed, and the answer is the same.
+    // Back to branch a: its positions come back from the branch store, only the last is run
+    // again (for its logits), and the answer is the same.
     let before = model.usage();
     let a_again = dense(model.next_logprobs(&branch_a).expect("runs"));
-    assert_eq!(model.usage().since(&before).tokens_prefilled, 3);
+    assert_eq!(
+        model.usage().since(&before),
+        Usage { forward_calls: 1, tokens_prefilled: 1, tokens_reused: branch_a.len() as u64 - 1, tokens_generated: 1, cache_hits: 0 }
+    );
     assert!(max_abs_diff(&a, &a_again) < 1e-4);
+    // Without the store, the whole suffix is recomputed.
+    model.set_branch_store_bytes(0);
+    model.next_logprobs(&branch_b).expect("runs");
+    let before = model.usage();
+    let a_recomputed = dense(model.next_logprobs(&branch_a).expect("runs"));
+    assert_eq!(model.usage().since(&before).tokens_prefilled, 3);
+    assert!(max_abs_diff(&a, &a_recomputed) < 1e-4);
+    assert_eq!(model.branch_store_bytes(), 0);
+    // A budget smaller than a branch: the store empties itself, answers are unchanged.
+    let per_position = model.cache_bytes() / model.cached_tokens().len();
+    model.set_branch_store_bytes(per_position * (branch_b.len() + 1));
+    let b_again = dense(model.next_logprobs(&branch_b).expect("runs"));
+    assert_eq!(model.branch_store_bytes(), per_position * branch_b.len());
+    assert!(max_abs_diff(&a, &dense(model.next_logprobs(&branch_a).expect("runs"))) < 1e-4);
+    assert!(model.branch_store_bytes() <= per_position * (branch_b.len() + 1));
+    assert!(max_abs_diff(&b, &b_again) < 1e-4);
     // The same sequence again: no forward pass.
     let before = model.usage();
     assert_eq!(dense(model.next_logprobs(&branch_a).expect("runs")), a_again);

@@ -79,6 +79,30 @@ impl KvCache {
         self.len = len;
     }
 
+    /// Floats of one position's keys and values over all layers ([`KvCache::copy_position`]).
+    pub fn position_len(&self) -> usize {
+        self.layers.len() * 2 * self.kv_dim
+    }
+
+    /// Appends position `pos`'s keys and values, layer by layer (keys, then values), to `out`.
+    pub fn copy_position(&self, pos: usize, out: &mut Vec<f32>) {
+        let range = pos * self.kv_dim..(pos + 1) * self.kv_dim;
+        for layer in &self.layers {
+            out.extend_from_slice(&layer.keys[range.clone()]);
+            out.extend_from_slice(&layer.values[range.clone()]);
+        }
+    }
+
+    /// Appends one position from a row laid out as [`KvCache::copy_position`] writes it.
+    pub fn push_position(&mut self, row: &[f32]) {
+        debug_assert_eq!(row.len(), self.position_len());
+        for (layer, chunk) in self.layers.iter_mut().zip(row.chunks_exact(2 * self.kv_dim)) {
+            let (keys, values) = chunk.split_at(self.kv_dim);
+            layer.append(keys, values);
+        }
+        self.len += 1;
+    }
+
     /// Called by the forward pass once every layer has appended the new positions.
     pub(crate) fn set_len(&mut self, len: usize) {
         debug_assert!(self.layers.iter().all(|l| l.keys.len() == len * self.kv_dim));
