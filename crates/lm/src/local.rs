@@ -15,7 +15,7 @@ use std::sync::Arc;
 use crate::error::LmError;
 use crate::gguf::{GgufFile, Metadata};
 use crate::llama::{KvCache, LlamaModel};
-use crate::model::{LanguageModel, Logprobs, Usage};
+use crate::model::{LanguageModel, Logprobs, Prior, Usage};
 use crate::tokenizer::Tokenizer;
 use crate::vocabulary::TokenId;
 
@@ -28,8 +28,12 @@ pub struct LocalModel {
     cache: KvCache,
     /// The tokens whose keys and values are in `cache`, position by position.
     cached: Vec<TokenId>,
-    /// The logits after `cached`, when the last forward pass ended there.
+    /// The final hidden state after `cached`, when the last forward pass ended there.
+    last_hidden: Option<Vec<f32>>,
+    /// The full head's logits for `last_hidden`, once asked for.
     last_logits: Option<Vec<f32>>,
+    /// Output-head rows dequantized for [`LocalModel::logits_among`], by token.
+    rows: rustc_hash::FxHashMap<TokenId, Box<[f32]>>,
     store: BranchStore,
     usage: Usage,
 }
@@ -133,7 +137,17 @@ impl LocalModel {
     pub fn with_shared_weights(model: Arc<LlamaModel>, tokenizer: Arc<Tokenizer>) -> Self {
         let cache = model.new_cache();
         let store = BranchStore::new(cache.position_len(), DEFAULT_BRANCH_STORE_BYTES);
-        LocalModel { model, tokenizer, cache, cached: Vec::new(), last_logits: None, store, usage: Usage::default() }
+        LocalModel {
+            model,
+            tokenizer,
+            cache,
+            cached: Vec::new(),
+            last_hidden: None,
+            last_logits: None,
+            rows: rustc_hash::FxHashMap::default(),
+            store,
+            usage: Usage::default(),
+        }
     }
 
     /// Sets the branch store's budget in bytes (0 turns it off); empties it.
@@ -169,12 +183,46 @@ impl LocalModel {
     pub fn clear_cache(&mut self) {
         self.cache.clear();
         self.cached.clear();
+        self.last_hidden = None;
         self.last_logits = None;
         self.store.clear();
     }
 
     /// The raw logits of the token after `tokens`, through the prefix cache.
     pub fn next_logits(&mut self, tokens: &[TokenId]) -> Result<&[f32], LmError> {
+        self.advance(tokens)?;
+        if self.last_logits.is_none() {
+            let logits = self.model.output_logits(self.last_hidden.as_deref().unwrap_or_default())?;
+            self.last_logits = Some(logits);
+        }
+        Ok(self.last_logits.as_deref().unwrap_or_default())
+    }
+
+    /// The logits of `allowed` only, after `tokens`: each row of the output head dotted with the
+    /// final hidden state in `f32` ([`LlamaModel::output_row`]; rows dequantized once and kept).
+    /// A constrained prior needs no other logit (Eq. 6's normaliser is over the allowed tokens),
+    /// so the full head, a large share of a step for a small model, is skipped.
+    pub fn logits_among(&mut self, tokens: &[TokenId], allowed: &[TokenId]) -> Result<Vec<f32>, LmError> {
+        let size = self.tokenizer.vocabulary().len().min(self.model.vocabulary_size());
+        if let Some(&id) = allowed.iter().find(|&&id| id as usize >= size) {
+            return Err(LmError::TokenOutOfRange { id, size });
+        }
+        self.advance(tokens)?;
+        let hidden = self.last_hidden.as_deref().unwrap_or_default();
+        let mut logits = Vec::with_capacity(allowed.len());
+        for &token in allowed {
+            let row = match self.rows.entry(token) {
+                std::collections::hash_map::Entry::Occupied(row) => row.into_mut(),
+                std::collections::hash_map::Entry::Vacant(slot) => slot.insert(self.model.output_row(token)?.into_boxed_slice()),
+            };
+            logits.push(row.iter().zip(hidden).map(|(w, h)| w * h).sum());
+        }
+        Ok(logits)
+    }
+
+    /// Brings the cache to `tokens` (prefix cache, then branch store, then the model for the
+    /// rest, at least the last token) and leaves the final hidden state after them.
+    fn advance(&mut self, tokens: &[TokenId]) -> Result<(), LmError> {
         if tokens.is_empty() {
             return Err(LmError::EmptySequence);
         }
@@ -186,15 +234,16 @@ impl LocalModel {
         }
         let common = self.cached.iter().zip(tokens).take_while(|(a, b)| a == b).count();
         self.usage.tokens_generated += 1;
-        if common == tokens.len() && common == self.cached.len() && self.last_logits.is_some() {
+        if common == tokens.len() && common == self.cached.len() && self.last_hidden.is_some() {
             self.usage.cache_hits += 1;
             self.usage.tokens_reused += tokens.len() as u64;
-            return Ok(self.last_logits.as_deref().unwrap_or_default());
+            return Ok(());
         }
-        // At least the last token is run, so that its logits exist.
+        // At least the last token is run, so that its hidden state exists.
         let mut keep = common.min(tokens.len() - 1);
         self.cache.truncate(keep);
         self.cached.truncate(keep);
+        self.last_hidden = None;
         self.last_logits = None;
         // Positions past the common prefix that an earlier request computed: copied back.
         self.store.walk(tokens);
@@ -206,13 +255,14 @@ impl LocalModel {
             self.cached.extend_from_slice(&tokens[keep..restore]);
             keep = restore;
         }
-        let logits = self.model.forward(&mut self.cache, &tokens[keep..])?;
+        let hidden = self.model.forward_hidden(&mut self.cache, &tokens[keep..])?;
         self.store.insert(tokens, &self.cache);
         self.cached.extend_from_slice(&tokens[keep..]);
         self.usage.forward_calls += 1;
         self.usage.tokens_prefilled += (tokens.len() - keep) as u64;
         self.usage.tokens_reused += keep as u64;
-        Ok(self.last_logits.insert(logits))
+        self.last_hidden = Some(hidden);
+        Ok(())
     }
 }
 
@@ -226,6 +276,18 @@ impl LanguageModel for LocalModel {
         let logits = self.next_logits(tokens)?;
         // Rows past the tokenizer's vocabulary (padding) are not tokens: leave them out.
         Ok(Logprobs::from_logits(&logits[..vocabulary.min(logits.len())]))
+    }
+
+    /// Only the allowed tokens' logits are computed ([`LocalModel::logits_among`]).
+    fn next_logprobs_among(&mut self, tokens: &[TokenId], allowed: &[TokenId]) -> Result<Prior, LmError> {
+        let mut unique = Vec::with_capacity(allowed.len());
+        let mut seen = rustc_hash::FxHashSet::default();
+        unique.extend(allowed.iter().copied().filter(|&t| seen.insert(t)));
+        if unique.is_empty() {
+            return Err(LmError::NoAllowedTokens);
+        }
+        let logits = self.logits_among(tokens, &unique)?;
+        Ok(Prior::from_logits(unique, &logits))
     }
 
     fn usage(&self) -> Usage {

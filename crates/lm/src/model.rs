@@ -31,6 +31,19 @@ pub struct Prior {
 }
 
 impl Prior {
+    /// The prior of distinct `tokens` from their raw logits: the log-softmax over them alone
+    /// (accumulated in f64); uniform if no logit is finite.
+    pub fn from_logits(tokens: Vec<TokenId>, logits: &[f32]) -> Prior {
+        let max = logits.iter().copied().fold(f32::NEG_INFINITY, f32::max) as f64;
+        let logprobs = if max.is_finite() {
+            let log_sum = max + logits.iter().map(|&l| (l as f64 - max).exp()).sum::<f64>().ln();
+            logits.iter().map(|&l| (l as f64 - log_sum) as f32).collect()
+        } else {
+            vec![-(tokens.len() as f32).ln(); tokens.len()]
+        };
+        Prior { tokens, logprobs, estimated: 0 }
+    }
+
     /// `p_C(t)` for each allowed token, in the order of `tokens`.
     pub fn probabilities(&self) -> Vec<f32> {
         self.logprobs.iter().map(|l| l.exp()).collect()

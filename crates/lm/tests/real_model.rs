@@ -123,3 +123,23 @@ fn logits_match_candle_transformers_quantized_llama() {
         ours = ours_step;
     }
 }
+
+#[test]
+fn the_prior_over_allowed_tokens_matches_the_full_head() {
+    let mut model = LocalModel::load(&model_path()).expect("loads");
+    let prompt =
+        model.encode("<|im_start|>user\nPut a clean mug in the coffeemachine.<|im_end|>\n<|im_start|>assistant\ngo to").expect("encodes");
+    let allowed: Vec<u32> = [" countertop", " sinkbasin", " coffeemachine", " cabinet", " fridge"]
+        .iter()
+        .map(|w| model.encode(w).expect("encodes")[0])
+        .collect();
+    let Logprobs::Dense(full) = model.next_logprobs(&prompt).expect("runs") else { unreachable!() };
+    let expected = Logprobs::Dense(full).among(&allowed).expect("allowed");
+    let prior = model.next_logprobs_among(&prompt, &allowed).expect("runs");
+    assert_eq!(prior.tokens, expected.tokens);
+    // Rows dotted in f32 against the full head's 8-bit activations: the same prior up to that
+    // rounding.
+    let total_variation: f32 = prior.probabilities().iter().zip(expected.probabilities()).map(|(a, b)| (a - b).abs()).sum::<f32>() / 2.0;
+    assert!(total_variation < 0.01, "total variation {total_variation}");
+    assert_eq!(prior.argmax(), expected.argmax());
+}

@@ -202,15 +202,31 @@ fn requests_with_bad_tokens_fail_without_breaking_the_cache() {
 
 #[test]
 fn the_prior_over_allowed_tokens_is_the_renormalised_distribution() {
-    let dir = TempDir::new("prior");
-    let mut model = LocalModel::load(&tiny_file(&dir, "tiny.gguf", &TinySpec::default())).expect("loads");
-    let tokens = prompt(&model);
-    let full = dense(model.next_logprobs(&tokens).expect("runs"));
-    let allowed = [265, 261, byte(b'z')];
-    let prior = model.next_logprobs_among(&tokens, &allowed).expect("runs");
-    let mass: f32 = allowed.iter().map(|&t| full[t as usize].exp()).sum();
-    for (i, &t) in allowed.iter().enumerate() {
-        assert!((prior.probabilities()[i] - full[t as usize].exp() / mass).abs() < 1e-5);
+    // The prior dots each allowed row with the hidden state in f32; the full head quantizes the
+    // hidden state to 8 bits first (as llama.cpp and candle do) except for an f32 head. So the two
+    // agree to float precision with an f32 head, and to that rounding with the tiny model's tied
+    // Q8_0 head.
+    for (weight_type, tied_output, tolerance) in
+        [(GgmlDType::F32, false, 1e-5), (GgmlDType::Q8_0, true, 5e-3), (GgmlDType::Q4_1, true, 5e-3)]
+    {
+        let dir = TempDir::new(&format!("prior-{weight_type:?}"));
+        let mut model =
+            LocalModel::load(&tiny_file(&dir, "tiny.gguf", &TinySpec { weight_type, tied_output, ..TinySpec::default() })).expect("loads");
+        let tokens = prompt(&model);
+        let full = dense(model.next_logprobs(&tokens).expect("runs"));
+        let allowed = [265, 261, byte(b'z'), 265];
+        let prior = model.next_logprobs_among(&tokens, &allowed).expect("runs");
+        assert_eq!(prior.tokens, vec![265, 261, byte(b'z')], "distinct, in the order given");
+        let mass: f32 = prior.tokens.iter().map(|&t| full[t as usize].exp()).sum();
+        let total: f32 = prior.probabilities().iter().sum();
+        assert!((total - 1.0).abs() < 1e-5);
+        for (i, &t) in prior.tokens.iter().enumerate() {
+            let expected = full[t as usize].exp() / mass;
+            assert!((prior.probabilities()[i] - expected).abs() < tolerance, "{weight_type:?}: {} vs {expected}", prior.probabilities()[i]);
+        }
+        // Asked again, the rows are reused and the answer is the same; errors are typed.
+        assert_eq!(model.next_logprobs_among(&tokens, &allowed).expect("runs"), prior);
+        assert!(matches!(model.next_logprobs_among(&tokens, &[9999]), Err(LmError::TokenOutOfRange { id: 9999, .. })));
     }
 }
 

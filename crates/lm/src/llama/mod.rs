@@ -162,6 +162,8 @@ pub struct LlamaModel {
     layers: Vec<Layer>,
     output_norm: Vec<f32>,
     output: Weight,
+    /// The output head's quantized rows (the embedding when tied), for [`LlamaModel::output_row`].
+    output_rows: Arc<QTensor>,
     /// θ_i for i < rope.dimensions / 2 (after `rope_freqs.weight` where the file has it).
     rope_theta: Vec<f32>,
 }
@@ -246,11 +248,12 @@ impl LlamaModel {
             }
         }
         let embedding = Arc::new(loader.tensor("token_embd.weight", &[vocabulary_size, config.embedding])?);
-        let output = if loader.has("output.weight") {
-            loader.matrix("output.weight", vocabulary_size, config.embedding)?
+        let output_rows = if loader.has("output.weight") {
+            Arc::new(loader.tensor("output.weight", &[vocabulary_size, config.embedding])?)
         } else {
-            Weight::from_shared(embedding.clone())?
+            embedding.clone()
         };
+        let output = Weight::from_shared(output_rows.clone())?;
         let output_norm = loader.vector("output_norm.weight", config.embedding)?;
         let (d, q, kv, ff, hd) = (config.embedding, config.q_dim(), config.kv_dim(), config.feed_forward, config.head_dim);
         let qwen2 = config.architecture == Architecture::Qwen2;
@@ -285,7 +288,7 @@ impl LlamaModel {
             };
             layers.push(layer);
         }
-        Ok(LlamaModel { config, vocabulary_size, embedding, layers, output_norm, output, rope_theta })
+        Ok(LlamaModel { config, vocabulary_size, embedding, layers, output_norm, output, output_rows, rope_theta })
     }
 
     pub fn config(&self) -> &ModelConfig {
@@ -305,6 +308,37 @@ impl LlamaModel {
     /// Runs `tokens` at positions `cache.len()..`, appends their keys and values to `cache`, and
     /// returns the logits of the next token after the last of them.
     pub fn forward(&self, cache: &mut KvCache, tokens: &[u32]) -> Result<Vec<f32>, LmError> {
+        let hidden = self.forward_hidden(cache, tokens)?;
+        self.output_logits(&hidden)
+    }
+
+    /// The output head over a final hidden state: the logits of every row.
+    pub fn output_logits(&self, hidden: &[f32]) -> Result<Vec<f32>, LmError> {
+        self.output.forward(hidden, 1)
+    }
+
+    /// Row `token` of the output head, dequantized to `f32`: its logit is the row's dot product
+    /// with the final hidden state. (The full head quantizes the hidden state to 8 bits first, as
+    /// llama.cpp and candle do; a row dotted in `f32` differs from it by that rounding.)
+    pub fn output_row(&self, token: u32) -> Result<Vec<f32>, LmError> {
+        if token as usize >= self.vocabulary_size {
+            return Err(LmError::TokenOutOfRange { id: token, size: self.vocabulary_size });
+        }
+        let dtype = self.output_rows.dtype();
+        let columns = self.config.embedding;
+        let row_bytes = columns / dtype.block_size() * dtype.type_size();
+        let data = self.output_rows.data()?;
+        let start = token as usize * row_bytes;
+        let bytes = data
+            .get(start..start + row_bytes)
+            .ok_or_else(|| LmError::MalformedGguf(format!("output head: row {token} past the end of {} bytes", data.len())))?;
+        let row = QTensor::new(QStorage::from_data(std::borrow::Cow::Borrowed(bytes), &Device::Cpu, dtype)?, columns)?;
+        Ok(row.dequantize(&Device::Cpu)?.to_vec1::<f32>()?)
+    }
+
+    /// [`LlamaModel::forward`] up to the final hidden state (after the output norm) of the last
+    /// token, without the output head.
+    pub fn forward_hidden(&self, cache: &mut KvCache, tokens: &[u32]) -> Result<Vec<f32>, LmError> {
         if tokens.is_empty() {
             return Err(LmError::EmptySequence);
         }
@@ -360,8 +394,7 @@ impl LlamaModel {
             add_in_place(&mut x, &down);
         }
         cache.set_len(total);
-        let last = rms_norm_rows(&x[(n - 1) * d..], &self.output_norm, d, cfg.rms_eps);
-        self.output.forward(&last, 1)
+        Ok(rms_norm_rows(&x[(n - 1) * d..], &self.output_norm, d, cfg.rms_eps))
     }
 
     /// cos/sin of position × θ_i for the `n` positions from `start`, row-major by position.
