@@ -35,8 +35,9 @@
 //! every simulation ends at an action boundary (or at the end of the plan), where Eq. 8
 //! gives the value, which is *backed up* along the whole path. Distributions are asked for
 //! once per node (the node keeps its children and priors: the cache by prefix); a token the
-//! mask forces needs no model call at all; and the model's own prefix cache makes a
-//! sibling's request cost its divergent suffix.
+//! mask forces needs no model call at all; and the model's own caches make a request cost
+//! only positions never computed before (a local model's prefix cache and branch store: a
+//! return to a branch the search left copies its keys and values back).
 //!
 //! **Values.** At a boundary reaching state `s` after `|π|` actions: `R_G` at the goal, else
 //! `−h(s, G) − λ|π|` ([`crate::value`]). A dead end (`h = ∞`), an unconstrained line that
