@@ -43,6 +43,11 @@ pub const DEFAULT_BRANCH_STORE_BYTES: usize = 512 << 20;
 
 const ROOT: u32 = u32::MAX;
 
+/// Dequantized output-head rows kept for constrained priors before the set is emptied: the
+/// tokens a task's masks allow are a few thousand, far below this; the cap bounds memory for a
+/// long run over many tasks (16 KB a row for a 4096-wide model).
+const MAX_KEPT_ROWS: usize = 16_384;
+
 /// Keys and values of positions computed before, by token prefix: a trie from position 0 whose
 /// node `i` (the prefix ending at some token) owns row `i` of `rows`. A hash map of edges is
 /// all the trie needs (lookups only walk down), so it is written here rather than taken from
@@ -208,6 +213,9 @@ impl LocalModel {
             return Err(LmError::TokenOutOfRange { id, size });
         }
         self.advance(tokens)?;
+        if self.rows.len() + allowed.len() > MAX_KEPT_ROWS {
+            self.rows.clear();
+        }
         let hidden = self.last_hidden.as_deref().unwrap_or_default();
         let mut logits = Vec::with_capacity(allowed.len());
         for &token in allowed {
