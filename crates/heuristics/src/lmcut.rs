@@ -33,6 +33,11 @@ use crate::{Heuristic, INFINITE};
 pub struct LmCut {
     exploration: Exploration,
     costs: Vec<u32>,
+    /// Per fact, how many of its achievers cost 0 this evaluation (so far); reset from
+    /// `base_zero_achievers`, raised as cuts bring operators to 0. The goal-zone tie-breaking
+    /// asks it for every precondition of equal h_max instead of scanning the achievers.
+    zero_achievers: Vec<u32>,
+    base_zero_achievers: Vec<u32>,
     /// Per fact, this round: [`IN_GOAL_ZONE`], [`REACHED`] (by the forward exploration,
     /// before the goal zone) or 0; the two are exclusive, so one array and one reset.
     status: Vec<u8>,
@@ -53,8 +58,16 @@ impl LmCut {
         exploration.track_supported();
         let relaxed = &exploration.relaxed;
         let facts = relaxed.num_facts;
+        let mut base_zero_achievers = vec![0u32; facts];
+        for op in relaxed.ops.iter().filter(|o| o.cost == 0) {
+            for &added in op.add(relaxed) {
+                base_zero_achievers[added as usize] += 1;
+            }
+        }
         LmCut {
             costs: relaxed.ops.iter().map(|o| o.cost).collect(),
+            zero_achievers: base_zero_achievers.clone(),
+            base_zero_achievers,
             status: vec![0; facts],
             queue: VecDeque::new(),
             cut: Vec::new(),
@@ -87,7 +100,7 @@ impl LmCut {
             if exploration.fact_cost[pre as usize] != cost {
                 continue;
             }
-            if relaxed.achievers.of(pre).iter().all(|&a| self.costs[a as usize] != 0) {
+            if self.zero_achievers[pre as usize] == 0 {
                 exploration.set_supporter(op, pre);
                 return pre;
             }
@@ -110,6 +123,7 @@ impl Heuristic for LmCut {
         for (cost, op) in self.costs.iter_mut().zip(&self.exploration.relaxed.ops) {
             *cost = op.cost;
         }
+        self.zero_achievers.copy_from_slice(&self.base_zero_achievers);
         let mut h: u32 = 0;
         let mut goal_cost = self.exploration.run(state, Combine::Max, Some(&self.costs));
         if goal_cost == INFINITE {
@@ -193,6 +207,12 @@ impl Heuristic for LmCut {
             h = h.saturating_add(cheapest);
             for &op in &self.cut {
                 self.costs[op as usize] -= cheapest;
+                if self.costs[op as usize] == 0 {
+                    let relaxed = &self.exploration.relaxed;
+                    for &added in relaxed.ops[op as usize].add(relaxed) {
+                        self.zero_achievers[added as usize] += 1;
+                    }
+                }
             }
             goal_cost = if self.incremental {
                 self.exploration.lower(&self.cut, &self.costs)
