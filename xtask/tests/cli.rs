@@ -225,24 +225,8 @@ fn phase2_writes_records_resumes_and_plan_mcts_prints_json() {
     assert_eq!(std::fs::read_to_string(out.join("virtualhome-eai-50-constrained-mcts-uniform.jsonl")).expect("records").lines().count(), 2);
 
     // A non-default end policy is recorded and names its own records (no resuming another's).
-    let greedy = xtask(&[
-        "phase2",
-        "--benchmark",
-        "virtualhome-eai",
-        "--subset",
-        "virtualhome-eai-50",
-        "--limit",
-        "2",
-        "--lm",
-        "uniform",
-        "--mode",
-        "constrained-greedy",
-        "--end",
-        "at-goal",
-        "--out",
-        &out_text,
-        "--json",
-    ]);
+    let greedy_args: Vec<&str> = args.iter().copied().chain(["--mode", "constrained-greedy", "--end", "at-goal"]).collect();
+    let greedy = xtask(&greedy_args);
     assert!(greedy.status.success(), "{}", String::from_utf8_lossy(&greedy.stderr));
     let summary: serde_json::Value = serde_json::from_str(stdout(&greedy).trim()).expect("one JSON object");
     assert_eq!((summary["end"].as_str(), summary["tasks"].as_u64()), (Some("at-goal"), Some(2)));

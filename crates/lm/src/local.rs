@@ -288,12 +288,8 @@ impl LanguageModel for LocalModel {
 
     /// Only the allowed tokens' logits are computed ([`LocalModel::logits_among`]).
     fn next_logprobs_among(&mut self, tokens: &[TokenId], allowed: &[TokenId]) -> Result<Prior, LmError> {
-        let mut unique = Vec::with_capacity(allowed.len());
-        let mut seen = rustc_hash::FxHashSet::default();
-        unique.extend(allowed.iter().copied().filter(|&t| seen.insert(t)));
-        if unique.is_empty() {
-            return Err(LmError::NoAllowedTokens);
-        }
+        let size = self.tokenizer.vocabulary().len().min(self.model.vocabulary_size());
+        let unique = Prior::distinct_allowed(allowed, size)?;
         let logits = self.logits_among(tokens, &unique)?;
         Ok(Prior::from_logits(unique, &logits))
     }

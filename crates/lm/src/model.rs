@@ -34,14 +34,40 @@ impl Prior {
     /// The prior of distinct `tokens` from their raw logits: the log-softmax over them alone
     /// (accumulated in f64); uniform if no logit is finite.
     pub fn from_logits(tokens: Vec<TokenId>, logits: &[f32]) -> Prior {
-        let max = logits.iter().copied().fold(f32::NEG_INFINITY, f32::max) as f64;
+        let raw: Vec<f64> = logits.iter().map(|&l| l as f64).collect();
+        Prior::normalised(tokens, &raw, 0)
+    }
+
+    /// `raw` (unnormalised log-weights of `tokens`) renormalised over them; uniform if none is
+    /// finite (every allowed token has probability 0 under the model).
+    fn normalised(tokens: Vec<TokenId>, raw: &[f64], estimated: usize) -> Prior {
+        let max = raw.iter().copied().fold(f64::NEG_INFINITY, f64::max);
         let logprobs = if max.is_finite() {
-            let log_sum = max + logits.iter().map(|&l| (l as f64 - max).exp()).sum::<f64>().ln();
-            logits.iter().map(|&l| (l as f64 - log_sum) as f32).collect()
+            let log_sum = max + raw.iter().map(|l| (l - max).exp()).sum::<f64>().ln();
+            raw.iter().map(|l| (l - log_sum) as f32).collect()
         } else {
             vec![-(tokens.len() as f32).ln(); tokens.len()]
         };
-        Prior { tokens, logprobs, estimated: 0 }
+        Prior { tokens, logprobs, estimated }
+    }
+
+    /// `allowed` without repeats, in the order first given, each checked against a vocabulary
+    /// of `size` tokens; at least one.
+    pub(crate) fn distinct_allowed(allowed: &[TokenId], size: usize) -> Result<Vec<TokenId>, LmError> {
+        let mut tokens = Vec::with_capacity(allowed.len());
+        let mut seen = rustc_hash::FxHashSet::default();
+        for &t in allowed {
+            if t as usize >= size {
+                return Err(LmError::TokenOutOfRange { id: t, size });
+            }
+            if seen.insert(t) {
+                tokens.push(t);
+            }
+        }
+        if tokens.is_empty() {
+            return Err(LmError::NoAllowedTokens);
+        }
+        Ok(tokens)
     }
 
     /// `p_C(t)` for each allowed token, in the order of `tokens`.
@@ -126,20 +152,7 @@ impl Logprobs {
     /// counted in [`Prior::estimated`]. The estimate keeps their order among themselves flat,
     /// so a search relying on it should ask for a top-k at least as large as the allowed set.
     pub fn among(&self, allowed: &[TokenId]) -> Result<Prior, LmError> {
-        let size = self.vocabulary_size();
-        let mut tokens = Vec::with_capacity(allowed.len());
-        let mut seen = rustc_hash::FxHashSet::default();
-        for &t in allowed {
-            if t as usize >= size {
-                return Err(LmError::TokenOutOfRange { id: t, size });
-            }
-            if seen.insert(t) {
-                tokens.push(t);
-            }
-        }
-        if tokens.is_empty() {
-            return Err(LmError::NoAllowedTokens);
-        }
+        let tokens = Prior::distinct_allowed(allowed, self.vocabulary_size())?;
         let mut estimated = 0;
         let raw: Vec<f64> = match self {
             Logprobs::Dense(values) => tokens.iter().map(|&t| values[t as usize] as f64).collect(),
@@ -160,15 +173,7 @@ impl Logprobs {
                     .collect()
             }
         };
-        let max = raw.iter().copied().fold(f64::NEG_INFINITY, f64::max);
-        let logprobs = if max.is_finite() {
-            let log_sum = max + raw.iter().map(|l| (l - max).exp()).sum::<f64>().ln();
-            raw.iter().map(|l| (l - log_sum) as f32).collect()
-        } else {
-            // Every allowed token has probability 0 under the model: fall back to uniform.
-            vec![-(tokens.len() as f32).ln(); tokens.len()]
-        };
-        Ok(Prior { tokens, logprobs, estimated })
+        Ok(Prior::normalised(tokens, &raw, estimated))
     }
 }
 
