@@ -85,35 +85,6 @@ impl LmCut {
     }
 }
 
-impl LmCut {
-    /// The supporter of zero-cost operator `op` for this round, stored back: among its
-    /// preconditions of the supporter's h_max, the first with no zero-cost achiever (on the
-    /// border of the goal zone), else the first already in the goal zone, else the current
-    /// one.
-    fn break_ties(&mut self, op: u32) -> u32 {
-        let exploration = &mut self.exploration;
-        let current = exploration.op_supporter[op as usize];
-        let cost = exploration.fact_cost[current as usize];
-        let relaxed = &exploration.relaxed;
-        let mut in_zone = None;
-        for &pre in relaxed.ops[op as usize].pre(relaxed) {
-            if exploration.fact_cost[pre as usize] != cost {
-                continue;
-            }
-            if self.zero_achievers[pre as usize] == 0 {
-                exploration.set_supporter(op, pre);
-                return pre;
-            }
-            if in_zone.is_none() && self.status[pre as usize] == IN_GOAL_ZONE {
-                in_zone = Some(pre);
-            }
-        }
-        let chosen = in_zone.unwrap_or(current);
-        exploration.set_supporter(op, chosen);
-        chosen
-    }
-}
-
 impl Heuristic for LmCut {
     fn name(&self) -> &'static str {
         "lmcut"
@@ -133,40 +104,64 @@ impl Heuristic for LmCut {
             if goal_cost == 0 {
                 return Some(h);
             }
+            // Split borrows, so the loops below keep each buffer's pointer in a register.
+            let Exploration { relaxed, fact_cost, op_supporter, supported, .. } = &mut self.exploration;
+            let relaxed = &*relaxed;
+            let (status, queue, cut, costs) = (&mut self.status, &mut self.queue, &mut self.cut, &self.costs);
             // Goal zone: facts from which the goal is reached through zero-cost operators.
-            // A zero-cost operator's supporter is re-chosen among its preconditions of equal
-            // h_max (Fast Downward's border and goal-zone detection): first one that no
-            // zero-cost operator achieves, else one already in the goal zone.
-            self.status.fill(0);
-            let goal = self.exploration.relaxed.goal;
-            self.status[goal as usize] = IN_GOAL_ZONE;
-            self.queue.clear();
-            self.queue.push_back(goal);
-            while let Some(fact) = self.queue.pop_front() {
-                for i in 0..self.exploration.relaxed.achievers.of(fact).len() {
-                    let op = self.exploration.relaxed.achievers.of(fact)[i];
-                    if self.costs[op as usize] != 0 || self.exploration.op_supporter[op as usize] == NONE {
+            status.fill(0);
+            let goal = relaxed.goal;
+            status[goal as usize] = IN_GOAL_ZONE;
+            queue.clear();
+            queue.push_back(goal);
+            while let Some(fact) = queue.pop_front() {
+                for &op in relaxed.achievers.of(fact) {
+                    let current = op_supporter[op as usize];
+                    if costs[op as usize] != 0 || current == NONE {
                         continue;
                     }
-                    let supporter = self.break_ties(op);
-                    if self.status[supporter as usize] != IN_GOAL_ZONE {
-                        self.status[supporter as usize] = IN_GOAL_ZONE;
-                        self.queue.push_back(supporter);
+                    // The supporter of a zero-cost operator is re-chosen for this round among
+                    // its preconditions of the supporter's h_max (Fast Downward's border and
+                    // goal-zone detection): the first that no zero-cost operator achieves (on
+                    // the border of the goal zone), else the first already in the goal zone,
+                    // else the current one. An operator of one precondition keeps it.
+                    let cost = fact_cost[current as usize];
+                    let mut border = None;
+                    let mut in_zone = None;
+                    for &pre in relaxed.ops[op as usize].pre(relaxed) {
+                        if fact_cost[pre as usize] != cost {
+                            continue;
+                        }
+                        if self.zero_achievers[pre as usize] == 0 {
+                            border = Some(pre);
+                            break;
+                        }
+                        if in_zone.is_none() && status[pre as usize] == IN_GOAL_ZONE {
+                            in_zone = Some(pre);
+                        }
+                    }
+                    let supporter = border.or(in_zone).unwrap_or(current);
+                    if supporter != current {
+                        op_supporter[op as usize] = supporter;
+                        supported.relink(op, current, supporter);
+                    }
+                    if status[supporter as usize] != IN_GOAL_ZONE {
+                        status[supporter as usize] = IN_GOAL_ZONE;
+                        queue.push_back(supporter);
                     }
                 }
             }
-            let relaxed = &self.exploration.relaxed;
             // Precondition choice function: the precondition whose arrival made the
             // operator applicable in this round's exploration, so one of maximal h_max and,
             // among ties, the one reached last (the bucket queue is last-in-first-out).
-            let supported = &self.exploration.supported;
+            let supported = &*supported;
             // Forward from the state along supporter edges until the goal zone: the cut.
-            self.cut.clear();
-            self.queue.clear();
+            cut.clear();
+            queue.clear();
             for fact in state.facts() {
                 // A state fact is never in the goal zone: the goal would cost 0.
-                self.status[fact.index()] = REACHED;
-                self.queue.push_back(fact.0);
+                status[fact.index()] = REACHED;
+                queue.push_back(fact.0);
             }
             // An operator with an effect in the goal zone is in the cut, and its other
             // effects are not explored further (as in Fast Downward): the cut stays a
@@ -186,14 +181,14 @@ impl Heuristic for LmCut {
                 }
             };
             for &op in &relaxed.no_pre {
-                triggered(op, &mut self.status, &mut self.queue, &mut self.cut);
+                triggered(op, status, queue, cut);
             }
-            while let Some(fact) = self.queue.pop_front() {
+            while let Some(fact) = queue.pop_front() {
                 for &op in relaxed.sole_pre_of.of(fact) {
-                    triggered(op, &mut self.status, &mut self.queue, &mut self.cut);
+                    triggered(op, status, queue, cut);
                 }
                 for op in supported.of(fact) {
-                    triggered(op, &mut self.status, &mut self.queue, &mut self.cut);
+                    triggered(op, status, queue, cut);
                 }
             }
             // Each fact is reached once and each operator triggered by its supporter only,

@@ -89,8 +89,10 @@ pub struct Exploration {
     pub op_supporter: Vec<u32>,
     /// With [`Exploration::track_supported`]: the operators each fact supports.
     pub supported: Supported,
+    /// With [`Exploration::track_supported`], per operator of two or more preconditions:
+    /// its supporter's cost when last looked at (the operator's h_max before its own cost).
+    supporter_cost: Vec<u32>,
     track: bool,
-    scratch: Vec<u32>,
     unsatisfied: Vec<u32>,
     /// Precondition count of each operator, copied into `unsatisfied` per run.
     pre_count: Vec<u32>,
@@ -111,8 +113,8 @@ impl Exploration {
             op_cost: vec![0; ops],
             op_supporter: vec![u32::MAX; ops],
             supported: Supported { head: vec![u32::MAX; facts], next: vec![u32::MAX; ops], prev: vec![u32::MAX; ops] },
+            supporter_cost: vec![0; ops],
             track: false,
-            scratch: Vec::new(),
             unsatisfied: vec![0; ops],
             queue: FactQueue::default(),
         }
@@ -123,74 +125,100 @@ impl Exploration {
     /// exploration run to the end (LM-cut needs every operator's supporter); without it the
     /// exploration stops once the goal's cost is final.
     pub fn run(&mut self, state: &State, combine: Combine, costs: Option<&[u32]>) -> u32 {
-        let relaxed = &self.relaxed;
-        let additive = combine == Combine::Add;
-        self.fact_cost.fill(INFINITE);
-        self.unsatisfied.copy_from_slice(&self.pre_count);
-        self.op_supporter.fill(u32::MAX);
-        if self.track {
-            self.supported.head.fill(u32::MAX);
+        // One body, specialised per combination so the inner loop carries no mode tests.
+        match (combine, self.track) {
+            (Combine::Add, false) => self.run_with::<true, false>(state, costs),
+            (Combine::Add, true) => self.run_with::<true, true>(state, costs),
+            (Combine::Max, false) => self.run_with::<false, false>(state, costs),
+            (Combine::Max, true) => self.run_with::<false, true>(state, costs),
         }
-        if additive {
+    }
+
+    fn run_with<const ADD: bool, const TRACK: bool>(&mut self, state: &State, costs: Option<&[u32]>) -> u32 {
+        // Split borrows: the loops below keep each buffer's pointer in a register.
+        let Exploration {
+            relaxed,
+            fact_cost,
+            supporter,
+            op_cost,
+            op_supporter,
+            supported,
+            supporter_cost,
+            unsatisfied,
+            pre_count,
+            queue,
+            ..
+        } = self;
+        let relaxed = &*relaxed;
+        let pre_count = &pre_count[..];
+        fact_cost.fill(INFINITE);
+        unsatisfied.copy_from_slice(pre_count);
+        op_supporter.fill(u32::MAX);
+        if TRACK {
+            supported.head.fill(u32::MAX);
+        }
+        if ADD {
             // Only h_add needs operator costs (for h_max an operator costs what its last
             // precondition popped at) and fact supporters (for h_FF's relaxed plan).
-            self.supporter.fill(u32::MAX);
-            self.op_cost.fill(0);
+            supporter.fill(u32::MAX);
+            op_cost.fill(0);
         }
-        self.queue.clear();
+        queue.clear();
         for fact in state.facts() {
-            self.fact_cost[fact.index()] = 0;
-            self.queue.push(0, fact.0);
+            fact_cost[fact.index()] = 0;
+            queue.push(0, fact.0);
         }
         let op_base = |i: usize| costs.map_or(relaxed.ops[i].cost, |c| c[i]);
         for &op in &relaxed.no_pre {
             let cost = op_base(op as usize);
             for &fact in relaxed.ops[op as usize].add(relaxed) {
-                if cost < self.fact_cost[fact as usize] {
-                    self.fact_cost[fact as usize] = cost;
-                    if additive {
-                        self.supporter[fact as usize] = op;
+                if cost < fact_cost[fact as usize] {
+                    fact_cost[fact as usize] = cost;
+                    if ADD {
+                        supporter[fact as usize] = op;
                     }
-                    self.queue.push(cost, fact);
+                    queue.push(cost, fact);
                 }
             }
         }
         let goal = relaxed.goal;
-        while let Some((cost, fact)) = self.queue.pop() {
-            if cost > self.fact_cost[fact as usize] {
+        let stop_at_goal = costs.is_none();
+        while let Some((cost, fact)) = queue.pop() {
+            if cost > fact_cost[fact as usize] {
                 continue;
             }
-            if fact == goal && costs.is_none() {
+            if fact == goal && stop_at_goal {
                 break;
             }
             for &op in relaxed.pre_of(fact) {
                 let i = op as usize;
-                if additive {
-                    self.op_cost[i] = self.op_cost[i].saturating_add(cost);
+                if ADD {
+                    op_cost[i] = op_cost[i].saturating_add(cost);
                 }
-                self.unsatisfied[i] -= 1;
-                if self.unsatisfied[i] == 0 {
-                    self.op_supporter[i] = fact;
-                    if self.track && self.pre_count[i] > 1 {
-                        self.supported.link(op, fact);
+                unsatisfied[i] -= 1;
+                if unsatisfied[i] == 0 {
+                    op_supporter[i] = fact;
+                    if TRACK && pre_count[i] > 1 {
+                        supported.link(op, fact);
+                        supporter_cost[i] = cost;
                     }
                     // Facts leave the queue in cost order, so for h_max the operator costs
                     // what its last precondition cost.
-                    let pre_cost = if additive { self.op_cost[i] } else { cost };
+                    let pre_cost = if ADD { op_cost[i] } else { cost };
                     let reached = pre_cost.saturating_add(op_base(i)).min(INFINITE - 1);
                     for &added in relaxed.ops[i].add(relaxed) {
-                        if reached < self.fact_cost[added as usize] {
-                            self.fact_cost[added as usize] = reached;
-                            if additive {
-                                self.supporter[added as usize] = op;
+                        if reached < fact_cost[added as usize] {
+                            fact_cost[added as usize] = reached;
+                            if ADD {
+                                supporter[added as usize] = op;
                             }
-                            self.queue.push(reached, added);
+                            queue.push(reached, added);
                         }
                     }
                 }
             }
         }
-        self.fact_cost[goal as usize]
+        fact_cost[goal as usize]
     }
 }
 
@@ -230,6 +258,13 @@ impl Supported {
         if next != u32::MAX {
             self.prev[next as usize] = prev;
         }
+    }
+
+    /// Moves `op` from `from`'s list to `to`'s.
+    #[inline]
+    pub(crate) fn relink(&mut self, op: u32, from: u32, to: u32) {
+        self.unlink(op, from);
+        self.link(op, to);
     }
 
     /// The operators of two or more preconditions that `fact` supports.
@@ -275,57 +310,76 @@ impl Exploration {
     /// over, if any (Fast Downward's rule).
     pub fn lower(&mut self, lowered: &[u32], costs: &[u32]) -> u32 {
         assert!(self.track, "Exploration::lower walks the supported-operator lists: call track_supported first");
-        let relaxed = &self.relaxed;
-        self.queue.clear();
+        let Exploration { relaxed, fact_cost, op_supporter, supported, supporter_cost, queue, .. } = self;
+        let relaxed = &*relaxed;
+        queue.clear();
         for &op in lowered {
-            let supporter = self.op_supporter[op as usize];
-            let base = if supporter == u32::MAX { 0 } else { self.fact_cost[supporter as usize] };
+            let supporter = op_supporter[op as usize];
+            let base = if supporter == u32::MAX { 0 } else { fact_cost[supporter as usize] };
             let target = base.saturating_add(costs[op as usize]);
             for &added in relaxed.ops[op as usize].add(relaxed) {
-                if target < self.fact_cost[added as usize] {
-                    self.fact_cost[added as usize] = target;
-                    self.queue.push(target, added);
+                if target < fact_cost[added as usize] {
+                    fact_cost[added as usize] = target;
+                    queue.push(target, added);
                 }
             }
         }
-        while let Some((cost, fact)) = self.queue.pop() {
-            if cost > self.fact_cost[fact as usize] {
+        while let Some((cost, fact)) = queue.pop() {
+            if cost > fact_cost[fact as usize] {
                 continue;
             }
             for &op in relaxed.sole_pre_of.of(fact) {
                 let target = cost.saturating_add(costs[op as usize]);
                 for &added in relaxed.ops[op as usize].add(relaxed) {
-                    if target < self.fact_cost[added as usize] {
-                        self.fact_cost[added as usize] = target;
-                        self.queue.push(target, added);
+                    if target < fact_cost[added as usize] {
+                        fact_cost[added as usize] = target;
+                        queue.push(target, added);
                     }
                 }
             }
-            self.scratch.clear();
-            self.scratch.extend(self.supported.of(fact));
-            for &op in &self.scratch {
+            // The list is walked while its operators move to other lists: `next` is read
+            // before the current operator is unlinked.
+            let mut op = supported.head[fact as usize];
+            while op != u32::MAX {
+                let next = supported.next[op as usize];
                 let i = op as usize;
+                // Costs only fall, so no precondition costs more than the supporter did
+                // (`old`): the first precondition still at `old`, if any, is the new supporter
+                // and leaves the operator's cost unchanged, so the scan stops there and
+                // nothing is propagated. Otherwise the first of strictly greater cost than
+                // `fact` takes over (Fast Downward's rule).
+                let old = supporter_cost[i];
                 let mut supporter = fact;
+                let mut best = cost;
                 for &pre in relaxed.ops[i].pre(relaxed) {
-                    if self.fact_cost[pre as usize] > self.fact_cost[supporter as usize] {
+                    let pre_cost = fact_cost[pre as usize];
+                    if pre_cost > best {
+                        best = pre_cost;
                         supporter = pre;
+                        if pre_cost == old {
+                            break;
+                        }
                     }
                 }
                 if supporter != fact {
-                    self.op_supporter[i] = supporter;
-                    self.supported.unlink(op, fact);
-                    self.supported.link(op, supporter);
+                    op_supporter[i] = supporter;
+                    supported.unlink(op, fact);
+                    supported.link(op, supporter);
                 }
-                let target = self.fact_cost[supporter as usize].saturating_add(costs[i]);
-                for &added in relaxed.ops[i].add(relaxed) {
-                    if target < self.fact_cost[added as usize] {
-                        self.fact_cost[added as usize] = target;
-                        self.queue.push(target, added);
+                supporter_cost[i] = best;
+                if best != old {
+                    let target = best.saturating_add(costs[i]);
+                    for &added in relaxed.ops[i].add(relaxed) {
+                        if target < fact_cost[added as usize] {
+                            fact_cost[added as usize] = target;
+                            queue.push(target, added);
+                        }
                     }
                 }
+                op = next;
             }
         }
-        self.fact_cost[relaxed.goal as usize]
+        fact_cost[relaxed.goal as usize]
     }
 }
 
