@@ -74,6 +74,10 @@ pub struct DecodeArgs {
     /// (by default they are closed; cycles are closed either way).
     #[arg(long)]
     pub keep_transpositions: bool,
+    /// MCTS: mix the prior with the uniform over each node's kept children by this weight,
+    /// `(1 − ε)·p + ε/k` (0: the model's prior alone, as the paper).
+    #[arg(long, default_value_t = 0.0, value_parser = parse_unit)]
+    pub prior_mix: f64,
     /// Value: weights of h_FF, LM-cut and the remaining plan cost in h (paper Appendix A.4;
     /// the remaining plan cost is off by default, see `mcts::value`).
     #[arg(long, default_value = "1,1,0", value_parser = parse_weights)]
@@ -122,6 +126,7 @@ impl DecodeArgs {
                     prune_transpositions: !self.keep_transpositions,
                     backup: if self.backup == "mean" { Backup::Mean } else { Backup::Max },
                     normalization: if self.normalization == "tree" { Normalization::Tree } else { Normalization::Siblings },
+                    prior_mix: self.prior_mix,
                     ..MctsConfig::default()
                 };
             }
@@ -161,6 +166,25 @@ impl DecodeArgs {
         }
     }
 
+    /// The settings that differ from the defaults and change what a run finds, as a name
+    /// part (`-end-at-goal-mix-0.25-weights-1-1-1`, empty for the defaults): records of
+    /// different settings go to different files, so a run never resumes another's.
+    pub fn variant(&self) -> String {
+        let mut parts = Vec::new();
+        if self.end != "anywhere" {
+            parts.push(format!("end-{}", self.end));
+        }
+        if self.prior_mix != MctsConfig::default().prior_mix {
+            parts.push(format!("mix-{}", self.prior_mix));
+        }
+        let value = ValueConfig::default();
+        if self.weights != (value.ff, value.lmcut, value.remaining) {
+            let (ff, lmcut, remaining) = self.weights;
+            parts.push(format!("weights-{ff}-{lmcut}-{remaining}"));
+        }
+        parts.iter().map(|p| format!("-{p}")).collect()
+    }
+
     fn prompt_options(&self) -> PromptOptions {
         let mut options = PromptOptions::default();
         if self.all_facts {
@@ -176,6 +200,15 @@ fn parse_weights(text: &str) -> Result<(f64, f64, f64), String> {
     match parts[..] {
         [ff, lmcut, remaining] if parts.iter().all(|w| w.is_finite() && *w >= 0.0) => Ok((ff, lmcut, remaining)),
         _ => Err(format!("{text:?}: give three non-negative weights, `FF,LMCUT,REMAINING`")),
+    }
+}
+
+/// A number in `[0, 1]`.
+fn parse_unit(text: &str) -> Result<f64, String> {
+    match text.trim().parse::<f64>() {
+        Ok(value) if (0.0..=1.0).contains(&value) => Ok(value),
+        Ok(_) => Err(format!("{text:?}: give a number from 0 to 1")),
+        Err(e) => Err(format!("{text:?}: {e}")),
     }
 }
 
@@ -431,9 +464,8 @@ pub fn run(args: Phase2Args) -> anyhow::Result<ExitCode> {
         None => args.benchmark.clone(),
     };
     std::fs::create_dir_all(&args.out).with_context(|| format!("cannot create {}", args.out.display()))?;
-    // A non-default end policy is part of the name, so that its records do not resume another's.
-    let end = if args.decode.end == "anywhere" { String::new() } else { format!("-end-{}", args.decode.end) };
-    let stem = file_safe(&format!("{set}-{}{end}-{lm_name}", args.decode.mode));
+    let variant = args.decode.variant();
+    let stem = file_safe(&format!("{set}-{}{variant}-{lm_name}", args.decode.mode));
     let path = args.out.join(format!("{stem}.jsonl"));
     if args.fresh && path.exists() {
         std::fs::remove_file(&path).with_context(|| format!("cannot remove {}", path.display()))?;
@@ -469,7 +501,7 @@ pub fn run(args: Phase2Args) -> anyhow::Result<ExitCode> {
 
     let keep: BTreeSet<&str> = tasks.iter().map(|t| t.id.as_str()).collect();
     records.retain(|r| keep.contains(r.task.as_str()));
-    let summary = summarize(&records, &set, &args.decode.mode, &args.decode.end, &lm_name, &path);
+    let summary = summarize(&records, &set, &args.decode, &lm_name, &path);
     std::fs::write(args.out.join(format!("{stem}.summary.json")), serde_json::to_string_pretty(&summary)? + "\n")?;
     if args.json {
         println!("{summary}");
@@ -492,7 +524,7 @@ pub fn run(args: Phase2Args) -> anyhow::Result<ExitCode> {
     Ok(ExitCode::SUCCESS)
 }
 
-fn summarize(records: &[Record], set: &str, mode: &str, end: &str, lm: &str, path: &Path) -> serde_json::Value {
+fn summarize(records: &[Record], set: &str, decode: &DecodeArgs, lm: &str, path: &Path) -> serde_json::Value {
     let n = records.len().max(1) as f64;
     let mean = |f: &dyn Fn(&Record) -> f64| records.iter().map(f).sum::<f64>() / n;
     let solved = records.iter().filter(|r| r.solved).count();
@@ -506,7 +538,8 @@ fn summarize(records: &[Record], set: &str, mode: &str, end: &str, lm: &str, pat
     }
     let solved_lengths: Vec<f64> = records.iter().filter(|r| r.solved).map(|r| r.length as f64).collect();
     serde_json::json!({
-        "set": set, "mode": mode, "end": end, "lm": lm, "tasks": records.len(),
+        "set": set, "mode": decode.mode, "end": decode.end, "prior_mix": decode.prior_mix,
+        "weights": [decode.weights.0, decode.weights.1, decode.weights.2], "lm": lm, "tasks": records.len(),
         "solved": solved, "success_rate": solved as f64 / n,
         "solvable": solvable, "success_rate_solvable": solved as f64 / solvable.max(1) as f64, "valid": valid, "valid_rate": valid as f64 / n,
         "mean_generated_tokens": mean(&|r| r.generated_tokens as f64),

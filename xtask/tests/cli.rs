@@ -224,13 +224,20 @@ fn phase2_writes_records_resumes_and_plan_mcts_prints_json() {
     assert!(again.status.success());
     assert_eq!(std::fs::read_to_string(out.join("virtualhome-eai-50-constrained-mcts-uniform.jsonl")).expect("records").lines().count(), 2);
 
-    // A non-default end policy is recorded and names its own records (no resuming another's).
-    let greedy_args: Vec<&str> = args.iter().copied().chain(["--mode", "constrained-greedy", "--end", "at-goal"]).collect();
+    // Non-default settings are recorded and name their own records (no resuming another's).
+    let greedy_args: Vec<&str> = args
+        .iter()
+        .copied()
+        .chain(["--mode", "constrained-greedy", "--end", "at-goal", "--prior-mix", "0.25", "--weights", "1,1,1"])
+        .collect();
     let greedy = xtask(&greedy_args);
     assert!(greedy.status.success(), "{}", String::from_utf8_lossy(&greedy.stderr));
     let summary: serde_json::Value = serde_json::from_str(stdout(&greedy).trim()).expect("one JSON object");
     assert_eq!((summary["end"].as_str(), summary["tasks"].as_u64()), (Some("at-goal"), Some(2)));
-    let records = std::fs::read_to_string(out.join("virtualhome-eai-50-constrained-greedy-end-at-goal-uniform.jsonl")).expect("records");
+    assert_eq!((summary["prior_mix"].as_f64(), &summary["weights"]), (Some(0.25), &serde_json::json!([1.0, 1.0, 1.0])));
+    let records =
+        std::fs::read_to_string(out.join("virtualhome-eai-50-constrained-greedy-end-at-goal-mix-0.25-weights-1-1-1-uniform.jsonl"))
+            .expect("records");
     for line in records.lines() {
         let record: serde_json::Value = serde_json::from_str(line).expect("record");
         // The plan may end only at the goal: a plan that stopped is either solved or cut by a limit.

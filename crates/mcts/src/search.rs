@@ -91,6 +91,12 @@ pub struct MctsConfig {
     pub backup: Backup,
     /// Over which values `Q` is min-max normalised into `[0, 1]`.
     pub normalization: Normalization,
+    /// `ε`: a node's children take the prior `(1 − ε)·p + ε/k` (`k` children) instead of the
+    /// model's `p`. 0 (the default) is the paper's prior (Eq. 6). A small model can give the
+    /// right token a prior so small that PUCB tries it only after thousands of visits to its
+    /// siblings; mixing in the uniform over the kept children bounds that wait, as AlphaZero's
+    /// root noise does. The children kept (the `width` most likely) are the same either way.
+    pub prior_mix: f64,
 }
 
 /// The range `Q` is min-max normalised over, so that it and the prior term are on one scale.
@@ -126,6 +132,7 @@ impl Default for MctsConfig {
             prune_transpositions: true,
             backup: Backup::Max,
             normalization: Normalization::Siblings,
+            prior_mix: 0.0,
         }
     }
 }
@@ -195,10 +202,13 @@ impl Tree {
         if self.max > self.min { ((value - self.min) / (self.max - self.min)).clamp(0.0, 1.0) } else { 0.5 }
     }
 
-    fn expand(&mut self, node: usize, candidates: &[(TokenId, f32)]) {
+    /// Adds `candidates` as the children of `node`, their priors mixed with the uniform over
+    /// them by `mix` ([`MctsConfig::prior_mix`]).
+    fn expand(&mut self, node: usize, candidates: &[(TokenId, f32)], mix: f32) {
         let first = self.nodes.len() as u32;
         let count = candidates.len().min(u16::MAX as usize);
-        self.nodes.extend(candidates[..count].iter().map(|&(t, p)| Node::new(t, p)));
+        let uniform = mix / count.max(1) as f32;
+        self.nodes.extend(candidates[..count].iter().map(|&(t, p)| Node::new(t, (1.0 - mix) * p + uniform)));
         let n = &mut self.nodes[node];
         n.first_child = first;
         n.child_count = count as u16;
@@ -422,6 +432,7 @@ pub(crate) fn run(
     best.value = -h0;
     let dead_value = -(h0 + lambda * budget.max_actions as f64 + 1.0);
     let width = mcts.width.clamp(1, u16::MAX as usize);
+    let prior_mix = mcts.prior_mix.clamp(0.0, 1.0) as f32;
 
     let mut tree = Tree::new(mcts);
     let mut sequence = prompt.to_vec();
@@ -497,7 +508,7 @@ pub(crate) fn run(
             }
             let node = *path.last().expect("root");
             let distribution = decoder.distribution(lm, &sequence, &cursor, width)?;
-            tree.expand(node, &distribution.candidates);
+            tree.expand(node, &distribution.candidates, prior_mix);
             let Some(&(token, _)) = distribution.candidates.first() else { break Leaf::Terminal(dead_value) };
             let child = tree.nodes[node].first_child as usize;
             stats.decoded_tokens += 1;
@@ -523,4 +534,45 @@ pub(crate) fn run(
     };
     stats.nodes = tree.nodes.len() as u64;
     Ok(finish(&best, stop))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Visits to the root, all valued alike, before PUCB first selects the unlikely child.
+    fn visits_until_unlikely_child(prior_mix: f32) -> Option<u32> {
+        let config = MctsConfig::default();
+        let mut tree = Tree::new(&config);
+        tree.expand(0, &[(1, 0.999), (2, 0.001)], prior_mix);
+        for visit in 0..100_000 {
+            let child = tree.select(0, &config).expect("an open child");
+            if tree.nodes[child].token == 2 {
+                return Some(visit);
+            }
+            tree.backup(&[0, child], -1.0);
+        }
+        None
+    }
+
+    #[test]
+    fn the_prior_mix_blends_in_the_uniform_over_the_children() {
+        let config = MctsConfig::default();
+        let mut tree = Tree::new(&config);
+        tree.expand(0, &[(7, 0.75), (8, 0.25)], 0.5);
+        let priors: Vec<f32> = tree.nodes[1..].iter().map(|n| n.prior).collect();
+        assert_eq!(priors, [0.625, 0.375]);
+        let mut unmixed = Tree::new(&config);
+        unmixed.expand(0, &[(7, 0.75), (8, 0.25)], 0.0);
+        assert_eq!(unmixed.nodes[2].prior, 0.25, "no mix keeps the model's prior");
+    }
+
+    #[test]
+    fn a_prior_mix_bounds_the_wait_for_an_unlikely_token() {
+        // The model's prior alone: the 0.1% child waits for hundreds of visits to its sibling.
+        let alone = visits_until_unlikely_child(0.0).expect("visited eventually");
+        let mixed = visits_until_unlikely_child(0.25).expect("visited");
+        assert!(alone > 300, "{alone}");
+        assert!(mixed < 10, "{mixed}");
+    }
 }
