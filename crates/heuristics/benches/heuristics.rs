@@ -43,6 +43,7 @@ fn bench(c: &mut Criterion) {
     sets.push(("ipc-logistics00", ipc.iter().filter(|t| t.id == "logistics00/instance-13").cloned().collect()));
     sets.push(("ipc-visitall-opt11", ipc.iter().filter(|t| t.id == "visitall-opt11/instance-12").cloned().collect()));
     sets.push(("ipc-elevators-opt08", ipc.iter().filter(|t| t.id == "elevators-opt08/instance-5").cloned().collect()));
+    sets.push(("ipc-miconic", ipc.iter().filter(|t| t.id == "miconic/instance-101").cloned().collect()));
     let mut group = c.benchmark_group("heuristic");
     for (name, tasks) in &sets {
         let prepared: Vec<(TransitionModel, Vec<State>)> = tasks

@@ -27,6 +27,7 @@ use std::collections::VecDeque;
 use transition_model::{State, TransitionModel};
 
 use crate::relaxation::{Combine, Exploration};
+use crate::relaxed::NO_ADD;
 use crate::{Heuristic, INFINITE};
 
 #[derive(Debug, Clone)]
@@ -184,8 +185,20 @@ impl Heuristic for LmCut {
                 triggered(op, status, queue, cut);
             }
             while let Some(fact) = queue.pop_front() {
-                for &op in relaxed.sole_pre_of.of(fact) {
-                    triggered(op, status, queue, cut);
+                for (op, added) in relaxed.sole_pre_entries(fact) {
+                    if added == NO_ADD {
+                        triggered(op, status, queue, cut);
+                        continue;
+                    }
+                    // One add effect: the same rule, read without the operator.
+                    match status[added as usize] {
+                        0 => {
+                            status[added as usize] = REACHED;
+                            queue.push_back(added);
+                        }
+                        IN_GOAL_ZONE => cut.push(op),
+                        _ => {}
+                    }
                 }
                 for op in supported.of(fact) {
                     triggered(op, status, queue, cut);

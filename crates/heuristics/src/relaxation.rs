@@ -328,8 +328,15 @@ impl Exploration {
             if cost > fact_cost[fact as usize] {
                 continue;
             }
-            for &op in relaxed.sole_pre_of.of(fact) {
+            for (op, single) in relaxed.sole_pre_entries(fact) {
                 let target = cost.saturating_add(costs[op as usize]);
+                if single != crate::relaxed::NO_ADD {
+                    if target < fact_cost[single as usize] {
+                        fact_cost[single as usize] = target;
+                        queue.push(target, single);
+                    }
+                    continue;
+                }
                 for &added in relaxed.ops[op as usize].add(relaxed) {
                     if target < fact_cost[added as usize] {
                         fact_cost[added as usize] = target;

@@ -20,6 +20,9 @@ use rustc_hash::FxHashMap;
 /// `action` of operators that stand for no action (clause and goal achievers).
 pub const NO_ACTION: u32 = u32::MAX;
 
+/// [`RelaxedTask::sole_pre_add`] of an operator with no or several add effects.
+pub const NO_ADD: u32 = u32::MAX;
+
 #[derive(Debug, Clone, Copy)]
 pub struct RelaxedOp {
     pub pre_start: u32,
@@ -45,6 +48,10 @@ pub struct RelaxedTask {
     /// Operators whose only precondition is each fact: their h_max supporter can only be it,
     /// so the explorations keep no supporter lists for them.
     pub sole_pre_of: FactIndex,
+    /// Parallel to [`RelaxedTask::sole_pre_of`]'s lists: each listed operator's add effect
+    /// when it has exactly one, else [`NO_ADD`]. The explorations read the effect beside the
+    /// operator id instead of through the operator (two dependent loads fewer per visit).
+    pub sole_pre_add: Vec<u32>,
     /// Operators without preconditions.
     pub no_pre: Vec<u32>,
     pub goal: u32,
@@ -65,6 +72,14 @@ impl RelaxedOp {
 }
 
 impl RelaxedTask {
+    /// The operators whose only precondition is `fact`, with their single add effect or
+    /// [`NO_ADD`].
+    #[inline]
+    pub fn sole_pre_entries(&self, fact: u32) -> impl Iterator<Item = (u32, u32)> + '_ {
+        let range = self.sole_pre_of.range(fact);
+        self.sole_pre_of.ops[range.clone()].iter().copied().zip(self.sole_pre_add[range].iter().copied())
+    }
+
     pub fn new(task: &Task) -> RelaxedTask {
         let mut builder = Builder {
             relaxed: RelaxedTask {
@@ -75,6 +90,7 @@ impl RelaxedTask {
                 preconditions_of: FactIndex::default(),
                 achievers: FactIndex::default(),
                 sole_pre_of: FactIndex::default(),
+                sole_pre_add: Vec::new(),
                 no_pre: Vec::new(),
                 goal: 0,
                 task_facts: task.facts.len(),
@@ -223,6 +239,15 @@ impl Builder {
             let pre = &relaxed.pre[op.pre_start as usize..op.pre_end as usize];
             if pre.len() == 1 { pre } else { &[] }
         });
+        relaxed.sole_pre_add = relaxed
+            .sole_pre_of
+            .ops
+            .iter()
+            .map(|&op| match relaxed.ops[op as usize].add(relaxed) {
+                [added] => *added,
+                _ => NO_ADD,
+            })
+            .collect();
         self.relaxed
     }
 }
@@ -260,6 +285,12 @@ impl FactIndex {
     /// The operators listed under `fact`.
     #[inline]
     pub fn of(&self, fact: u32) -> &[u32] {
-        &self.ops[self.start[fact as usize] as usize..self.start[fact as usize + 1] as usize]
+        &self.ops[self.range(fact)]
+    }
+
+    /// Where `fact`'s list lies in the concatenation of all lists (for parallel arrays).
+    #[inline]
+    pub fn range(&self, fact: u32) -> std::ops::Range<usize> {
+        self.start[fact as usize] as usize..self.start[fact as usize + 1] as usize
     }
 }
