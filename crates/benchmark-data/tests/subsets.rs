@@ -78,3 +78,16 @@ fn an_unknown_or_repeated_id_is_reported_at_its_line() {
     assert!(matches!(&error, DataError::DuplicateSubsetTask { line: 2, .. }), "{error}");
     std::fs::remove_dir_all(&dir).ok();
 }
+
+#[test]
+fn the_alfworld_heldout_subset_is_the_rule_over_the_tasks_outside_the_fifty() {
+    let all = benchmark_data::load(Benchmark::AlfworldSeen).expect("benchmark loads");
+    let fifty: Vec<String> = load_subset(Benchmark::AlfworldSeen, "alfworld-seen-50").expect("subset").into_iter().map(|t| t.id).collect();
+    let rest: Vec<TaskFiles> = all.iter().filter(|t| !fifty.contains(&t.id)).cloned().collect();
+    let derived: Vec<String> = stratified_subset(&rest, 24).into_iter().map(|t| t.id.clone()).collect();
+    let name = "alfworld-seen-heldout-24";
+    let listed: Vec<String> = subset_ids(&subset_path(name)).expect("subset file reads").into_iter().map(|(_, id)| id).collect();
+    assert_eq!(listed, derived, "{name} differs from the rule over valid_seen minus alfworld-seen-50");
+    assert!(listed.iter().all(|id| !fifty.contains(id)), "disjoint from alfworld-seen-50");
+    assert_eq!(families(&load_subset(Benchmark::AlfworldSeen, name).expect("loads")), families(&all));
+}
