@@ -65,7 +65,7 @@ impl FactQueue {
 use grounding::{ActionId, Task};
 use transition_model::{State, TransitionModel};
 
-use crate::relaxed::RelaxedTask;
+use crate::relaxed::{NO_ADD, RelaxedTask};
 use crate::{Heuristic, INFINITE};
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -85,7 +85,8 @@ pub struct Exploration {
     op_cost: Vec<u32>,
     /// Per operator: the precondition whose arrival made it applicable (the last one
     /// popped, so one of maximal cost), `u32::MAX` if none. Change it with
-    /// [`Exploration::set_supporter`] so that `supported` follows.
+    /// [`Exploration::set_supporter`] so that `supported` follows (LM-cut, which holds split
+    /// borrows of the exploration, moves the list entry itself with `Supported::relink`).
     pub op_supporter: Vec<u32>,
     /// With [`Exploration::track_supported`]: the operators each fact supports.
     pub supported: Supported,
@@ -330,14 +331,9 @@ impl Exploration {
             }
             for (op, single) in relaxed.sole_pre_entries(fact) {
                 let target = cost.saturating_add(costs[op as usize]);
-                if single != crate::relaxed::NO_ADD {
-                    if target < fact_cost[single as usize] {
-                        fact_cost[single as usize] = target;
-                        queue.push(target, single);
-                    }
-                    continue;
-                }
-                for &added in relaxed.ops[op as usize].add(relaxed) {
+                // The one add effect from the parallel array, else through the operator.
+                let adds = if single != NO_ADD { std::slice::from_ref(&single) } else { relaxed.ops[op as usize].add(relaxed) };
+                for &added in adds {
                     if target < fact_cost[added as usize] {
                         fact_cost[added as usize] = target;
                         queue.push(target, added);
