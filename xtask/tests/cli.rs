@@ -16,7 +16,8 @@ fn xtask(args: &[&str]) -> Output {
 }
 
 fn scratch(name: &str, text: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("xtask-cli-{}", std::process::id()));
+    // Under the target directory (cargo's scratch space for integration tests), so runs leave nothing in /tmp.
+    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(format!("xtask-cli-{}", std::process::id()));
     std::fs::create_dir_all(&dir).expect("temp dir");
     let path = dir.join(name);
     std::fs::write(&path, text).expect("write");
@@ -191,7 +192,7 @@ fn bench_mask_reports_the_issue_figures_and_agrees_with_llguidance() {
 
 #[test]
 fn phase2_writes_records_resumes_and_plan_mcts_prints_json() {
-    let out = std::env::temp_dir().join(format!("xtask-phase2-{}", std::process::id()));
+    let out = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(format!("xtask-phase2-{}", std::process::id()));
     let out_text = out.display().to_string();
     let args = [
         "phase2",

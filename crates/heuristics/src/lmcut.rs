@@ -15,14 +15,14 @@
 //!
 //! The forward exploration walks each fact's supported operators (its one-precondition
 //! operators, then the intrusive lists the exploration keeps for the others,
-//! `Exploration::supported`) rather than every operator the fact is a precondition of.
+//! `Exploration::supported`) rather than every operator the fact is a precondition of,
+//! and it stops as soon as the cut holds every operator that could join it (the achievers
+//! of goal-zone facts that it can trigger), which leaves the cut and its order unchanged.
 //!
 //! On the IPC fixtures the per-domain means are within 4.1% of Fast Downward's 26.6 (1.041
 //! on driverlog, 0.987 on elevators, within 0.6% elsewhere; `tests/fast_downward.rs`).
 //! [`LmCut::full`] recomputes h_max from scratch every round instead: the same
 //! informedness on these domains, slower.
-
-use std::collections::VecDeque;
 
 use transition_model::{State, TransitionModel};
 
@@ -42,8 +42,13 @@ pub struct LmCut {
     /// Per fact, this round: [`IN_GOAL_ZONE`], [`REACHED`] (by the forward exploration,
     /// before the goal zone) or 0; the two are exclusive, so one array and one reset.
     status: Vec<u8>,
-    queue: VecDeque<u32>,
+    /// First-in-first-out queue of the goal-zone and forward walks: a plain vector read from
+    /// a moving head (each fact enters at most once per walk, so it never wraps).
+    queue: Vec<u32>,
     cut: Vec<u32>,
+    /// Per operator, the round in which it was last counted as a cut candidate (`round`).
+    candidate_round: Vec<u32>,
+    round: u32,
     /// Update h_max incrementally between rounds (the default) instead of recomputing it.
     incremental: bool,
 }
@@ -70,8 +75,10 @@ impl LmCut {
             zero_achievers: base_zero_achievers.clone(),
             base_zero_achievers,
             status: vec![0; facts],
-            queue: VecDeque::new(),
+            queue: Vec::new(),
             cut: Vec::new(),
+            candidate_round: vec![0; relaxed.ops.len()],
+            round: 0,
             incremental: true,
             exploration,
         }
@@ -114,8 +121,10 @@ impl Heuristic for LmCut {
             let goal = relaxed.goal;
             status[goal as usize] = IN_GOAL_ZONE;
             queue.clear();
-            queue.push_back(goal);
-            while let Some(fact) = queue.pop_front() {
+            queue.push(goal);
+            let mut head = 0;
+            while let Some(&fact) = queue.get(head) {
+                head += 1;
                 for &op in relaxed.achievers.of(fact) {
                     let current = op_supporter[op as usize];
                     if costs[op as usize] != 0 || current == NONE {
@@ -148,7 +157,7 @@ impl Heuristic for LmCut {
                     }
                     if status[supporter as usize] != IN_GOAL_ZONE {
                         status[supporter as usize] = IN_GOAL_ZONE;
-                        queue.push_back(supporter);
+                        queue.push(supporter);
                     }
                 }
             }
@@ -156,19 +165,46 @@ impl Heuristic for LmCut {
             // operator applicable in this round's exploration, so one of maximal h_max and,
             // among ties, the one reached last (the bucket queue is last-in-first-out).
             let supported = &*supported;
+            // The cut's candidates: operators with an effect in the goal zone that the forward
+            // walk can trigger (no preconditions, or a supporter outside the zone). The cut
+            // is the candidates whose supporter it reaches, so once it holds them all the walk
+            // stops: the rest of it would find nothing (on the IPC fixtures it skips 10-65% of
+            // the walk; it cannot stop early when some candidate's supporter lies beyond the
+            // zone). The zone's facts are `queue`'s entries, in marking order.
+            self.round = self.round.wrapping_add(1);
+            if self.round == 0 {
+                self.candidate_round.fill(0);
+                self.round = 1;
+            }
+            let (round, candidate_round) = (self.round, &mut self.candidate_round);
+            let mut candidates = 0;
+            for &fact in queue.iter() {
+                for &op in relaxed.achievers.of(fact) {
+                    let supporter = op_supporter[op as usize];
+                    let triggerable = if supporter == NONE {
+                        relaxed.ops[op as usize].pre_start == relaxed.ops[op as usize].pre_end
+                    } else {
+                        status[supporter as usize] != IN_GOAL_ZONE
+                    };
+                    if triggerable && candidate_round[op as usize] != round {
+                        candidate_round[op as usize] = round;
+                        candidates += 1;
+                    }
+                }
+            }
             // Forward from the state along supporter edges until the goal zone: the cut.
             cut.clear();
             queue.clear();
             for fact in state.facts() {
                 // A state fact is never in the goal zone: the goal would cost 0.
                 status[fact.index()] = REACHED;
-                queue.push_back(fact.0);
+                queue.push(fact.0);
             }
             // An operator with an effect in the goal zone is in the cut, and its other
             // effects are not explored further (as in Fast Downward): the cut stays a
             // landmark, since reaching those effects needs the operator itself, and smaller
             // cuts leave more landmarks for later rounds.
-            let triggered = |op: u32, status: &mut Vec<u8>, queue: &mut VecDeque<u32>, cut: &mut Vec<u32>| {
+            let triggered = |op: u32, status: &mut Vec<u8>, queue: &mut Vec<u32>, cut: &mut Vec<u32>| {
                 let adds = relaxed.ops[op as usize].add(relaxed);
                 if adds.iter().any(|&added| status[added as usize] == IN_GOAL_ZONE) {
                     cut.push(op);
@@ -177,14 +213,19 @@ impl Heuristic for LmCut {
                 for &added in adds {
                     if status[added as usize] == 0 {
                         status[added as usize] = REACHED;
-                        queue.push_back(added);
+                        queue.push(added);
                     }
                 }
             };
             for &op in &relaxed.no_pre {
                 triggered(op, status, queue, cut);
             }
-            while let Some(fact) = queue.pop_front() {
+            let mut head = 0;
+            while let Some(&fact) = queue.get(head) {
+                if cut.len() == candidates {
+                    break;
+                }
+                head += 1;
                 for (op, added) in relaxed.sole_pre_entries(fact) {
                     if added == NO_ADD {
                         triggered(op, status, queue, cut);
@@ -194,7 +235,7 @@ impl Heuristic for LmCut {
                     match status[added as usize] {
                         0 => {
                             status[added as usize] = REACHED;
-                            queue.push_back(added);
+                            queue.push(added);
                         }
                         IN_GOAL_ZONE => cut.push(op),
                         _ => {}
