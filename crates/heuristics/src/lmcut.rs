@@ -29,7 +29,7 @@
 use transition_model::{State, TransitionModel};
 
 use crate::relaxation::{Combine, Exploration};
-use crate::relaxed::NO_ADD;
+use crate::relaxed::{NO_ADD, TWO_ADDS};
 use crate::{Heuristic, INFINITE};
 
 #[derive(Debug, Clone)]
@@ -269,18 +269,35 @@ impl Heuristic for LmCut {
                 }
                 head += 1;
                 for (op, added) in relaxed.sole_pre_entries(fact) {
+                    // One or two add effects: the same rule, read without the operator.
+                    if added < TWO_ADDS {
+                        match status[added as usize] {
+                            0 => {
+                                status[added as usize] = REACHED;
+                                queue.push(added);
+                            }
+                            IN_GOAL_ZONE => cut.push(op),
+                            _ => {}
+                        }
+                        continue;
+                    }
                     if added == NO_ADD {
                         triggered(op, status, queue, cut);
                         continue;
                     }
-                    // One add effect: the same rule, read without the operator.
-                    match status[added as usize] {
-                        0 => {
-                            status[added as usize] = REACHED;
-                            queue.push(added);
-                        }
-                        IN_GOAL_ZONE => cut.push(op),
-                        _ => {}
+                    let (first, second) = (added & !TWO_ADDS, relaxed.second_add[op as usize]);
+                    let (first_status, second_status) = (status[first as usize], status[second as usize]);
+                    if first_status == IN_GOAL_ZONE || second_status == IN_GOAL_ZONE {
+                        cut.push(op);
+                        continue;
+                    }
+                    if first_status == 0 {
+                        status[first as usize] = REACHED;
+                        queue.push(first);
+                    }
+                    if second_status == 0 {
+                        status[second as usize] = REACHED;
+                        queue.push(second);
                     }
                 }
                 for op in supported.of(fact) {

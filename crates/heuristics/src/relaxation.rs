@@ -65,7 +65,7 @@ impl FactQueue {
 use grounding::{ActionId, Task};
 use transition_model::{State, TransitionModel};
 
-use crate::relaxed::{NO_ADD, RelaxedTask};
+use crate::relaxed::RelaxedTask;
 use crate::{Heuristic, INFINITE};
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -329,11 +329,10 @@ impl Exploration {
             if cost > fact_cost[fact as usize] {
                 continue;
             }
-            for (op, single) in relaxed.sole_pre_entries(fact) {
+            for (op, added) in relaxed.sole_pre_entries(fact) {
                 let target = cost.saturating_add(costs[op as usize]);
-                // The one add effect from the parallel array, else through the operator.
-                let adds = if single != NO_ADD { std::slice::from_ref(&single) } else { relaxed.ops[op as usize].add(relaxed) };
-                for &added in adds {
+                let mut pair = [0; 2];
+                for &added in relaxed.sole_pre_adds(op, &added, &mut pair) {
                     if target < fact_cost[added as usize] {
                         fact_cost[added as usize] = target;
                         queue.push(target, added);

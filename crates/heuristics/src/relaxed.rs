@@ -20,8 +20,13 @@ use rustc_hash::FxHashMap;
 /// `action` of operators that stand for no action (clause and goal achievers).
 pub const NO_ACTION: u32 = u32::MAX;
 
-/// [`RelaxedTask::sole_pre_add`] of an operator with no or several add effects.
+/// [`RelaxedTask::sole_pre_add`] of an operator with three or more add effects.
 pub const NO_ADD: u32 = u32::MAX;
+
+/// Flags [`RelaxedTask::sole_pre_add`]'s entry of an operator with two add effects: the
+/// first, with this bit set (fact ids stay below it); the second is in
+/// [`RelaxedTask::second_add`].
+pub const TWO_ADDS: u32 = 1 << 31;
 
 #[derive(Debug, Clone, Copy)]
 pub struct RelaxedOp {
@@ -49,9 +54,13 @@ pub struct RelaxedTask {
     /// so the explorations keep no supporter lists for them.
     pub sole_pre_of: FactIndex,
     /// Parallel to [`RelaxedTask::sole_pre_of`]'s lists: each listed operator's add effect
-    /// when it has exactly one, else [`NO_ADD`]. The explorations read the effect beside the
-    /// operator id instead of through the operator (two dependent loads fewer per visit).
+    /// when it has exactly one; its first one with [`TWO_ADDS`] set when it has two; else
+    /// [`NO_ADD`]. The explorations read the effects beside the operator id instead of through
+    /// the operator (two dependent loads fewer per visit), and test for one effect with one
+    /// comparison.
     pub sole_pre_add: Vec<u32>,
+    /// Per operator: its second add effect when it has exactly two, else [`NO_ADD`].
+    pub second_add: Vec<u32>,
     /// Operators without preconditions.
     pub no_pre: Vec<u32>,
     pub goal: u32,
@@ -72,12 +81,26 @@ impl RelaxedOp {
 }
 
 impl RelaxedTask {
-    /// The operators whose only precondition is `fact`, with their single add effect or
-    /// [`NO_ADD`].
+    /// The operators whose only precondition is `fact`, with their
+    /// [`RelaxedTask::sole_pre_add`] entries.
     #[inline]
     pub fn sole_pre_entries(&self, fact: u32) -> impl Iterator<Item = (u32, u32)> + '_ {
         let range = self.sole_pre_of.range(fact);
         self.sole_pre_of.ops[range.clone()].iter().copied().zip(self.sole_pre_add[range].iter().copied())
+    }
+
+    /// The add effects of `op`, listed in [`RelaxedTask::sole_pre_of`] with the entry
+    /// `added` (`pair` holds two effects).
+    #[inline]
+    pub fn sole_pre_adds<'a>(&'a self, op: u32, added: &'a u32, pair: &'a mut [u32; 2]) -> &'a [u32] {
+        if *added < TWO_ADDS {
+            std::slice::from_ref(added)
+        } else if *added != NO_ADD {
+            *pair = [*added & !TWO_ADDS, self.second_add[op as usize]];
+            &pair[..]
+        } else {
+            self.ops[op as usize].add(self)
+        }
     }
 
     pub fn new(task: &Task) -> RelaxedTask {
@@ -91,6 +114,7 @@ impl RelaxedTask {
                 achievers: FactIndex::default(),
                 sole_pre_of: FactIndex::default(),
                 sole_pre_add: Vec::new(),
+                second_add: Vec::new(),
                 no_pre: Vec::new(),
                 goal: 0,
                 task_facts: task.facts.len(),
@@ -239,12 +263,23 @@ impl Builder {
             let pre = &relaxed.pre[op.pre_start as usize..op.pre_end as usize];
             if pre.len() == 1 { pre } else { &[] }
         });
+        // Fact ids stay below the flag bit, or no operator is listed as having two effects.
+        let two_adds = relaxed.num_facts < TWO_ADDS as usize;
         relaxed.sole_pre_add = relaxed
             .sole_pre_of
             .ops
             .iter()
             .map(|&op| match relaxed.ops[op as usize].add(relaxed) {
                 [added] => *added,
+                [first, _] if two_adds => first | TWO_ADDS,
+                _ => NO_ADD,
+            })
+            .collect();
+        relaxed.second_add = relaxed
+            .ops
+            .iter()
+            .map(|op| match op.add(relaxed) {
+                [_, second] => *second,
                 _ => NO_ADD,
             })
             .collect();
