@@ -82,9 +82,9 @@ pub struct Exploration {
     /// Best supporter of each fact (an operator index), `u32::MAX` for state facts; kept by
     /// `Combine::Add` explorations only.
     pub supporter: Vec<u32>,
-    op_cost: Vec<u32>,
     /// Per operator: the precondition whose arrival made it applicable (the last one
-    /// popped, so one of maximal cost), `u32::MAX` if none. Change it with
+    /// popped, so one of maximal cost), `u32::MAX` if none; kept by explorations with
+    /// [`Exploration::track_supported`] only. Change it with
     /// [`Exploration::set_supporter`] so that `supported` follows (LM-cut, which holds split
     /// borrows of the exploration, moves the list entry itself with `Supported::relink`).
     pub op_supporter: Vec<u32>,
@@ -94,8 +94,12 @@ pub struct Exploration {
     /// its supporter's cost when last looked at (the operator's h_max before its own cost).
     supporter_cost: Vec<u32>,
     track: bool,
-    unsatisfied: Vec<u32>,
-    /// Precondition count of each operator, copied into `unsatisfied` per run.
+    /// Per operator during a run: its preconditions not yet reached, and (h_add) the sum of
+    /// their costs so far. One array, so that a visit touches one cache line.
+    op_state: Vec<[u32; 2]>,
+    /// `op_state` at the start of a run: each operator's precondition count, cost 0.
+    op_state_start: Vec<[u32; 2]>,
+    /// Precondition count of each operator.
     pre_count: Vec<u32>,
     queue: FactQueue,
 }
@@ -105,18 +109,19 @@ impl Exploration {
         let relaxed = RelaxedTask::new(task);
         let facts = relaxed.num_facts;
         let ops = relaxed.ops.len();
-        let pre_count = relaxed.ops.iter().map(|op| op.pre_end - op.pre_start).collect();
+        let pre_count: Vec<u32> = relaxed.ops.iter().map(|op| op.pre_end - op.pre_start).collect();
+        let op_state_start: Vec<[u32; 2]> = pre_count.iter().map(|&count| [count, 0]).collect();
         Exploration {
             pre_count,
             relaxed,
             fact_cost: vec![INFINITE; facts],
             supporter: vec![u32::MAX; facts],
-            op_cost: vec![0; ops],
             op_supporter: vec![u32::MAX; ops],
             supported: Supported { head: vec![u32::MAX; facts], next: vec![u32::MAX; ops], prev: vec![u32::MAX; ops] },
             supporter_cost: vec![0; ops],
             track: false,
-            unsatisfied: vec![0; ops],
+            op_state: op_state_start.clone(),
+            op_state_start,
             queue: FactQueue::default(),
         }
     }
@@ -141,11 +146,11 @@ impl Exploration {
             relaxed,
             fact_cost,
             supporter,
-            op_cost,
             op_supporter,
             supported,
             supporter_cost,
-            unsatisfied,
+            op_state,
+            op_state_start,
             pre_count,
             queue,
             ..
@@ -153,16 +158,16 @@ impl Exploration {
         let relaxed = &*relaxed;
         let pre_count = &pre_count[..];
         fact_cost.fill(INFINITE);
-        unsatisfied.copy_from_slice(pre_count);
-        op_supporter.fill(u32::MAX);
+        op_state.copy_from_slice(op_state_start);
         if TRACK {
+            // Only LM-cut (which tracks the supported lists) reads operator supporters.
+            op_supporter.fill(u32::MAX);
             supported.head.fill(u32::MAX);
         }
         if ADD {
             // Only h_add needs operator costs (for h_max an operator costs what its last
             // precondition popped at) and fact supporters (for h_FF's relaxed plan).
             supporter.fill(u32::MAX);
-            op_cost.fill(0);
         }
         queue.clear();
         for fact in state.facts() {
@@ -193,19 +198,22 @@ impl Exploration {
             }
             for &op in relaxed.pre_of(fact) {
                 let i = op as usize;
+                let [unsatisfied, pre_sum] = &mut op_state[i];
                 if ADD {
-                    op_cost[i] = op_cost[i].saturating_add(cost);
+                    *pre_sum = pre_sum.saturating_add(cost);
                 }
-                unsatisfied[i] -= 1;
-                if unsatisfied[i] == 0 {
-                    op_supporter[i] = fact;
-                    if TRACK && pre_count[i] > 1 {
-                        supported.link(op, fact);
-                        supporter_cost[i] = cost;
+                *unsatisfied -= 1;
+                if *unsatisfied == 0 {
+                    if TRACK {
+                        op_supporter[i] = fact;
+                        if pre_count[i] > 1 {
+                            supported.link(op, fact);
+                            supporter_cost[i] = cost;
+                        }
                     }
                     // Facts leave the queue in cost order, so for h_max the operator costs
                     // what its last precondition cost.
-                    let pre_cost = if ADD { op_cost[i] } else { cost };
+                    let pre_cost = if ADD { *pre_sum } else { cost };
                     let reached = pre_cost.saturating_add(op_base(i)).min(INFINITE - 1);
                     for &added in relaxed.ops[i].add(relaxed) {
                         if reached < fact_cost[added as usize] {
