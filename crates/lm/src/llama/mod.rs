@@ -481,10 +481,22 @@ fn attention(cfg: &ModelConfig, q: Vec<f32>, keys: &[f32], values: &[f32], start
     let (hd, heads, kv_heads) = (cfg.head_dim, cfg.heads, cfg.kv_heads);
     let total = start + n;
     let q = Tensor::from_vec(q, (1, n, heads, hd), &Device::Cpu)?.transpose(1, 2)?.contiguous()?;
+    // The reference's keys and values per query head: `(1, heads, total, hd)`, contiguous,
+    // head `h` reading key-value head `h / group` (its transpose, then `repeat_kv`'s
+    // concatenation and reshape). Gathered from the position-major cache in one pass, so the
+    // tensor (values and layout, hence every product) is the reference's, without the three
+    // intermediate copies of the whole cache those tensor ops make per layer and call.
+    let group = heads / kv_heads;
+    let kv_dim = kv_heads * hd;
     let per_head = |data: &[f32]| -> Result<Tensor, LmError> {
-        let t = Tensor::from_slice(data, (1, total, kv_heads, hd), &Device::Cpu)?.transpose(1, 2)?.contiguous()?;
-        let group = heads / kv_heads;
-        Ok(if group == 1 { t } else { Tensor::cat(&vec![&t; group], 2)?.reshape((1, heads, total, hd))? })
+        let mut gathered = Vec::with_capacity(heads * total * hd);
+        for head in 0..heads {
+            let offset = (head / group) * hd;
+            for row in data[..total * kv_dim].chunks_exact(kv_dim) {
+                gathered.extend_from_slice(&row[offset..offset + hd]);
+            }
+        }
+        Ok(Tensor::from_vec(gathered, (1, heads, total, hd), &Device::Cpu)?)
     };
     let k = per_head(keys)?;
     let v = per_head(values)?;
