@@ -462,13 +462,15 @@ mod tests {
 
     /// The early stop of the forward walk and the proofs that supporters lie beyond the goal
     /// zone change no value, and the audit finds every cut operator counted and no proved
-    /// fact reached, on states along random walks in every IPC fixture and some ALFWorld games.
+    /// fact reached, on states along random walks in every IPC fixture and some ALFWorld and
+    /// VirtualHome tasks.
     #[test]
     fn the_early_stop_changes_nothing() {
         let ipc = load(Benchmark::Ipc).expect("fixtures");
         let alfworld = load(Benchmark::AlfworldSeen).expect("fixtures");
+        let virtualhome = load(Benchmark::VirtualhomeEai).expect("fixtures");
         let mut proved_on = Vec::new();
-        for files in ipc.iter().chain(alfworld.iter().step_by(35)) {
+        for files in ipc.iter().chain(alfworld.iter().step_by(35)).chain(virtualhome.iter().step_by(40)) {
             let model = model(files);
             let mut fast = LmCut::new(&model);
             let mut audited = LmCut::new(&model);
