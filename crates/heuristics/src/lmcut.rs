@@ -215,9 +215,10 @@ impl Heuristic for LmCut {
                         continue;
                     }
                     candidate_round[op as usize] = round;
-                    // A supporter through which the operator reaches the zone fact above its
-                    // h_max often lies beyond the zone (reached only through it); a short
-                    // backward search proves that, so the walk need not wait for it.
+                    // A supporter costlier than the zone fact it leads to often lies beyond
+                    // the zone (reached only through it, as a package loaded again at its
+                    // destination in logistics); a short backward search proves that, so the
+                    // walk need not wait for it.
                     if beyond.enabled
                         && supporter != NONE
                         && status[supporter as usize] == 0
