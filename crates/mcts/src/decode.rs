@@ -451,7 +451,6 @@ impl<'m> Decoder<'m> {
     }
 }
 
-/// Higher probability first, then lower token id.
 /// Up to this many candidates, a dense distribution's best are picked in one pass.
 const SMALL_KEEP: usize = 256;
 
@@ -480,6 +479,7 @@ fn top_candidates(values: &[f32], keep: usize, floor: f32) -> Vec<(TokenId, f32)
     top
 }
 
+/// Higher probability first, then lower token id.
 pub(crate) fn by_probability(a: &(TokenId, f32), b: &(TokenId, f32)) -> std::cmp::Ordering {
     b.1.total_cmp(&a.1).then(a.0.cmp(&b.0))
 }
