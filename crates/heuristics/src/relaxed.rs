@@ -69,6 +69,12 @@ pub struct RelaxedTask {
 }
 
 impl RelaxedOp {
+    /// Whether the operator has no preconditions (it is applicable in every state).
+    #[inline]
+    pub fn has_no_pre(&self) -> bool {
+        self.pre_start == self.pre_end
+    }
+
     #[inline]
     pub fn pre<'a>(&self, task: &'a RelaxedTask) -> &'a [u32] {
         &task.pre[self.pre_start as usize..self.pre_end as usize]
@@ -254,8 +260,7 @@ impl Builder {
     fn finish(mut self) -> RelaxedTask {
         self.prune_irrelevant();
         let relaxed = &mut self.relaxed;
-        relaxed.no_pre =
-            (0..relaxed.ops.len() as u32).filter(|&i| relaxed.ops[i as usize].pre_start == relaxed.ops[i as usize].pre_end).collect();
+        relaxed.no_pre = (0..relaxed.ops.len() as u32).filter(|&i| relaxed.ops[i as usize].has_no_pre()).collect();
         relaxed.preconditions_of =
             FactIndex::new(relaxed.num_facts, &relaxed.ops, |op| &relaxed.pre[op.pre_start as usize..op.pre_end as usize]);
         relaxed.achievers = FactIndex::new(relaxed.num_facts, &relaxed.ops, |op| &relaxed.add[op.add_start as usize..op.add_end as usize]);
