@@ -197,9 +197,9 @@ impl Heuristic for LmCut {
                 self.round = 1;
             }
             let (round, candidate_round, beyond) = (self.round, &mut self.candidate_round, &mut self.beyond);
-            for fact in state.facts() {
+            for fact in relaxed.state_facts(state) {
                 // A state fact is never in the goal zone: the goal would cost 0.
-                status[fact.index()] = REACHED;
+                status[fact as usize] = REACHED;
             }
             let mut candidates = 0;
             let (mut tried, mut proved) = (false, false);
@@ -239,7 +239,7 @@ impl Heuristic for LmCut {
             // Forward from the state along supporter edges until the goal zone: the cut.
             cut.clear();
             queue.clear();
-            queue.extend(state.facts().map(|fact| fact.0));
+            queue.extend(relaxed.state_facts(state));
             // An operator with an effect in the goal zone is in the cut, and its other
             // effects are not explored further (as in Fast Downward): the cut stays a
             // landmark, since reaching those effects needs the operator itself, and smaller

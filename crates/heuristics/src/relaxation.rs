@@ -170,9 +170,9 @@ impl Exploration {
             supporter.fill(u32::MAX);
         }
         queue.clear();
-        for fact in state.facts() {
-            fact_cost[fact.index()] = 0;
-            queue.push(0, fact.0);
+        for fact in relaxed.state_facts(state) {
+            fact_cost[fact as usize] = 0;
+            queue.push(0, fact);
         }
         let op_base = |i: usize| costs.map_or(relaxed.ops[i].cost, |c| c[i]);
         for &op in &relaxed.no_pre {

@@ -5,9 +5,15 @@
 //! - an action becomes one operator (its positive preconditions, its unconditional adds)
 //!   plus one operator per conditional effect (preconditions and effect condition, the
 //!   effect's adds), each with the action's cost, as Fast Downward does;
-//! - negative preconditions are dropped (they are free in the delete relaxation), and so is
-//!   any clause with a negative literal; a clause of positive literals becomes an auxiliary
-//!   fact, achieved at zero cost by any of its literals;
+//! - a fact `f` that some condition needs false gets a *negation fact* `¬f`: true in a state
+//!   where `f` is false, added by every operator whose action deletes `f` (and does not add
+//!   it back). A precondition `(not f)` becomes the precondition `¬f`. This is what Fast
+//!   Downward's translator does (a binary variable with the values `f` and `NegatedAtom f`),
+//!   and it matters on the household domains: ALFWorld's `pickupobject` needs
+//!   `(not (holdsAny ?a))`, so a relaxation that dropped it valued "holding the wrong object"
+//!   as close to the goal as "holding the right one";
+//! - a clause (a disjunctive precondition) becomes an auxiliary fact, achieved at zero cost by
+//!   any of its literals (a negative literal through its negation fact);
 //! - the goal becomes one auxiliary goal fact, achieved at zero cost by one operator per goal
 //!   disjunct. Fast Downward compiles complex goals the same way (an artificial goal reached
 //!   by zero-cost actions); for a conjunctive goal every heuristic value is unchanged by it;
@@ -16,9 +22,13 @@
 
 use grounding::{ActionId, Condition, FactId, Literal, Task};
 use rustc_hash::FxHashMap;
+use transition_model::State;
 
 /// `action` of operators that stand for no action (clause and goal achievers).
 pub const NO_ACTION: u32 = u32::MAX;
+
+/// A precondition marked for removal while the relaxation is built.
+const DROPPED: u32 = u32::MAX;
 
 /// [`RelaxedTask::sole_pre_add`] of an operator with three or more add effects.
 pub const NO_ADD: u32 = u32::MAX;
@@ -66,6 +76,8 @@ pub struct RelaxedTask {
     pub goal: u32,
     /// Number of real task facts (state facts have ids below this).
     pub task_facts: usize,
+    /// `(f, ¬f)` for every negation fact, by `f`: `¬f` holds in a state without `f`.
+    pub negations: Vec<(u32, u32)>,
 }
 
 impl RelaxedOp {
@@ -109,6 +121,16 @@ impl RelaxedTask {
         }
     }
 
+    /// The facts true in `state` in the relaxed task: its own, and the negation facts of the
+    /// facts it lacks.
+    #[inline]
+    pub fn state_facts<'a>(&'a self, state: &'a State) -> impl Iterator<Item = u32> + 'a {
+        state
+            .facts()
+            .map(|f| f.0)
+            .chain(self.negations.iter().filter(|&&(fact, _)| !state.contains(FactId(fact))).map(|&(_, negation)| negation))
+    }
+
     pub fn new(task: &Task) -> RelaxedTask {
         let mut builder = Builder {
             relaxed: RelaxedTask {
@@ -124,20 +146,25 @@ impl RelaxedTask {
                 no_pre: Vec::new(),
                 goal: 0,
                 task_facts: task.facts.len(),
+                negations: Vec::new(),
             },
             clause_facts: FxHashMap::default(),
             pending_clauses: Vec::new(),
+            negation_of: FxHashMap::default(),
         };
+        builder.negation_facts(task);
         for (index, action) in task.actions.iter().enumerate() {
             let pre = builder.condition_facts(&action.pre);
-            builder.push(pre.clone(), action.add.iter().map(|f| f.0).collect(), action.cost, index as u32);
+            let add = builder.effect_facts(&action.add, &action.del, &[]);
+            builder.push(pre.clone(), add, action.cost, index as u32);
             for effect in &action.conditional {
-                if effect.add.is_empty() {
+                let add = builder.effect_facts(&effect.add, &effect.del, &action.add);
+                if add.is_empty() {
                     continue;
                 }
                 let mut pre = pre.clone();
                 pre.extend(builder.condition_facts(&effect.condition));
-                builder.push(pre, effect.add.iter().map(|f| f.0).collect(), action.cost, index as u32);
+                builder.push(pre, add, action.cost, index as u32);
             }
         }
         let goal = builder.relaxed.num_facts as u32;
@@ -150,7 +177,8 @@ impl RelaxedTask {
         // Clause achievers: any literal of the clause reaches its auxiliary fact.
         for (fact, clause) in std::mem::take(&mut builder.pending_clauses) {
             for literal in clause {
-                builder.push(vec![literal.fact().0], vec![fact], 0, NO_ACTION);
+                let pre = builder.literal_fact(literal);
+                builder.push(vec![pre], vec![fact], 0, NO_ACTION);
             }
         }
         builder.finish()
@@ -172,17 +200,62 @@ struct Builder {
     relaxed: RelaxedTask,
     clause_facts: FxHashMap<Vec<Literal>, u32>,
     pending_clauses: Vec<(u32, Vec<Literal>)>,
+    /// The negation fact of each fact some condition needs false.
+    negation_of: FxHashMap<u32, u32>,
 }
 
 impl Builder {
-    /// Relaxed preconditions of a condition: its positive facts and one auxiliary fact per
-    /// all-positive clause.
+    /// Gives a negation fact to every fact that a precondition, an effect condition or the goal
+    /// needs false, in order of fact id.
+    fn negation_facts(&mut self, task: &Task) {
+        let mut negated: Vec<u32> = Vec::new();
+        let mut collect = |condition: &Condition| {
+            negated.extend(condition.neg.iter().map(|f| f.0));
+            negated.extend(condition.clauses.iter().flatten().filter(|l| l.is_negated()).map(|l| l.fact().0));
+        };
+        for action in &task.actions {
+            collect(&action.pre);
+            action.conditional.iter().for_each(|effect| collect(&effect.condition));
+        }
+        task.goal.disjuncts.iter().for_each(&mut collect);
+        negated.sort_unstable();
+        negated.dedup();
+        for fact in negated {
+            let negation = self.relaxed.num_facts as u32;
+            self.relaxed.num_facts += 1;
+            self.negation_of.insert(fact, negation);
+            self.relaxed.negations.push((fact, negation));
+        }
+    }
+
+    /// The relaxed fact of a literal: the fact, or its negation fact.
+    fn literal_fact(&self, literal: Literal) -> u32 {
+        let fact = literal.fact().0;
+        if literal.is_negated() { self.negation_of[&fact] } else { fact }
+    }
+
+    /// Relaxed adds of an effect: its adds, and the negation facts of its deletes that neither
+    /// it nor `also_added` (the action's unconditional adds) adds back (an added fact stays
+    /// true, PDDL semantics).
+    fn effect_facts(&self, add: &[FactId], del: &[FactId], also_added: &[FactId]) -> Vec<u32> {
+        let mut out: Vec<u32> = add.iter().map(|f| f.0).collect();
+        for fact in del {
+            if let Some(&negation) = self.negation_of.get(&fact.0)
+                && add.binary_search(fact).is_err()
+                && also_added.binary_search(fact).is_err()
+            {
+                out.push(negation);
+            }
+        }
+        out
+    }
+
+    /// Relaxed preconditions of a condition: its positive facts, the negation facts of its
+    /// negative ones, and one auxiliary fact per clause.
     fn condition_facts(&mut self, condition: &Condition) -> Vec<u32> {
         let mut out: Vec<u32> = condition.pos.iter().map(|f: &FactId| f.0).collect();
+        out.extend(condition.neg.iter().map(|f| self.negation_of[&f.0]));
         for clause in &condition.clauses {
-            if clause.iter().any(|l| l.is_negated()) {
-                continue;
-            }
             let next = self.relaxed.num_facts as u32;
             let fact = *self.clause_facts.entry(clause.clone()).or_insert_with(|| {
                 self.pending_clauses.push((next, clause.clone()));
@@ -221,25 +294,83 @@ impl Builder {
 
     /// Drops every operator that cannot contribute to the goal: one is kept when it adds a
     /// *relevant* fact (the goal fact, or a precondition of a kept operator), found by a
-    /// backward fixpoint from the goal. h_max, h_add, the relaxed plan and LM-cut's cuts only
-    /// ever look at the goal's supporters, transitively, which are all kept; and a dropped
-    /// operator adds only dropped facts, so the order in which the kept facts leave the
-    /// queue, and with it every tie-break, is unchanged. On ALFWorld this keeps a third to
-    /// a half of the operators, on EAI VirtualHome about half.
+    /// backward fixpoint from the goal; a kept operator keeps only its relevant adds. h_max,
+    /// h_add, the relaxed plan and LM-cut's cuts only ever look at the goal's supporters,
+    /// transitively, which are all kept; and a dropped operator or effect reaches only
+    /// irrelevant facts, which no kept operator needs, so the order in which the kept facts
+    /// leave the queue, and with it every tie-break, is unchanged. On ALFWorld this keeps a
+    /// third to a half of the operators, on EAI VirtualHome about half.
+    ///
+    /// Then a precondition `¬f` of an operator whose only relevant add is `f` is dropped, and
+    /// the fixpoint runs again: where `f` holds, the operator adds nothing new, and where it
+    /// does not, `¬f` holds. Values are unchanged, and the achievers of `¬f` are no longer
+    /// relevant through it: ALFWorld's `openobject` needs `(not (opened ?r))` and adds
+    /// `(opened ?r)`, and without this rule every `closeobject` would be kept for it.
     fn prune_irrelevant(&mut self) {
+        loop {
+            self.keep_relevant();
+            let relaxed = &mut self.relaxed;
+            let negation_of = &self.negation_of;
+            let mut dropped = false;
+            for op in &relaxed.ops {
+                let [added] = relaxed.add[op.add_start as usize..op.add_end as usize] else { continue };
+                let Some(&negation) = negation_of.get(&added) else { continue };
+                let pre = &mut relaxed.pre[op.pre_start as usize..op.pre_end as usize];
+                if let Some(at) = pre.iter().position(|&p| p == negation) {
+                    // Marked here, removed by the next `keep_relevant`.
+                    pre[at] = DROPPED;
+                    dropped = true;
+                }
+            }
+            if !dropped {
+                return;
+            }
+        }
+    }
+
+    /// One backward relevance fixpoint: keeps the operators with a relevant add, and only
+    /// their relevant adds (and drops preconditions marked [`DROPPED`]).
+    ///
+    /// An operator reached only as an achiever of a negation fact `¬f` does not make its
+    /// *guarded* preconditions relevant: those whose every achiever needs `¬f`. Such a
+    /// precondition `p` can be reached before `¬f` only when the state has it, so where the
+    /// state lacks `p` the operator is never `¬f`'s first achiever, and `p`'s achievers (which
+    /// need `¬f` already) add nothing that counts. This is ALFWorld's hand: `¬holdsAny` is
+    /// added by `putobject ?o ?r` for every object, each needing `(holds ?o)`, which only
+    /// `pickupobject` adds, after `¬holdsAny`; without the rule every object's pick-up and
+    /// put-down would be relevant (2.6 times the operators). The operator keeps `p` as a
+    /// precondition, so it adds `¬f` exactly where the state holds `p`. h_max and h_add are
+    /// unchanged (the dropped operators only ever reach a fact after its cheapest achiever),
+    /// and so is h⁺: no relaxed plan needs them.
+    fn keep_relevant(&mut self) {
+        const PARTIAL: u8 = 1;
+        const FULL: u8 = 2;
         let relaxed = &mut self.relaxed;
         let adders = FactIndex::new(relaxed.num_facts, &relaxed.ops, |op| &relaxed.add[op.add_start as usize..op.add_end as usize]);
+        let negations: rustc_hash::FxHashSet<u32> = relaxed.negations.iter().map(|&(_, negation)| negation).collect();
         let mut relevant_fact = vec![false; relaxed.num_facts];
-        let mut kept = vec![false; relaxed.ops.len()];
+        let mut kept = vec![0u8; relaxed.ops.len()];
         let mut stack = vec![relaxed.goal];
         relevant_fact[relaxed.goal as usize] = true;
+        let pre_of = |op: &RelaxedOp| &relaxed.pre[op.pre_start as usize..op.pre_end as usize];
         while let Some(fact) = stack.pop() {
-            for &op in adders.of(fact) {
-                if std::mem::replace(&mut kept[op as usize], true) {
+            for &index in adders.of(fact) {
+                let op = relaxed.ops[index as usize];
+                let guarded = |p: u32| {
+                    negations.contains(&fact)
+                        && !negations.contains(&p)
+                        && adders.of(p).iter().all(|&a| pre_of(&relaxed.ops[a as usize]).contains(&fact))
+                };
+                let mode = if pre_of(&op).iter().any(|&p| p != DROPPED && guarded(p)) { PARTIAL } else { FULL };
+                let before = kept[index as usize];
+                if before >= mode {
                     continue;
                 }
-                let op = relaxed.ops[op as usize];
-                for &pre in &relaxed.pre[op.pre_start as usize..op.pre_end as usize] {
+                kept[index as usize] = mode;
+                for &pre in pre_of(&op) {
+                    if pre == DROPPED || (mode == PARTIAL && guarded(pre)) {
+                        continue;
+                    }
                     if !std::mem::replace(&mut relevant_fact[pre as usize], true) {
                         stack.push(pre);
                     }
@@ -247,14 +378,15 @@ impl Builder {
             }
         }
         let (mut pre, mut add, mut ops) = (Vec::new(), Vec::new(), Vec::new());
-        for (op, _) in relaxed.ops.iter().zip(&kept).filter(|(_, k)| **k) {
+        for (op, _) in relaxed.ops.iter().zip(&kept).filter(|(_, k)| **k > 0) {
             let pre_start = pre.len() as u32;
-            pre.extend_from_slice(&relaxed.pre[op.pre_start as usize..op.pre_end as usize]);
+            pre.extend(relaxed.pre[op.pre_start as usize..op.pre_end as usize].iter().filter(|&&p| p != DROPPED));
             let add_start = add.len() as u32;
-            add.extend_from_slice(&relaxed.add[op.add_start as usize..op.add_end as usize]);
+            add.extend(relaxed.add[op.add_start as usize..op.add_end as usize].iter().filter(|&&a| relevant_fact[a as usize]));
             ops.push(RelaxedOp { pre_start, pre_end: pre.len() as u32, add_start, add_end: add.len() as u32, ..*op });
         }
         (relaxed.pre, relaxed.add, relaxed.ops) = (pre, add, ops);
+        relaxed.negations.retain(|&(_, negation)| relevant_fact[negation as usize]);
     }
 
     fn finish(mut self) -> RelaxedTask {
