@@ -122,6 +122,16 @@ fn logits_match_candle_transformers_quantized_llama() {
         assert!(diff < 1e-3, "decode logits differ by {diff}");
         ours = ours_step;
     }
+    // Steps of several tokens at once (a constrained decoder sends the tokens the mask forced
+    // with the next one).
+    for width in 2..=4 {
+        let next: Vec<_> = (0..width).map(|i| prompt[10 + i]).collect();
+        sequence.extend_from_slice(&next);
+        let ours_step = model.next_logits(&sequence).expect("runs").to_vec();
+        let theirs_step = reference.forward(&next).expect("runs");
+        let diff = max_abs_diff(&ours_step, &theirs_step);
+        assert!(diff < 1e-3, "logits after a {width}-token step differ by {diff}");
+    }
 }
 
 #[test]

@@ -471,54 +471,62 @@ fn rms_norm_in_place(x: &mut [f32], weight: &[f32], width: usize, eps: f32) {
 /// `start..start + n` over the cached keys and values (`positions × kv_dim`), returning
 /// `n × q_dim`.
 ///
-/// Written with candle-core tensor ops in the same order as candle-transformers' quantized
-/// llama (`q · kᵀ`, scale, causal mask, softmax over the last axis as max / exp / sum / divide,
-/// `· v`), except that the query heads sharing a key-value head are stacked as rows of one
-/// product instead of the keys and values being repeated per query head (`repeat_kv`): each
-/// output element is the same dot product over the same data, and the logits stay bitwise the
-/// reference's (`logits_match_candle_transformers_quantized_llama`: a maximum difference of 0
-/// for the prefill and 8 decode steps, one thread or two), so that every value is bitwise the
-/// one the reference computes: activations are quantized to 8 bits
-/// before each matmul, and an attention result one ulp off flips a rounding there, which
-/// compounds over 30 layers into logit differences of 0.1 and more.
+/// Written with candle-core tensor ops in the same order, shapes and layouts as
+/// candle-transformers' quantized llama (`q · kᵀ`, scale, causal mask, softmax over the last
+/// axis as max / exp / sum / divide, `· v`, one `(1, 1, n, ·)` product per query head), so that
+/// every value is bitwise the one the reference computes (a maximum difference of 0 for the
+/// prefill, single-token and 2- to 4-token steps in
+/// `logits_match_candle_transformers_quantized_llama`): activations are quantized to 8 bits
+/// before each matmul, and an attention result one
+/// ulp off flips a rounding there, which compounds over 30 layers into logit differences of
+/// 0.1 and more. Stacking the query heads that share a key-value head as rows of one product
+/// (9 rows for a 3-token step) made gemm take another path and moved the logits by 0.49; the
+/// keys and values are instead gathered once per key-value head and shared by its query heads.
 fn attention(cfg: &ModelConfig, q: Vec<f32>, keys: &[f32], values: &[f32], start: usize, n: usize) -> Result<Vec<f32>, LmError> {
     let (hd, heads, kv_heads) = (cfg.head_dim, cfg.heads, cfg.kv_heads);
     let total = start + n;
     let group = heads / kv_heads;
     let kv_dim = kv_heads * hd;
-    // Query heads grouped by the key-value head they read: `(1, kv_heads, group · n, hd)`,
-    // row `g · n + i` for query head `kv · group + g` at position `start + i` (a reshape of the
-    // reference's `(1, heads, n, hd)`).
-    let q = Tensor::from_vec(q, (1, n, heads, hd), &Device::Cpu)?.transpose(1, 2)?.contiguous()?.reshape((1, kv_heads, group * n, hd))?;
-    // Each key-value head's keys and values, `(1, kv_heads, total, hd)`, gathered once from the
-    // position-major cache: the reference repeats them per query head (`repeat_kv`), three
-    // whole-cache copies per layer that the grouping makes unnecessary.
-    let per_kv_head = |data: &[f32]| -> Result<Tensor, LmError> {
-        let mut gathered = Vec::with_capacity(kv_heads * total * hd);
-        for kv in 0..kv_heads {
-            for row in data[..total * kv_dim].chunks_exact(kv_dim) {
-                gathered.extend_from_slice(&row[kv * hd..(kv + 1) * hd]);
-            }
-        }
-        Ok(Tensor::from_vec(gathered, (1, kv_heads, total, hd), &Device::Cpu)?)
+    let q = Tensor::from_vec(q, (1, n, heads, hd), &Device::Cpu)?.transpose(1, 2)?.contiguous()?;
+    // Each key-value head's keys and values, `(1, 1, total, hd)`, gathered once from the
+    // position-major cache; query head `h` reads head `h / group` (the reference repeats them
+    // per query head, `repeat_kv`). One product per query head, of the reference's shapes.
+    let per_kv_head = |data: &[f32]| -> Result<Vec<Tensor>, LmError> {
+        (0..kv_heads)
+            .map(|kv| {
+                let mut gathered = Vec::with_capacity(total * hd);
+                for row in data[..total * kv_dim].chunks_exact(kv_dim) {
+                    gathered.extend_from_slice(&row[kv * hd..(kv + 1) * hd]);
+                }
+                Ok(Tensor::from_vec(gathered, (1, 1, total, hd), &Device::Cpu)?)
+            })
+            .collect()
     };
-    let k = per_kv_head(keys)?;
-    let v = per_kv_head(values)?;
-    let scores = (q.matmul(&k.t()?)? / (hd as f64).sqrt())?;
-    let scores = if n == 1 {
-        scores
+    let keys = per_kv_head(keys)?;
+    let values = per_kv_head(values)?;
+    let mask = if n == 1 {
+        None
     } else {
-        // Row g · n + i (position start + i) sees keys 0..=start + i.
-        let mask: Vec<u8> = (0..group * n).flat_map(|r| (0..total).map(move |j| u8::from(j > start + r % n))).collect();
-        let mask = Tensor::from_vec(mask, (group * n, total), &Device::Cpu)?.broadcast_as(scores.shape())?;
-        let neg_inf = Tensor::new(f32::NEG_INFINITY, &Device::Cpu)?.broadcast_as(scores.shape())?;
-        mask.where_cond(&neg_inf, &scores)?
+        // Query i (position start + i) sees keys 0..=start + i.
+        let mask: Vec<u8> = (0..n).flat_map(|i| (0..total).map(move |j| u8::from(j > start + i))).collect();
+        Some(Tensor::from_vec(mask, (1, 1, n, total), &Device::Cpu)?)
     };
-    let max = scores.max_keepdim(D::Minus1)?;
-    let exp = scores.broadcast_sub(&max)?.exp()?;
-    let sum = exp.sum_keepdim(D::Minus1)?;
-    let weights = exp.broadcast_div(&sum)?;
-    let out = weights.matmul(&v)?.reshape((1, heads, n, hd))?.transpose(1, 2)?.reshape((n, heads * hd))?;
+    let neg_inf = Tensor::new(f32::NEG_INFINITY, &Device::Cpu)?.broadcast_as((1, 1, n, total))?;
+    let mut outputs = Vec::with_capacity(heads);
+    for head in 0..heads {
+        let q = q.narrow(1, head, 1)?;
+        let scores = (q.matmul(&keys[head / group].t()?)? / (hd as f64).sqrt())?;
+        let scores = match &mask {
+            Some(mask) => mask.where_cond(&neg_inf, &scores)?,
+            None => scores,
+        };
+        let max = scores.max_keepdim(D::Minus1)?;
+        let exp = scores.broadcast_sub(&max)?.exp()?;
+        let sum = exp.sum_keepdim(D::Minus1)?;
+        let weights = exp.broadcast_div(&sum)?;
+        outputs.push(weights.matmul(&values[head / group])?);
+    }
+    let out = Tensor::cat(&outputs, 1)?.transpose(1, 2)?.reshape((n, heads * hd))?;
     Ok(out.flatten_all()?.to_vec1::<f32>()?)
 }
 
