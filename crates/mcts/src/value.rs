@@ -25,7 +25,7 @@
 //! the goal; the search gave up, h_FF 3) was valued above holding the butter knife (a plan of
 //! 4), so SmolLM2's search never left the paper towel roll. h_FF ignored the empty hand that
 //! picking up the knife needs; since the relaxation counts negative preconditions it does
-//! not, and the task is solved in 37 s.
+//! not, and the task is solved in 37 s (alone, two threads; 45–47 s beside another job).
 
 use heuristics::{HFF, LmCut, RemainingPlanCost, WeightedMix};
 use rustc_hash::FxHashMap;
