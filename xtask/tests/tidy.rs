@@ -92,6 +92,7 @@ fn crates_share_settings_and_respect_their_boundaries() {
         ("token-constraint", &["grounding", "transition-model"]),
         ("lm", &[]),
         ("mcts", &["grounding", "transition-model", "heuristics", "token-constraint", "lm"]),
+        ("household-sim", &["pddl-syntax", "grounding", "transition-model"]),
     ];
     let architecture = std::fs::read_to_string(root().join("docs/ARCHITECTURE.md")).expect("docs/ARCHITECTURE.md");
     for (dir, name) in crates().iter().zip(&names) {

@@ -1,0 +1,120 @@
+//! The agent-side interface every household environment implements, and the judge-side
+//! interface that evaluation alone uses.
+
+use std::fmt;
+
+/// A picture of what the agent sees, as encoded bytes (PNG or JPEG).
+#[derive(Clone, PartialEq, Eq)]
+pub struct Image {
+    /// `image/png` or `image/jpeg`.
+    pub mime: &'static str,
+    pub bytes: Vec<u8>,
+}
+
+impl fmt::Debug for Image {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "Image({}, {} bytes)", self.mime, self.bytes.len())
+    }
+}
+
+/// What the agent perceives after a reset or a step: the environment's text and, where the
+/// environment renders one, a picture.
+#[derive(Debug, Clone, PartialEq, Eq, Default)]
+pub struct Observation {
+    pub text: String,
+    pub image: Option<Image>,
+}
+
+impl Observation {
+    pub fn text(text: impl Into<String>) -> Observation {
+        Observation { text: text.into(), image: None }
+    }
+}
+
+/// Whether the environment carried the command out. Either way the observation holds the
+/// engine's own answer ("Nothing happens." in ALFWorld).
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum Event {
+    /// The command named an action the engine could execute, and it did.
+    Executed,
+    /// The command was not executed; the state is unchanged. `reason` is the engine's answer.
+    NotExecuted { reason: String },
+}
+
+impl Event {
+    pub fn executed(&self) -> bool {
+        matches!(self, Event::Executed)
+    }
+}
+
+/// The result of one [`Environment::step`].
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct StepResult {
+    pub observation: Observation,
+    pub event: Event,
+}
+
+/// The task as the benchmark states it to the agent: a sentence, and the goal in the
+/// benchmark's own notation (ALFWorld: the game's PDDL goal formula; VirtualHome: EAI's node,
+/// edge and action goals). Class level in the benchmarks that are; a later goal parser turns
+/// it into the planner's goal.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct GoalAnnotation {
+    /// The benchmark (`alfworld`, `virtualhome-eai`, ...).
+    pub benchmark: String,
+    /// The task sentence the agent is shown ("put a clean mug in coffeemachine.").
+    pub sentence: String,
+    /// The goal formula in the benchmark's notation.
+    pub formula: String,
+    /// The task family (ALFWorld's task type, an EAI category, a rearrangement family).
+    pub family: String,
+}
+
+/// A partially observable household: the only view of the world an agent gets.
+///
+/// The true state stays inside; the agent sees observations and events. The goal check is
+/// the environment's own (the benchmark's engine decides success), so an agent can ask
+/// whether it has won but not what is missing: that is the [`Judge`]'s.
+pub trait Environment {
+    /// Starts the episode over from the task's initial state; the first observation.
+    fn reset(&mut self) -> Observation;
+    /// Sends one command. A command the engine cannot execute changes nothing and returns
+    /// [`Event::NotExecuted`] with the engine's answer; it still counts as a step.
+    fn step(&mut self, command: &str) -> StepResult;
+    /// Whether the task's goal holds now (the benchmark's own success check).
+    fn goal_reached(&self) -> bool;
+    /// Steps sent since the last reset.
+    fn steps_taken(&self) -> usize;
+    /// The task as the benchmark states it.
+    fn goal(&self) -> &GoalAnnotation;
+    /// The commands the engine lists as admissible now, where the benchmark shows such a
+    /// list to agents (ALFWorld does); `None` where it does not.
+    fn admissible_commands(&self) -> Option<Vec<String>>;
+}
+
+/// One true atom of the hidden state, with arguments spelled as the agent could perceive
+/// them (ALFWorld display names such as `mug 1`; VirtualHome `class (id)`).
+#[derive(Debug, Clone, PartialEq, Eq, PartialOrd, Ord, Hash)]
+pub struct JudgeAtom {
+    pub predicate: String,
+    pub args: Vec<String>,
+}
+
+impl fmt::Display for JudgeAtom {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "({}", self.predicate)?;
+        for arg in &self.args {
+            write!(f, " {arg}")?;
+        }
+        write!(f, ")")
+    }
+}
+
+/// The hidden state, for evaluation only (failure attribution, precision and recall of
+/// what an agent believed). Agents are handed `&mut dyn Environment`, never this.
+pub trait Judge {
+    /// Every true atom of the hidden state.
+    fn hidden_atoms(&self) -> Vec<JudgeAtom>;
+    /// The goal's parts that do not hold now, in words; empty when the goal holds.
+    fn unmet_goals(&self) -> Vec<String>;
+}

@@ -1,0 +1,11 @@
+//! Household environments that hide the true state and judge success as the benchmarks' own
+//! engines do.
+//!
+//! An agent sees an [`Environment`]: it resets, sends command text, reads
+//! [`Observation`]s and [`Event`]s, and may ask whether the goal holds. The hidden state is
+//! reachable only through the [`Judge`] trait, which evaluation uses after an episode (failure
+//! attribution, precision and recall of beliefs) and which no agent is handed.
+
+mod env;
+
+pub use env::{Environment, Event, GoalAnnotation, Image, Judge, JudgeAtom, Observation, StepResult};
