@@ -73,6 +73,25 @@ enum Which {
         #[arg(long)]
         json: bool,
     },
+    /// Household environment speed (reset, step), ours beside the real engine on the same
+    /// games and commands (ALFWorld: TextWorld 1.7.0 + alfworld 0.4.2, from install.sh alfworld).
+    Env {
+        /// Games of this subset of fixtures/ (a name in fixtures/subsets or a file).
+        #[arg(long, default_value = "alfworld-seen-50")]
+        subset: String,
+        /// At most this many games (evenly spaced); the engine takes seconds per game.
+        #[arg(long, default_value_t = 12)]
+        limit: usize,
+        /// Timed repetitions of ours per game (the median is reported).
+        #[arg(long, default_value_t = 20)]
+        runs: usize,
+        /// Skip the real engine.
+        #[arg(long)]
+        no_reference: bool,
+        /// Print one JSON object.
+        #[arg(long)]
+        json: bool,
+    },
     /// Local language model speed (prefill, decode, branch rewind) beside candle-transformers' quantized llama.
     Lm(crate::lm::BenchLmArgs),
 }
@@ -82,6 +101,7 @@ pub fn run(args: BenchArgs) -> anyhow::Result<ExitCode> {
         Which::Ground { benchmark, limit, runs, no_reference, json } => ground(&benchmark, limit, runs.max(1), no_reference, json),
         Which::Plan { configs, time_limit, filter, json } => plan(&configs, time_limit, filter.as_deref(), json),
         Which::Mask { tokenizer, every, no_reference, json } => crate::mask_bench::run(tokenizer, every, no_reference, json),
+        Which::Env { subset, limit, runs, no_reference, json } => crate::env::bench(&subset, limit, runs.max(1), no_reference, json),
         Which::Lm(args) => crate::lm::bench(args),
     }
 }

@@ -127,3 +127,109 @@ pub fn run(args: EnvArgs) -> anyhow::Result<ExitCode> {
     }
     Ok(if env.goal_reached() { ExitCode::SUCCESS } else { ExitCode::from(1) })
 }
+
+fn median(mut xs: Vec<f64>) -> f64 {
+    xs.sort_by(f64::total_cmp);
+    xs[xs.len() / 2]
+}
+
+/// Per game: ours (load + first reset, reset alone, mean step over the walkthrough; medians
+/// of `runs`) and the real engine (its reset, which reloads the game, and its mean step over
+/// the same walkthrough), measured one after the other in the same run.
+pub fn bench(subset: &str, limit: usize, runs: usize, no_reference: bool, json: bool) -> anyhow::Result<ExitCode> {
+    use anyhow::Context;
+    let tasks = benchmark_data::load_subset(benchmark_data::Benchmark::AlfworldSeen, subset).map_err(|e| InputError(e.to_string()))?;
+    let limit = limit.clamp(1, tasks.len().max(1));
+    let picked: Vec<&benchmark_data::TaskFiles> = (0..limit).map(|i| &tasks[i * tasks.len() / limit]).collect();
+    let mut rows = Vec::new();
+    for files in &picked {
+        let game = files.problem_path.clone();
+        let (mut load, mut reset, mut step) = (Vec::new(), Vec::new(), Vec::new());
+        let mut steps = 0;
+        for _ in 0..runs {
+            let start = std::time::Instant::now();
+            let mut env = AlfworldEnv::from_game_file(&game).map_err(|e| InputError(e.to_string()))?;
+            env.reset();
+            load.push(start.elapsed().as_secs_f64());
+            let start = std::time::Instant::now();
+            env.reset();
+            reset.push(start.elapsed().as_secs_f64());
+            let plan = env.walkthrough().to_vec();
+            let start = std::time::Instant::now();
+            for command in &plan {
+                env.step(command);
+            }
+            step.push(start.elapsed().as_secs_f64() / plan.len().max(1) as f64);
+            steps = plan.len();
+        }
+        rows.push(serde_json::json!({
+            "game": files.id,
+            "steps": steps,
+            "ours_load_reset_ms": median(load) * 1e3,
+            "ours_reset_us": median(reset) * 1e6,
+            "ours_step_us": median(step) * 1e6,
+        }));
+    }
+    let mut engine_note = None;
+    if !no_reference {
+        let script = benchmark_data::fixtures_dir().join("../tools/alfworld_time.py");
+        let dirs: Vec<PathBuf> = picked.iter().map(|f| f.problem_path.parent().map(PathBuf::from).unwrap_or_default()).collect();
+        let output = std::process::Command::new("python3").arg(&script).args(&dirs).output().context("running python3")?;
+        let stdout = String::from_utf8_lossy(&output.stdout);
+        let lines: Vec<serde_json::Value> = stdout.lines().filter_map(|l| serde_json::from_str(l).ok()).collect();
+        if output.status.success() && lines.len() == rows.len() {
+            for (row, line) in rows.iter_mut().zip(&lines) {
+                let reset_s = line["reset_s"][1].as_f64().unwrap_or(f64::NAN);
+                let step_s = line["step_s"].as_f64().unwrap_or(f64::NAN) / line["steps"].as_f64().unwrap_or(1.0).max(1.0);
+                row["engine_reset_ms"] = serde_json::json!(reset_s * 1e3);
+                row["engine_step_us"] = serde_json::json!(step_s * 1e6);
+            }
+        } else {
+            engine_note = Some(format!(
+                "the real engine did not run (bash ../shared/anchors/install.sh alfworld installs it): {}",
+                lines
+                    .first()
+                    .map_or_else(|| String::from_utf8_lossy(&output.stderr).lines().last().unwrap_or("").to_string(), |l| l.to_string())
+            ));
+        }
+    }
+    let mean = |key: &str| -> Option<f64> {
+        let xs: Vec<f64> = rows.iter().filter_map(|r| r[key].as_f64()).collect();
+        (xs.len() == rows.len() && !xs.is_empty()).then(|| xs.iter().sum::<f64>() / xs.len() as f64)
+    };
+    let (ours_load, ours_reset, ours_step) = (mean("ours_load_reset_ms"), mean("ours_reset_us"), mean("ours_step_us"));
+    let (engine_reset, engine_step) = (mean("engine_reset_ms"), mean("engine_step_us"));
+    let ratio = |engine: Option<f64>, ours: Option<f64>| engine.zip(ours).map(|(e, o)| e / o);
+    let summary = serde_json::json!({
+        "subset": subset,
+        "games": rows.len(),
+        "runs": runs,
+        "ours_load_reset_ms": ours_load,
+        "ours_reset_us": ours_reset,
+        "ours_step_us": ours_step,
+        "engine_reset_ms": engine_reset,
+        "engine_step_us": engine_step,
+        "reset_speedup_vs_our_load_and_reset": ratio(engine_reset, ours_load),
+        "reset_speedup_vs_our_reset": ratio(engine_reset.map(|r| r * 1e3), ours_reset),
+        "step_speedup": ratio(engine_step, ours_step),
+        "note": engine_note,
+        "per_game": rows,
+    });
+    if json {
+        println!("{summary}");
+    } else {
+        println!("ALFWorld, {} games of {subset} ({runs} runs of ours each):", summary["games"]);
+        let show = |x: Option<f64>| x.map_or("-".to_string(), |v| format!("{v:.3}"));
+        println!("  ours:   load+reset {} ms, reset {} us, step {} us", show(ours_load), show(ours_reset), show(ours_step));
+        println!("  engine: reset {} ms, step {} us", show(engine_reset), show(engine_step));
+        println!(
+            "  speed-up: reset {}x (against our load+reset), step {}x",
+            show(ratio(engine_reset, ours_load)),
+            show(ratio(engine_step, ours_step))
+        );
+        if let Some(note) = &summary["note"].as_str() {
+            println!("  {note}");
+        }
+    }
+    Ok(ExitCode::SUCCESS)
+}

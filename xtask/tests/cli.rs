@@ -271,3 +271,31 @@ fn phase2_writes_records_resumes_and_plan_mcts_prints_json() {
     }
     assert_eq!(record["solved"], true);
 }
+
+/// The lines the real engine printed for one game's trace (fixtures/alfworld-traces), with
+/// the recorder's `game` and `trace` keys taken out: alfworld_trace.py's lines, byte for byte.
+fn engine_lines(split: &str, game: &str, trace: &str) -> Vec<String> {
+    use std::io::BufRead;
+    let path = fixtures().join("alfworld-traces").join(format!("{split}.jsonl.gz"));
+    let reader = std::io::BufReader::new(flate2::read::GzDecoder::new(std::fs::File::open(&path).expect("traces")));
+    let prefix = format!("{{\"game\": \"{split}/{game}\", \"trace\": \"{trace}\", ");
+    reader.lines().map(|l| l.expect("line")).filter_map(|l| l.strip_prefix(&prefix).map(|rest| format!("{{{rest}"))).collect()
+}
+
+#[test]
+fn env_prints_the_engines_lines_byte_for_byte() {
+    let game = "pick_clean_then_place_in_recep-Mug-None-CoffeeMachine-26/trial_T20190907_233056_022802";
+    let dir = fixtures().join("alfworld/valid_seen").join(game).display().to_string();
+    for (trace, args) in [("walkthrough", vec![]), ("random-30-seed-1", vec!["--random", "30", "--seed", "1"])] {
+        let want = engine_lines("valid_seen", game, trace);
+        assert!(want.len() > 2, "{trace} recorded");
+        let output = xtask(&[&["env", "--game", dir.as_str(), "--json"][..], &args].concat());
+        let lines: Vec<String> = stdout(&output).lines().map(str::to_string).collect();
+        assert_eq!(lines, want, "{trace}");
+        let won = want.last().is_some_and(|l| l.ends_with("\"won\": true}"));
+        assert_eq!(output.status.code(), Some(if won { 0 } else { 1 }), "{trace}");
+    }
+    let output = xtask(&["env", "--game", "no/such/game", "--json"]);
+    assert_eq!(output.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&output.stderr).contains("no/such/game"));
+}

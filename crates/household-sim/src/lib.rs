@@ -12,6 +12,6 @@ mod error;
 mod python_random;
 
 pub use alfworld::{AlfworldEnv, NOTHING_HAPPENS, TASK_TYPES};
+pub use env::{Environment, Event, GoalAnnotation, Image, Judge, JudgeAtom, Observation, StepResult};
 pub use error::EnvError;
 pub use python_random::PythonRandom;
-pub use env::{Environment, Event, GoalAnnotation, Image, Judge, JudgeAtom, Observation, StepResult};

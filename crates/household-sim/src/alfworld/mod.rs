@@ -115,9 +115,7 @@ fn fast_downward_commas(domain: &str) -> String {
         let (code, comment) = line.split_at(line.find(';').unwrap_or(line.len()));
         let mut rest = code;
         while let Some(at) = rest.find(',') {
-            let word_start = rest[..at]
-                .rfind(|c: char| c.is_whitespace() || c == '(' || c == ')')
-                .map_or(0, |p| p + 1);
+            let word_start = rest[..at].rfind(|c: char| c.is_whitespace() || c == '(' || c == ')').map_or(0, |p| p + 1);
             let word = &rest[word_start..at];
             out.push_str(&rest[..at]);
             if !word.is_empty() && !word.starts_with('?') {
@@ -209,8 +207,7 @@ impl AlfworldEnv {
         let domain_text = &fast_downward_commas(domain_text);
         let domain = pddl_syntax::parse_domain(domain_text).map_err(|e| pddl("pddl_domain", domain_text, e))?;
         let problem = pddl_syntax::parse_problem(problem_text).map_err(|e| pddl("pddl_problem", problem_text, e))?;
-        let task = grounding::ground(&domain, &problem)
-            .map_err(|e| EnvError::Grounding { path: source.into(), message: e.to_string() })?;
+        let task = grounding::ground(&domain, &problem).map_err(|e| EnvError::Grounding { path: source.into(), message: e.to_string() })?;
         let grammar_error = |offset: usize, message: String| {
             let at = twl::position(grammar_text, offset);
             EnvError::Grammar { path: source.into(), line: at.line, column: at.column, message }
@@ -278,9 +275,8 @@ impl AlfworldEnv {
         }
 
         // The grammar, checked for unknown symbols now rather than mid-episode.
-        let parse = |text: &str, what: &str| {
-            textgen::parse_symbols(text, &predicates).map_err(|e| grammar_error(0, format!("{what}: {e}")))
-        };
+        let parse =
+            |text: &str, what: &str| textgen::parse_symbols(text, &predicates).map_err(|e| grammar_error(0, format!("{what}: {e}")));
         let mut grammar = Grammar::default();
         for (name, rules) in &document.rules {
             let mut productions = Vec::with_capacity(rules.len());
@@ -299,9 +295,10 @@ impl AlfworldEnv {
         }
         let mut schemas = Vec::with_capacity(task.schemas.len());
         for schema in &task.schemas {
-            let text = document.actions.iter().find(|a| a.name == schema.name).ok_or_else(|| {
-                grammar_error(0, format!("no `action {}` block for the domain's action `{}`", schema.name, schema.name))
-            })?;
+            let text =
+                document.actions.iter().find(|a| a.name == schema.name).ok_or_else(|| {
+                    grammar_error(0, format!("no `action {}` block for the domain's action `{}`", schema.name, schema.name))
+                })?;
             let declared = domain.actions.iter().find(|a| a.name.as_str().eq_ignore_ascii_case(&schema.name));
             let params = schema
                 .params
@@ -542,8 +539,7 @@ impl Environment for AlfworldEnv {
         self.facts = self.initial_facts.clone();
         self.steps = 0;
         self.gather();
-        let text =
-            self.world().derive(&self.intro, &Context::default()).unwrap_or_else(|e| format!("[grammar error: {e}]"));
+        let text = self.world().derive(&self.intro, &Context::default()).unwrap_or_else(|e| format!("[grammar error: {e}]"));
         Observation::text(text)
     }
 

@@ -219,9 +219,7 @@ impl Parser<'_> {
     fn nonterminal(&self, pos: usize) -> Option<(Symbol, usize)> {
         let pos = self.token(pos, "#")?;
         let start = self.skip(pos);
-        let end = self.run(start, |c| {
-            c.is_alphanumeric() || c == '_' || is_python_space(c) || "()/!<>-,.".contains(c)
-        });
+        let end = self.run(start, |c| c.is_alphanumeric() || c == '_' || is_python_space(c) || "()/!<>-,.".contains(c));
         if end == start {
             return None;
         }
@@ -426,12 +424,8 @@ impl World<'_> {
 
     fn eval(&self, expr: &Expr, context: &Context) -> Result<Value<'_>, DeriveError> {
         let entity = |name: &str| -> Result<&EntityInfo, DeriveError> {
-            let (_, e) = context
-                .variables
-                .iter()
-                .rev()
-                .find(|(n, _)| n == name)
-                .ok_or_else(|| DeriveError::UnboundName(name.to_string()))?;
+            let (_, e) =
+                context.variables.iter().rev().find(|(n, _)| n == name).ok_or_else(|| DeriveError::UnboundName(name.to_string()))?;
             Ok(&self.entities[*e as usize])
         };
         Ok(match expr {
@@ -470,5 +464,54 @@ impl World<'_> {
                 last
             }
         })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn parse(text: &str) -> Vec<Symbol> {
+        let mut predicates = Predicates::default();
+        predicates.intern("at");
+        parse_symbols(text, &predicates).expect("parses")
+    }
+
+    fn terminals(symbols: &[Symbol]) -> Vec<String> {
+        symbols
+            .iter()
+            .map(|s| match s {
+                Symbol::Terminal(t) => format!("T{t:?}"),
+                Symbol::Nonterminal(n) => format!("N{n}"),
+                Symbol::Conditional { given, .. } => format!("C{}", given.is_some()),
+                Symbol::List(_) => "L".into(),
+                Symbol::Eval(_) => "E".into(),
+            })
+            .collect()
+    }
+
+    /// TatSu's end-of-line comment rule eats a leading newline (help's feedback starts with one).
+    #[test]
+    fn a_leading_newline_is_eaten_and_inner_ones_kept() {
+        assert_eq!(terminals(&parse("\nAvailable commands:\n  look\n")), [r#"T"Available commands:\n  look\n""#]);
+        assert_eq!(terminals(&parse("a\n\n#b#\n\n#c#")), [r#"T"a\n\n""#, "Nb", r#"T"\n\n""#, "Nc"]);
+    }
+
+    /// Parsing stops where no symbol matches: the text after a stray `}` is dropped.
+    #[test]
+    fn text_after_a_stray_brace_is_dropped() {
+        assert_eq!(terminals(&parse("{o.name} (in {r.name})} tail")), ["Cfalse", r#"T" (in ""#, "Cfalse", r#"T")""#]);
+    }
+
+    #[test]
+    fn lists_conditionals_and_expressions() {
+        let symbols = parse("[{x.indefinite + ' ' + x.name | at(x:thing, l:place)}] and #y#");
+        assert_eq!(terminals(&symbols), ["L", r#"T" and ""#, "Ny"]);
+        let Symbol::List(inner) = &symbols[0] else { panic!("a list") };
+        let Symbol::Conditional { expression, given: Some(query) } = &**inner else { panic!("a conditional with a query") };
+        assert!(matches!(&**expression, Symbol::Eval(Expr::Concat(parts)) if parts.len() == 3));
+        assert_eq!(query.placeholders.len(), 2);
+        assert!(parse_expr("r.name or r.id").is_ok_and(|e| matches!(e, Expr::Or(v) if v.len() == 2)));
+        assert!(parse_expr("os.system('x')").is_err());
     }
 }

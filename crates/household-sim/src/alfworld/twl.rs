@@ -148,10 +148,10 @@ fn merge_json(rules: &mut Vec<(String, Vec<RuleText>)>, json: &str, at: usize) -
         };
         let mut parsed = Vec::with_capacity(list.len());
         for production in list {
-            let rhs = production.get("rhs").and_then(Value::as_str).ok_or_else(|| DocError {
-                offset: at,
-                message: format!("a production of `{name}` has no string `rhs`"),
-            })?;
+            let rhs = production
+                .get("rhs")
+                .and_then(Value::as_str)
+                .ok_or_else(|| DocError { offset: at, message: format!("a production of `{name}` has no string `rhs`") })?;
             let condition = match production.get("condition") {
                 None | Some(Value::Null) => String::new(),
                 Some(Value::String(c)) => c.clone(),
