@@ -11,6 +11,7 @@ fixtures root) and "trace" ("walkthrough" or "random-N-seed-S").
 
 Usage:
     alfworld_record.py FIXTURES_ROOT OUT.jsonl GAME_DIR... [--random N] [--seeds 0,1,2]
+                       [--no-walkthrough] [--unpatched]
 
 Needs the venv made by ../shared/anchors/install.sh alfworld (re-runs itself there).
 """
@@ -86,6 +87,7 @@ def main():
     ap.add_argument("--random", type=int, default=30)
     ap.add_argument("--seeds", default="0,1,2")
     ap.add_argument("--unpatched", action="store_true", help="do not cache the engine's parsers")
+    ap.add_argument("--no-walkthrough", action="store_true", help="record the random walks only")
     args = ap.parse_args()
     try:
         import textworld
@@ -106,7 +108,7 @@ def main():
                                                   asynchronous=False, max_episode_steps=None,
                                                   wrappers=[AlfredDemangler(shuffle=False), AlfredInfos])
             env = textworld.gym.make(env_id)
-            runs = [("walkthrough", list(game.get("walkthrough") or []), None, 0)]
+            runs = [] if args.no_walkthrough else [("walkthrough", list(game.get("walkthrough") or []), None, 0)]
             runs += [(f"random-{args.random}-seed-{s}", None, args.random, s) for s in seeds]
             lines = []
             for name, plan, n, seed in runs:

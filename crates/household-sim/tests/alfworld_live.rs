@@ -13,7 +13,8 @@ use common::{fixtures, parse_traces, replay};
 
 #[test]
 fn random_walks_with_new_seeds_match_the_live_engine() {
-    // Two games of each task type across both splits (evenly spaced), seeds 1000 + i.
+    // One game of each task type across both splits (the middle one), seeds 1000 and 1001,
+    // 30 steps: the unpatched engine takes about 0.2 s a step and 5 s a reset here.
     let mut games: Vec<String> = Vec::new();
     for task_type in household_sim::TASK_TYPES {
         let mut of_type: Vec<String> = Vec::new();
@@ -29,25 +30,23 @@ fn random_walks_with_new_seeds_match_the_live_engine() {
             }
         }
         of_type.sort();
-        games.extend([of_type[of_type.len() / 3].clone(), of_type[2 * of_type.len() / 3].clone()]);
+        games.push(of_type[of_type.len() / 2].clone());
     }
     let scratch = std::env::temp_dir().join(format!("alfworld-live-{}.jsonl", std::process::id()));
     let _ = std::fs::remove_file(&scratch);
     let root = fixtures().join("alfworld");
-    let seeds: Vec<String> = (0..3).map(|i| (1000 + i).to_string()).collect();
+    let seeds: Vec<String> = (0..2).map(|i| (1000 + i).to_string()).collect();
     let status = Command::new("python3")
         .arg(fixtures().join("../tools/alfworld_record.py"))
         .args([root.as_os_str(), scratch.as_os_str()])
         .args(games.iter().map(|g| root.join(g)))
-        .args(["--random", "40", "--seeds", &seeds.join(","), "--unpatched"])
+        .args(["--random", "30", "--seeds", &seeds.join(","), "--unpatched", "--no-walkthrough"])
         .status()
         .expect("python3 runs");
     assert!(status.success(), "the engine failed: install it with `bash ../shared/anchors/install.sh alfworld`");
     let text = std::fs::read_to_string(&scratch).expect("the recorder wrote its traces");
     let _ = std::fs::remove_file(&scratch);
     let traces = parse_traces(text.as_bytes(), "live engine");
-    // The walkthrough is recorded too; keep only the new random walks.
-    let traces: Vec<_> = traces.into_iter().filter(|t| t.name.starts_with("random-")).collect();
     assert_eq!(traces.len(), games.len() * seeds.len());
     let r = replay(&traces, |game| root.join(game));
     println!(
