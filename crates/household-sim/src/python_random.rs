@@ -26,7 +26,7 @@ impl PythonRandom {
         if key.is_empty() {
             key.push(0);
         }
-        PythonRandom { mt: Mt::new_with_key(key.into_iter()) }
+        PythonRandom { mt: Mt::new_with_key(key) }
     }
 
     fn getrandbits(&mut self, k: u32) -> u32 {

@@ -1,5 +1,8 @@
 //! Shared by the ALFWorld parity tests: reading recorded engine traces and replaying them.
 
+// Each test binary that includes this module uses a part of it.
+#![allow(dead_code)]
+
 use std::io::BufRead;
 use std::path::{Path, PathBuf};
 
@@ -62,8 +65,7 @@ pub struct Replay {
     pub identical_games: usize,
     pub traces: usize,
     pub identical_traces: usize,
-    /// Steps replayed (a trace stops at its first mismatch) and recorded.
-    pub steps: usize,
+    /// Steps recorded (a trace stops replaying at its first mismatch).
     pub recorded_steps: usize,
     pub identical_steps: usize,
     pub failures: Vec<String>,
@@ -75,7 +77,7 @@ pub fn replay(traces: &[Trace], game_dir: impl Fn(&str) -> PathBuf) -> Replay {
     for trace in traces {
         by_game.entry(&trace.game).or_default().push(trace);
     }
-    let (mut steps, mut identical_steps, mut identical_traces) = (0usize, 0usize, 0usize);
+    let (mut identical_steps, mut identical_traces) = (0usize, 0usize);
     let mut identical_games = 0usize;
     let mut failures = Vec::new();
     for (game, game_traces) in &by_game {
@@ -85,7 +87,6 @@ pub fn replay(traces: &[Trace], game_dir: impl Fn(&str) -> PathBuf) -> Replay {
         for trace in game_traces {
             let mut trace_ok = true;
             for recorded in &trace.steps {
-                steps += 1;
                 let step = recorded["step"].as_u64().expect("step");
                 let observation =
                     if step == 0 { env.reset().text } else { env.step(recorded["command"].as_str().expect("command")).observation.text };
@@ -126,7 +127,6 @@ pub fn replay(traces: &[Trace], game_dir: impl Fn(&str) -> PathBuf) -> Replay {
         identical_games,
         traces: traces.len(),
         identical_traces,
-        steps,
         recorded_steps: traces.iter().map(|t| t.steps.len()).sum(),
         identical_steps,
         failures,
