@@ -7,5 +7,11 @@
 //! attribution, precision and recall of beliefs) and which no agent is handed.
 
 mod env;
+mod virtualhome;
 
 pub use env::{Environment, Event, GoalAnnotation, Image, Judge, JudgeAtom, Observation, StepResult};
+pub use virtualhome::{
+    Action as VhAction, NodeIx as VhNodeIx, NodeState as VhNodeState, Property as VhProperty, Relation as VhRelation, SceneGraph,
+    SceneNode, ScriptLine, VhGoal, VirtualhomeEnv, VirtualhomeError, VirtualhomeTask, World as VhWorld, bind as vh_bind,
+    visible_nodes as vh_visible_nodes,
+};
