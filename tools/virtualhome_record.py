@@ -9,7 +9,8 @@ Usage:
         init_and_final_graphs/.../file<id>.json, the program file's title and description,
         vh_goal of resources/virtualhome/task_state_LTL_formula_accurate.json). Default
         tasks: the 33 kitchen tasks copied to ../shared/data/virtualhome-eai.
-    virtualhome_record.py record TASK_DIR OUT.jsonl.gz [--random K] [--steps N]
+    virtualhome_record.py record TASK_DIR OUT.jsonl.gz [--random K] [--steps N] [--shard I/N]
+    virtualhome_record.py merge OUT.jsonl.gz PART.jsonl.gz...
         For every task file in TASK_DIR: EAI's gold program and K random programs of N
         steps (default 5 and 15; seeds 0..K-1), one JSON line each:
         {task, program, lines, executed, messages, goal, unmet}.
@@ -51,9 +52,10 @@ RANDOM_ACTIONS = [("WALK", 5), ("FIND", 2), ("GRAB", 4), ("OPEN", 3), ("CLOSE", 
 SKIPPED_CATEGORIES = {"Walls", "Ceiling", "Floor", "Floors"}
 TWO_OBJECTS = {"PUTBACK", "PUTIN", "POUR"}
 NO_OBJECT = {"STANDUP"}
-# A line the executor has not finished after this long (it loops forever following a cycle of
+# A line the executor has not finished after this long (a minute: a loaded machine makes
+# ordinary steps take seconds) (it loops forever following a cycle of
 # INSIDE edges in _get_room_node) counts as not executed; the state is left as it was.
-STEP_LIMIT_S = 2.0
+STEP_LIMIT_S = 60.0
 KITCHEN = ("Wash_dishes_with_dishwasher", "Put_groceries_in_Fridge", "Cook_some_food",
            "Set_up_table", "Make_coffee")
 
@@ -190,10 +192,11 @@ def visible_nodes(state, char):
 
 
 def random_program(tid, seed, steps):
+    """The program's lines, and the planner that ran them (each line ran once as drawn)."""
     planner, _ = new_planner(tid)
     rng = random.Random(f"{tid}/{seed}")
     char = planner.acting_char_id
-    lines = []
+    lines, executed, messages, history = [], [], [], []
     for _ in range(steps):
         state = planner.env_state.to_dict()
         names = visible_nodes(state, char)
@@ -219,28 +222,46 @@ def random_program(tid, seed, steps):
             o = pick()
             line = f"[{act}] <{names[o]}> ({o})"
         lines.append(line)
-        run(planner, [line])
-    return lines
+        ok, msg, hist = run(planner, [line])
+        executed += ok
+        messages += msg
+        history += hist
+    return lines, planner, (executed, messages, history)
 
 
-def record(task_dir, out, k, steps):
+def record(task_dir, out, k, steps, shard):
     tasks = sorted(f[:-len(".json.gz")] for f in os.listdir(task_dir) if f.endswith(".json.gz"))
+    index, count = shard
+    tasks = tasks[index::count]
     rows = []
     for tid in tasks:
-        vh_goal = goals_of(tid)
-        _, gold = new_planner(tid)
-        programs = [("gold", list(gold))] + [(f"random-{s}", random_program(tid, s, steps)) for s in range(k)]
         print(f"task {tid}", file=sys.stderr, flush=True)
-        for name, lines in programs:
-            planner, _ = new_planner(tid)
-            executed, messages, history = run(planner, lines)
+        vh_goal = goals_of(tid)
+        planner, gold = new_planner(tid)
+        runs = [("gold", list(gold), planner, run(planner, list(gold)))]
+        for s in range(k):
+            lines, planner, result = random_program(tid, s, steps)
+            runs.append((f"random-{s}", lines, planner, result))
+        for name, lines, planner, (executed, messages, history) in runs:
             ok, unmet = strict_goal(planner, vh_goal, history)
             rows.append({"task": tid, "program": name, "lines": lines, "executed": executed,
                          "messages": messages, "goal": ok, "unmet": [json.dumps(u) if isinstance(u, dict) else u for u in unmet]})
+    write_rows(out, rows)
+    print(f"recorded {len(rows)} programs on {len(tasks)} tasks to {out}")
+
+
+def write_rows(out, rows):
     data = "".join(json.dumps(r, separators=(",", ":")) + "\n" for r in rows).encode()
     with open(out, "wb") as f:
         f.write(gzip.compress(data, compresslevel=9, mtime=0))
-    print(f"recorded {len(rows)} programs on {len(tasks)} tasks to {out}")
+
+
+def merge(out, parts):
+    """Merges shard recordings into one, ordered by task, then gold and random-0, -1, ..."""
+    rows = [json.loads(line) for p in parts for line in gzip.open(p, "rt")]
+    order = lambda r: (r["task"], -1 if r["program"] == "gold" else int(r["program"].split("-")[1]))  # noqa: E731
+    write_rows(out, sorted(rows, key=order))
+    print(f"merged {len(rows)} programs into {out}")
 
 
 def main():
@@ -254,6 +275,10 @@ def main():
     r.add_argument("out")
     r.add_argument("--random", type=int, default=5)
     r.add_argument("--steps", type=int, default=15)
+    r.add_argument("--shard", default="0/1", help="I/N: every N-th task from the I-th (sorted ids)")
+    m = sub.add_parser("merge")
+    m.add_argument("out")
+    m.add_argument("parts", nargs="+")
     args = ap.parse_args()
     if args.cmd == "export":
         if args.tasks:
@@ -263,8 +288,11 @@ def main():
             tasks = sorted(t for t, n in names.items() if n.replace(" ", "_") in KITCHEN
                            and os.path.exists(os.path.join(ROOT, "init_and_final_graphs", SUB, f"file{t}.json")))
         export(args.out_dir, tasks)
+    elif args.cmd == "merge":
+        merge(args.out, args.parts)
     else:
-        record(args.task_dir, args.out, args.random, args.steps)
+        index, count = (int(x) for x in args.shard.split("/"))
+        record(args.task_dir, args.out, args.random, args.steps, (index, count))
 
 
 if __name__ == "__main__":

@@ -4,6 +4,7 @@
 //! or malformed files, named with file, line and column) or usage errors.
 
 mod bench;
+mod env_virtualhome;
 mod eval;
 mod input;
 mod lm;
@@ -65,6 +66,9 @@ enum Command {
     FetchModel(lm::FetchArgs),
     /// Greedy generation with a local GGUF model; prints the continuation and tokens/s.
     Generate(lm::GenerateArgs),
+    /// Run commands in a household environment (VirtualHome: `--benchmark virtualhome-eai
+    /// --task ID`); JSON lines per step, the goal verdict last. Exit 0 goal reached, 1 not.
+    Env(env_virtualhome::VirtualhomeEnvArgs),
 }
 
 fn main() -> ExitCode {
@@ -152,5 +156,6 @@ fn run(command: Command) -> anyhow::Result<ExitCode> {
         Command::Bench(args) => bench::run(args),
         Command::FetchModel(args) => lm::fetch_model(args),
         Command::Generate(args) => lm::generate(args),
+        Command::Env(args) => env_virtualhome::run(&args),
     }
 }

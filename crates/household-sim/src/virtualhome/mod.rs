@@ -245,6 +245,19 @@ impl VirtualhomeEnv {
         &self.task
     }
 
+    /// What the agent sees now as `(id, class_name)`, by id (the nodes the observation
+    /// lists, rooms included, the character left out).
+    pub fn visible_objects(&self) -> Vec<(u32, String)> {
+        let g = &self.world.graph;
+        let mut out: Vec<(u32, String)> = visible_nodes(&self.world)
+            .into_iter()
+            .filter(|&ix| ix != self.world.character)
+            .map(|ix| (g.node(ix).id, g.node(ix).class_name.clone()))
+            .collect();
+        out.sort();
+        out
+    }
+
     /// The instance-level lines executed since the reset.
     pub fn executed_lines(&self) -> &[String] {
         &self.executed
