@@ -242,7 +242,7 @@ impl World {
             return inside.into_iter().find(|&n| g.node(n).is_room());
         }
         for _ in 0..g.len() {
-            let Some(&first) = inside.first() else { return None };
+            let &first = inside.first()?;
             if g.node(first).is_room() {
                 return Some(first);
             }
