@@ -13,14 +13,24 @@ use crate::input::InputError;
 #[derive(Debug, Args)]
 pub struct EnvArgs {
     /// An ALFWorld game: `game.tw-pddl` or the folder holding it.
-    #[arg(long)]
-    game: PathBuf,
+    #[arg(long, required_unless_present = "benchmark", conflicts_with = "benchmark")]
+    game: Option<PathBuf>,
+    /// A VirtualHome benchmark (`virtualhome-eai`), with `--task`.
+    #[arg(long, value_parser = ["virtualhome-eai"], requires = "task")]
+    benchmark: Option<String>,
+    /// EAI task id (`201_1`), with `--benchmark`.
+    #[arg(long, requires = "benchmark")]
+    task: Option<String>,
+    /// Folder of VirtualHome task files [default: fixtures/virtualhome-eai/graphs].
+    #[arg(long, requires = "benchmark")]
+    task_dir: Option<PathBuf>,
     /// Commands to send, one a line (blank lines and `#` lines skipped) [default: the game's
     /// expert walkthrough].
     #[arg(long, conflicts_with = "random")]
     commands: Option<PathBuf>,
-    /// Take N steps, each a command drawn from the sorted admissible list by Python's
-    /// `random.Random(SEED).choice`, as `alfworld_trace.py --random N --seed S` draws them.
+    /// Take N steps. ALFWorld: each a command drawn from the sorted admissible list by
+    /// Python's `random.Random(SEED).choice`, as `alfworld_trace.py --random N --seed S` draws
+    /// them; VirtualHome: a seeded random program, each step an action on a visible object.
     #[arg(long, value_name = "N")]
     random: Option<usize>,
     #[arg(long, default_value_t = 0)]
@@ -78,7 +88,18 @@ fn py_line(step: usize, command: Option<&str>, observation: &str, admissible: &[
 }
 
 pub fn run(args: EnvArgs) -> anyhow::Result<ExitCode> {
-    let mut env = AlfworldEnv::from_game_file(&args.game).map_err(|e| InputError(e.to_string()))?;
+    let Some(game) = &args.game else {
+        return crate::env_virtualhome::run(&crate::env_virtualhome::VirtualhomeEnvArgs {
+            benchmark: args.benchmark.clone().unwrap_or_default(),
+            task: args.task.clone().unwrap_or_default(),
+            task_dir: args.task_dir.clone(),
+            commands: args.commands.clone(),
+            random: args.random,
+            seed: args.seed,
+            json: args.json,
+        });
+    };
+    let mut env = AlfworldEnv::from_game_file(game).map_err(|e| InputError(e.to_string()))?;
     let plan: Vec<String> = match (&args.commands, args.random) {
         (Some(path), _) => std::fs::read_to_string(path)
             .map_err(|e| InputError(format!("{}: cannot read: {e}", path.display())))?

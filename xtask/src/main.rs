@@ -5,6 +5,7 @@
 
 mod bench;
 mod env;
+mod env_virtualhome;
 mod eval;
 mod input;
 mod lm;
@@ -60,8 +61,10 @@ enum Command {
     Heuristic(planning::HeuristicArgs),
     /// Evaluate an agent on the benchmarks in fixtures/ (the project's main job).
     Eval(eval::EvalArgs),
-    /// Play a household environment: JSON lines of what it shows at every step, as the real
-    /// engine's recorder prints them (exit 0 won, 1 not won, 2 bad input).
+    /// Play a household environment: ALFWorld (`--game G`: JSON lines of what it shows at every
+    /// step, as the real engine's recorder prints them) or VirtualHome (`--benchmark
+    /// virtualhome-eai --task ID`: JSON lines per step, the goal verdict last). Exit 0 won, 1
+    /// not won, 2 bad input.
     Env(env::EnvArgs),
     /// Benchmarks that compare with the reference systems.
     Bench(bench::BenchArgs),

@@ -298,4 +298,29 @@ fn env_prints_the_engines_lines_byte_for_byte() {
     let output = xtask(&["env", "--game", "no/such/game", "--json"]);
     assert_eq!(output.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&output.stderr).contains("no/such/game"));
+#[test]
+fn env_virtualhome_prints_json_lines_and_the_verdict() {
+    // EAI's gold program of task 201_1 (wash a plate with the dishwasher).
+    let program = "[WALK] <dining_room> (201)\n[WALK] <dishwasher> (1000)\n[FIND] <dishwasher> (1000)\n[OPEN] <dishwasher> (1000)\n\
+                   [FIND] <plate> (1001)\n[GRAB] <plate> (1001)\n[PUTBACK] <plate> (1001) <dishwasher> (1000)\n[FIND] <dish_soap> (1002)\n\
+                   [GRAB] <dish_soap> (1002)\n[PUTBACK] <dish_soap> (1002) <dishwasher> (1000)\n[CLOSE] <dishwasher> (1000)\n\
+                   [SWITCHON] <dishwasher> (1000)\n";
+    let plan = scratch("vh-201_1.txt", program);
+    let output = xtask(&["env", "--benchmark", "virtualhome-eai", "--task", "201_1", "--commands", &plan.display().to_string(), "--json"]);
+    assert_eq!(output.status.code(), Some(0), "{}", String::from_utf8_lossy(&output.stderr));
+    let lines: Vec<serde_json::Value> = stdout(&output).lines().map(|l| serde_json::from_str(l).expect("JSON line")).collect();
+    assert_eq!(lines.len(), 12 + 2, "reset, 12 steps, verdict");
+    assert_eq!(lines[0]["step"], 0);
+    assert!(lines[1..13].iter().all(|l| l["executed"] == true));
+    assert_eq!(lines[13]["goal_reached"], true);
+    // Without its last step the dishwasher is off: not reached, exit 1, the unmet goal named.
+    let short = scratch("vh-201_1-short.txt", &program.lines().take(11).collect::<Vec<_>>().join("\n"));
+    let output = xtask(&["env", "--benchmark", "virtualhome-eai", "--task", "201_1", "--commands", &short.display().to_string(), "--json"]);
+    assert_eq!(output.status.code(), Some(1));
+    let last: serde_json::Value = serde_json::from_str(stdout(&output).lines().last().expect("verdict")).expect("JSON");
+    assert_eq!(last["unmet"], serde_json::json!(["dishwasher (1000) is ON"]));
+    let output = xtask(&["env", "--benchmark", "virtualhome-eai", "--task", "201_1", "--random", "15", "--seed", "3", "--json"]);
+    assert_eq!(stdout(&output).lines().count(), 17);
+    let output = xtask(&["env", "--benchmark", "virtualhome-eai", "--task", "no_such_task", "--random", "3"]);
+    assert_eq!(output.status.code(), Some(2));
 }

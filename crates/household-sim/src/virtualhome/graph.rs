@@ -1,0 +1,284 @@
+//! The VirtualHome scene graph: nodes (class, category, properties, states) and labelled
+//! edges held in a `petgraph` graph map, read from EAI's scene-graph JSON.
+
+use std::fmt;
+
+use petgraph::Direction;
+use petgraph::graphmap::DiGraphMap;
+use rustc_hash::FxHashMap;
+use serde::Deserialize;
+
+use super::VirtualhomeError;
+
+/// Dense index of a node in a [`SceneGraph`] (not the VirtualHome id).
+pub type NodeIx = u32;
+
+macro_rules! flag_enum {
+    ($(#[$doc:meta])* $name:ident, $set:ident, $bits:ty, [$($variant:ident = $text:literal),* $(,)?]) => {
+        $(#[$doc])*
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
+        pub enum $name { $($variant),* }
+
+        impl $name {
+            pub const ALL: &'static [$name] = &[$($name::$variant),*];
+            /// The name as the executor writes it (`CLOSED`, `HOLDS_RH`, `CAN_OPEN`).
+            pub fn as_str(self) -> &'static str {
+                match self { $($name::$variant => $text),* }
+            }
+            /// Parses the executor's name, case-insensitively as `Enum[s.upper()]` does.
+            pub fn parse(text: &str) -> Option<$name> {
+                let upper = text.to_ascii_uppercase();
+                match upper.as_str() { $($text => Some($name::$variant),)* _ => None }
+            }
+            fn bit(self) -> $bits { 1 << (self as u32) }
+        }
+
+        impl fmt::Display for $name {
+            fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result { f.write_str(self.as_str()) }
+        }
+
+        #[doc = concat!("A set of [`", stringify!($name), "`] values as a bitset.")]
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+        pub struct $set($bits);
+
+        impl $set {
+            pub fn contains(self, value: $name) -> bool { self.0 & value.bit() != 0 }
+            pub fn insert(&mut self, value: $name) { self.0 |= value.bit(); }
+            pub fn remove(&mut self, value: $name) { self.0 &= !value.bit(); }
+            pub fn is_empty(self) -> bool { self.0 == 0 }
+            /// The members in declaration order.
+            pub fn iter(self) -> impl Iterator<Item = $name> {
+                $name::ALL.iter().copied().filter(move |v| self.contains(*v))
+            }
+        }
+    };
+}
+
+flag_enum!(
+    /// An edge label of the evolving graph (`environment.Relation`).
+    Relation, RelationSet, u16,
+    [On = "ON", Inside = "INSIDE", Between = "BETWEEN", Close = "CLOSE", Facing = "FACING",
+     HoldsRh = "HOLDS_RH", HoldsLh = "HOLDS_LH", Sitting = "SITTING"]
+);
+
+flag_enum!(
+    /// A node state of the evolving graph (`environment.State`).
+    NodeState, StateSet, u16,
+    [Closed = "CLOSED", Open = "OPEN", On = "ON", Off = "OFF", Sitting = "SITTING", Dirty = "DIRTY",
+     Clean = "CLEAN", Lying = "LYING", PluggedIn = "PLUGGED_IN", PluggedOut = "PLUGGED_OUT"]
+);
+
+flag_enum!(
+    /// An object property of the evolving graph (`environment.Property`).
+    Property, PropertySet, u32,
+    [Surfaces = "SURFACES", Grabbable = "GRABBABLE", Sittable = "SITTABLE", Lieable = "LIEABLE",
+     Hangable = "HANGABLE", Drinkable = "DRINKABLE", Eatable = "EATABLE", Recipient = "RECIPIENT",
+     Cuttable = "CUTTABLE", Pourable = "POURABLE", CanOpen = "CAN_OPEN", HasSwitch = "HAS_SWITCH",
+     Readable = "READABLE", Lookable = "LOOKABLE", Containers = "CONTAINERS", Clothes = "CLOTHES",
+     Person = "PERSON", BodyPart = "BODY_PART", CoverObject = "COVER_OBJECT", HasPlug = "HAS_PLUG",
+     HasPaper = "HAS_PAPER", Movable = "MOVABLE", Cream = "CREAM"]
+);
+
+/// One node of the scene: what never changes (id, class, category, properties) and its
+/// states, which actions change.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct SceneNode {
+    /// The VirtualHome id (`<plate> (1001)`).
+    pub id: u32,
+    pub class_name: String,
+    pub category: String,
+    pub properties: PropertySet,
+    pub states: StateSet,
+}
+
+impl SceneNode {
+    pub fn is_room(&self) -> bool {
+        self.category == "Rooms"
+    }
+}
+
+/// A scene graph: nodes in a dense vector, edges in a `petgraph` directed graph map from
+/// node index to node index whose weight is the set of relations between the two.
+#[derive(Debug, Clone)]
+pub struct SceneGraph {
+    pub(crate) nodes: Vec<SceneNode>,
+    pub(crate) by_id: FxHashMap<u32, NodeIx>,
+    pub(crate) edges: DiGraphMap<NodeIx, RelationSet>,
+}
+
+#[derive(Deserialize)]
+struct JsonNode {
+    id: i64,
+    class_name: String,
+    #[serde(default)]
+    category: Option<String>,
+    #[serde(default)]
+    properties: Vec<String>,
+    #[serde(default)]
+    states: Vec<String>,
+}
+
+#[derive(Deserialize)]
+struct JsonEdge {
+    from_id: i64,
+    relation_type: String,
+    to_id: i64,
+}
+
+#[derive(Deserialize)]
+pub(crate) struct JsonGraph {
+    nodes: Vec<JsonNode>,
+    edges: Vec<JsonEdge>,
+}
+
+impl SceneGraph {
+    /// Builds the graph from EAI's JSON (`{"nodes": [...], "edges": [...]}`); `origin` names
+    /// the file in errors. Duplicate node ids keep the last, as the executor does.
+    pub(crate) fn from_json(json: JsonGraph, origin: &str) -> Result<SceneGraph, VirtualhomeError> {
+        let bad = |field: String, message: String| VirtualhomeError::BadGraph { origin: origin.to_string(), field, message };
+        let mut graph = SceneGraph { nodes: Vec::new(), by_id: FxHashMap::default(), edges: DiGraphMap::new() };
+        for (i, node) in json.nodes.into_iter().enumerate() {
+            let id = u32::try_from(node.id).map_err(|_| bad(format!("nodes[{i}].id"), format!("{} is not a node id", node.id)))?;
+            let mut properties = PropertySet::default();
+            for (j, p) in node.properties.iter().enumerate() {
+                let p = Property::parse(p).ok_or_else(|| bad(format!("nodes[{i}].properties[{j}]"), format!("unknown property {p:?}")))?;
+                properties.insert(p);
+            }
+            let mut states = StateSet::default();
+            for (j, s) in node.states.iter().enumerate() {
+                let s = NodeState::parse(s).ok_or_else(|| bad(format!("nodes[{i}].states[{j}]"), format!("unknown state {s:?}")))?;
+                states.insert(s);
+            }
+            let scene_node = SceneNode { id, class_name: node.class_name, category: node.category.unwrap_or_default(), properties, states };
+            match graph.by_id.get(&id) {
+                Some(&ix) => graph.nodes[ix as usize] = scene_node,
+                None => {
+                    let ix = graph.nodes.len() as NodeIx;
+                    graph.nodes.push(scene_node);
+                    graph.by_id.insert(id, ix);
+                    graph.edges.add_node(ix);
+                }
+            }
+        }
+        for (i, edge) in json.edges.iter().enumerate() {
+            let relation = Relation::parse(&edge.relation_type)
+                .ok_or_else(|| bad(format!("edges[{i}].relation_type"), format!("unknown relation {:?}", edge.relation_type)))?;
+            let end = |id: i64, field: &str| {
+                u32::try_from(id)
+                    .ok()
+                    .and_then(|id| graph.by_id.get(&id).copied())
+                    .ok_or_else(|| bad(format!("edges[{i}].{field}"), format!("no node with id {id}")))
+            };
+            let from = end(edge.from_id, "from_id")?;
+            let to = end(edge.to_id, "to_id")?;
+            graph.add_edge(from, relation, to);
+        }
+        Ok(graph)
+    }
+
+    pub fn node(&self, ix: NodeIx) -> &SceneNode {
+        &self.nodes[ix as usize]
+    }
+
+    pub fn node_mut(&mut self, ix: NodeIx) -> &mut SceneNode {
+        &mut self.nodes[ix as usize]
+    }
+
+    /// The node with VirtualHome id `id`.
+    pub fn index_of(&self, id: u32) -> Option<NodeIx> {
+        self.by_id.get(&id).copied()
+    }
+
+    pub fn len(&self) -> usize {
+        self.nodes.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.nodes.is_empty()
+    }
+
+    pub fn indices(&self) -> impl Iterator<Item = NodeIx> {
+        0..self.nodes.len() as NodeIx
+    }
+
+    pub fn has_edge(&self, from: NodeIx, relation: Relation, to: NodeIx) -> bool {
+        self.edges.edge_weight(from, to).is_some_and(|set| set.contains(relation))
+    }
+
+    pub fn add_edge(&mut self, from: NodeIx, relation: Relation, to: NodeIx) {
+        match self.edges.edge_weight_mut(from, to) {
+            Some(set) => set.insert(relation),
+            None => {
+                let mut set = RelationSet::default();
+                set.insert(relation);
+                self.edges.add_edge(from, to, set);
+            }
+        }
+    }
+
+    pub fn remove_edge(&mut self, from: NodeIx, relation: Relation, to: NodeIx) {
+        if let Some(set) = self.edges.edge_weight_mut(from, to) {
+            set.remove(relation);
+            if set.is_empty() {
+                self.edges.remove_edge(from, to);
+            }
+        }
+    }
+
+    /// The nodes `from` has a `relation` edge to, in ascending index order.
+    pub fn targets(&self, from: NodeIx, relation: Relation) -> Vec<NodeIx> {
+        let mut out: Vec<NodeIx> = self
+            .edges
+            .edges_directed(from, Direction::Outgoing)
+            .filter(|(_, _, set)| set.contains(relation))
+            .map(|(_, to, _)| to)
+            .collect();
+        out.sort_unstable();
+        out
+    }
+
+    /// The nodes with a `relation` edge to `to`, in ascending index order.
+    pub fn sources(&self, to: NodeIx, relation: Relation) -> Vec<NodeIx> {
+        let mut out: Vec<NodeIx> = self
+            .edges
+            .edges_directed(to, Direction::Incoming)
+            .filter(|(_, _, set)| set.contains(relation))
+            .map(|(from, _, _)| from)
+            .collect();
+        out.sort_unstable();
+        out
+    }
+
+    /// Removes every `relation` edge from `node` and, with `reverse`, every one to it
+    /// (`DeleteEdges(node, relations, AnyNode(), delete_reverse)`).
+    pub fn remove_all(&mut self, node: NodeIx, relations: &[Relation], reverse: bool) {
+        for &relation in relations {
+            for to in self.targets(node, relation) {
+                self.remove_edge(node, relation, to);
+            }
+            if reverse {
+                for from in self.sources(node, relation) {
+                    self.remove_edge(from, relation, node);
+                }
+            }
+        }
+    }
+
+    /// Every edge as `(from, relation, to)`, sorted.
+    pub fn all_edges(&self) -> Vec<(NodeIx, Relation, NodeIx)> {
+        let mut out = Vec::new();
+        for (from, to, set) in self.edges.all_edges() {
+            for relation in set.iter() {
+                out.push((from, relation, to));
+            }
+        }
+        out.sort_unstable();
+        out
+    }
+
+    /// `<class> (id)`, as the executor prints a node.
+    pub fn label(&self, ix: NodeIx) -> String {
+        let node = self.node(ix);
+        format!("<{}> ({})", node.class_name, node.id)
+    }
+}

@@ -1,0 +1,463 @@
+//! VirtualHome as the Embodied Agent Interface (EAI) runs it: a task's scene graph, executed
+//! as the evolving graph executes script lines, seen as VirtualHome's `get_visible_nodes`
+//! shows it, and judged on every node, edge and action goal.
+//!
+//! Commands are either instance-level script lines (`[WALK] <plate> (1001)`, for replay and
+//! parity) or class-level verbs (`grab plate`, `putin plate dishwasher`) that the adapter
+//! binds to instances by [`bind`]'s rule.
+
+mod exec;
+mod graph;
+
+use std::fmt::Write as _;
+use std::io::Read as _;
+use std::path::Path;
+
+use serde::Deserialize;
+
+use crate::env::{Environment, Event, GoalAnnotation, Judge, JudgeAtom, Observation, StepResult};
+
+pub use exec::{Action, ScriptLine, World};
+pub use graph::{NodeIx, NodeState, Property, Relation, SceneGraph, SceneNode};
+
+/// What can go wrong loading a VirtualHome task.
+#[derive(Debug, thiserror::Error)]
+pub enum VirtualhomeError {
+    #[error("{path}: cannot read: {source}")]
+    Io { path: String, source: std::io::Error },
+    #[error("{origin}: not valid task JSON: {message}")]
+    Json { origin: String, message: String },
+    #[error("{origin}: field `{field}`: {message}")]
+    BadGraph { origin: String, field: String, message: String },
+}
+
+/// A goal of EAI's `vh_goal`: a node state, an edge, or a group of alternative actions
+/// (`"WATCH|LOOKAT"`) that must appear, in order, among the executed lines.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum VhGoal {
+    State { node: u32, class_name: String, state: NodeState },
+    Edge { from: u32, relation: Relation, to: u32 },
+    Action { options: String },
+}
+
+/// One EAI VirtualHome task: its initial scene graph and its goal.
+#[derive(Debug, Clone)]
+pub struct VirtualhomeTask {
+    pub task_id: String,
+    /// EAI's task category ("Wash dishes with dishwasher").
+    pub task_name: String,
+    /// The program's description line ("Wash a plate using the dishwasher in the kitchen.").
+    pub description: String,
+    pub init: World,
+    pub goals: Vec<VhGoal>,
+    /// `vh_goal` as EAI writes it, for the goal annotation.
+    pub goal_json: String,
+}
+
+#[derive(Deserialize)]
+struct TaskFile {
+    task_id: String,
+    task_name: String,
+    #[serde(default)]
+    description: String,
+    vh_goal: serde_json::Value,
+    init_graph: graph::JsonGraph,
+}
+
+impl VirtualhomeTask {
+    /// Reads a task file (`fixtures/virtualhome-eai/graphs/<id>.json.gz`, or the same JSON
+    /// uncompressed): `{task_id, task_name, description, vh_goal, init_graph}`.
+    pub fn load(path: &Path) -> Result<VirtualhomeTask, VirtualhomeError> {
+        let origin = path.display().to_string();
+        let bytes = std::fs::read(path).map_err(|source| VirtualhomeError::Io { path: origin.clone(), source })?;
+        let text = if bytes.starts_with(&[0x1f, 0x8b]) {
+            let mut text = String::new();
+            flate2::read::GzDecoder::new(&bytes[..])
+                .read_to_string(&mut text)
+                .map_err(|e| VirtualhomeError::Json { origin: origin.clone(), message: format!("bad gzip data: {e}") })?;
+            text
+        } else {
+            String::from_utf8(bytes).map_err(|e| VirtualhomeError::Json { origin: origin.clone(), message: e.to_string() })?
+        };
+        VirtualhomeTask::from_json(&text, &origin)
+    }
+
+    /// Parses a task file's JSON; `origin` names it in errors.
+    pub fn from_json(text: &str, origin: &str) -> Result<VirtualhomeTask, VirtualhomeError> {
+        let file: TaskFile =
+            serde_json::from_str(text).map_err(|e| VirtualhomeError::Json { origin: origin.to_string(), message: e.to_string() })?;
+        let graph = SceneGraph::from_json(file.init_graph, origin)?;
+        let bad =
+            |field: &str, message: String| VirtualhomeError::BadGraph { origin: origin.to_string(), field: field.to_string(), message };
+        let goals = parse_goals(&file.vh_goal, &graph).map_err(|(field, message)| bad(&field, message))?;
+        let init = World::new(graph).ok_or_else(|| bad("init_graph.nodes", "no node of class `character`".to_string()))?;
+        Ok(VirtualhomeTask {
+            task_id: file.task_id,
+            task_name: file.task_name,
+            description: file.description,
+            init,
+            goals,
+            goal_json: file.vh_goal.to_string(),
+        })
+    }
+}
+
+fn parse_goals(value: &serde_json::Value, graph: &SceneGraph) -> Result<Vec<VhGoal>, (String, String)> {
+    let mut goals = Vec::new();
+    let list = value.get("goal").and_then(|g| g.as_array()).ok_or(("vh_goal.goal".to_string(), "missing or not a list".to_string()))?;
+    let id_of = |v: Option<&serde_json::Value>, field: String| -> Result<u32, (String, String)> {
+        let id = v.and_then(|v| v.as_u64()).ok_or((field.clone(), "missing or not a node id".to_string()))?;
+        let id = u32::try_from(id).map_err(|_| (field.clone(), format!("{id} is not a node id")))?;
+        match graph.index_of(id) {
+            Some(_) => Ok(id),
+            None => Err((field, format!("no node with id {id} in the scene"))),
+        }
+    };
+    for (i, g) in list.iter().enumerate() {
+        let goal = if let Some(state) = g.get("state") {
+            let field = format!("vh_goal.goal[{i}].state");
+            let state = state.as_str().and_then(NodeState::parse).ok_or((field, format!("unknown state {state}")))?;
+            let node = id_of(g.get("id"), format!("vh_goal.goal[{i}].id"))?;
+            let class_name = g.get("class_name").and_then(|c| c.as_str()).unwrap_or_default().to_string();
+            VhGoal::State { node, class_name, state }
+        } else if let Some(relation) = g.get("relation_type") {
+            let field = format!("vh_goal.goal[{i}].relation_type");
+            let relation = relation.as_str().and_then(Relation::parse).ok_or((field, format!("unknown relation {relation}")))?;
+            let from = id_of(g.get("from_id"), format!("vh_goal.goal[{i}].from_id"))?;
+            let to = id_of(g.get("to_id"), format!("vh_goal.goal[{i}].to_id"))?;
+            VhGoal::Edge { from, relation, to }
+        } else {
+            return Err((format!("vh_goal.goal[{i}]"), "neither a node goal (state) nor an edge goal (relation_type)".to_string()));
+        };
+        if !goals.contains(&goal) {
+            goals.push(goal);
+        }
+    }
+    if let Some(actions) = value.get("actions") {
+        let actions = actions.as_array().ok_or(("vh_goal.actions".to_string(), "not a list".to_string()))?;
+        for (i, a) in actions.iter().enumerate() {
+            let options = a.as_str().ok_or((format!("vh_goal.actions[{i}]"), "not a string".to_string()))?.to_string();
+            let goal = VhGoal::Action { options };
+            if !goals.contains(&goal) {
+                goals.push(goal);
+            }
+        }
+    }
+    Ok(goals)
+}
+
+/// The nodes the agent sees, by VirtualHome's `get_visible_nodes`: every node transitively
+/// INSIDE the character's room that is not directly INSIDE a non-room node lacking the
+/// state OPEN, every room, and what the character holds. Sorted by index. (Where a node is
+/// INSIDE several nodes, EAI's rule reads one of them, depending on edge order; this reads
+/// all of them, so a node inside any closed container is hidden.)
+pub fn visible_nodes(world: &World) -> Vec<NodeIx> {
+    let g = &world.graph;
+    let mut seen = vec![false; g.len()];
+    let hidden = |ix: NodeIx| {
+        g.targets(ix, Relation::Inside).into_iter().any(|p| !g.node(p).is_room() && !g.node(p).states.contains(NodeState::Open))
+    };
+    for room in g.targets(world.character, Relation::Inside) {
+        let mut frontier = g.sources(room, Relation::Inside);
+        while let Some(ix) = frontier.pop() {
+            if seen[ix as usize] {
+                continue;
+            }
+            seen[ix as usize] = true;
+            frontier.extend(g.sources(ix, Relation::Inside));
+        }
+    }
+    let mut out: Vec<NodeIx> = g.indices().filter(|&ix| seen[ix as usize] && !hidden(ix)).collect();
+    out.extend(g.indices().filter(|&ix| g.node(ix).is_room()));
+    out.extend(world.held());
+    out.sort_unstable();
+    out.dedup();
+    out
+}
+
+/// Actions whose first object the character must hold: a class-level command binds it
+/// to a held instance first.
+const HELD_FIRST: &[Action] = &[
+    Action::PutBack,
+    Action::PutIn,
+    Action::PutObjBack,
+    Action::Pour,
+    Action::Drop,
+    Action::Release,
+    Action::PutOn,
+    Action::Read,
+    Action::Drink,
+];
+
+/// The adapter's binding rule for a class-level command: among the visible instances of
+/// `class_name`, one the character holds when the action needs a held object (first object
+/// of put, pour, drop, read, drink), else one the character is close to, else the lowest id;
+/// a grab never binds to an instance already held.
+/// `None`: no instance of that class is visible from this pose.
+pub fn bind(world: &World, action: Action, position: usize, class_name: &str) -> Option<NodeIx> {
+    let visible = visible_nodes(world);
+    let held = world.held();
+    // Grabbing what is already in hand would fail: a grab binds to the other instances.
+    let candidates: Vec<NodeIx> = visible
+        .into_iter()
+        .filter(|&ix| world.graph.node(ix).class_name == class_name && !(action == Action::Grab && held.contains(&ix)))
+        .collect();
+    let by_id = |ixs: &mut Vec<NodeIx>| ixs.sort_by_key(|&ix| world.graph.node(ix).id);
+    let mut held_ones: Vec<NodeIx> = candidates.iter().copied().filter(|ix| held.contains(ix)).collect();
+    by_id(&mut held_ones);
+    if position == 0 && HELD_FIRST.contains(&action) && !held_ones.is_empty() {
+        return held_ones.first().copied();
+    }
+    let mut close: Vec<NodeIx> = candidates.iter().copied().filter(|&ix| world.close_to(ix)).collect();
+    by_id(&mut close);
+    if let Some(&ix) = close.first() {
+        return Some(ix);
+    }
+    let mut all = candidates;
+    by_id(&mut all);
+    all.first().copied()
+}
+
+/// A VirtualHome task as an [`Environment`] (and a [`Judge`]).
+#[derive(Debug, Clone)]
+pub struct VirtualhomeEnv {
+    task: VirtualhomeTask,
+    world: World,
+    /// Lines executed since the reset, as sent (instance level), for the action goals.
+    executed: Vec<String>,
+    steps: usize,
+    annotation: GoalAnnotation,
+}
+
+impl VirtualhomeEnv {
+    pub fn new(task: VirtualhomeTask, benchmark: &str) -> VirtualhomeEnv {
+        let annotation = GoalAnnotation {
+            benchmark: benchmark.to_string(),
+            sentence: if task.description.is_empty() { task.task_name.clone() } else { task.description.clone() },
+            formula: task.goal_json.clone(),
+            family: task.task_name.clone(),
+        };
+        let world = task.init.clone();
+        VirtualhomeEnv { task, world, executed: Vec::new(), steps: 0, annotation }
+    }
+
+    pub fn task(&self) -> &VirtualhomeTask {
+        &self.task
+    }
+
+    /// What the agent sees now as `(id, class_name)`, by id (the nodes the observation
+    /// lists, rooms included, the character left out).
+    pub fn visible_objects(&self) -> Vec<(u32, String)> {
+        let g = &self.world.graph;
+        let mut out: Vec<(u32, String)> = visible_nodes(&self.world)
+            .into_iter()
+            .filter(|&ix| ix != self.world.character)
+            .map(|ix| (g.node(ix).id, g.node(ix).class_name.clone()))
+            .collect();
+        out.sort();
+        out
+    }
+
+    /// The instance-level lines executed since the reset.
+    pub fn executed_lines(&self) -> &[String] {
+        &self.executed
+    }
+
+    /// The observation text: the room, what the character holds, and every visible node
+    /// with its states and its ON/INSIDE relations to visible nodes, one per line, by id:
+    ///
+    /// ```text
+    /// You are in the kitchen (11).
+    /// You hold: plate (1001).
+    /// Rooms: bathroom (1), kitchen (11).
+    /// You see:
+    /// - dishwasher (1000): CLOSED, OFF; close to you
+    /// - plate (1001): on kitchencounter (123); close to you
+    /// ```
+    pub fn observe(&self) -> String {
+        let w = &self.world;
+        let g = &w.graph;
+        let name = |ix: NodeIx| format!("{} ({})", g.node(ix).class_name, g.node(ix).id);
+        let mut out = String::new();
+        let rooms: Vec<String> = g.targets(w.character, Relation::Inside).into_iter().filter(|&r| g.node(r).is_room()).map(name).collect();
+        let _ = writeln!(out, "You are in the {}.", if rooms.is_empty() { "nowhere".to_string() } else { rooms.join(", ") });
+        let held: Vec<String> = w.held().into_iter().map(name).collect();
+        let _ = writeln!(out, "You hold: {}.", if held.is_empty() { "nothing".to_string() } else { held.join(", ") });
+        let mut visible = visible_nodes(w);
+        visible.sort_by_key(|&ix| g.node(ix).id);
+        let all_rooms: Vec<String> = visible.iter().copied().filter(|&ix| g.node(ix).is_room()).map(name).collect();
+        let _ = writeln!(out, "Rooms: {}.", all_rooms.join(", "));
+        let _ = writeln!(out, "You see:");
+        let is_visible = |ix: NodeIx| visible.binary_search_by_key(&g.node(ix).id, |&v| g.node(v).id).is_ok();
+        for &ix in &visible {
+            if g.node(ix).is_room() || ix == w.character {
+                continue;
+            }
+            let mut parts = Vec::new();
+            let states: Vec<&str> = g.node(ix).states.iter().map(NodeState::as_str).collect();
+            if !states.is_empty() {
+                parts.push(states.join(", "));
+            }
+            for (relation, word) in [(Relation::On, "on"), (Relation::Inside, "inside")] {
+                let mut targets = g.targets(ix, relation);
+                targets.sort_by_key(|&t| g.node(t).id);
+                for t in targets {
+                    if !g.node(t).is_room() && is_visible(t) {
+                        parts.push(format!("{word} {}", name(t)));
+                    }
+                }
+            }
+            if g.has_edge(w.character, Relation::Close, ix) {
+                parts.push("close to you".to_string());
+            }
+            if parts.is_empty() {
+                let _ = writeln!(out, "- {}", name(ix));
+            } else {
+                let _ = writeln!(out, "- {}: {}", name(ix), parts.join("; "));
+            }
+        }
+        out
+    }
+
+    /// Turns a command into a script line: instance-level lines as they are; class-level
+    /// `verb class [class]` bound by [`bind`].
+    fn resolve(&self, command: &str) -> Result<(ScriptLine, String), String> {
+        let command = command.trim();
+        if command.starts_with('[') {
+            let line = ScriptLine::parse(command)?;
+            return Ok((line, command.to_string()));
+        }
+        let mut words = command.split_whitespace();
+        let Some(verb) = words.next() else { return Err("empty command".to_string()) };
+        let action = Action::parse(verb).ok_or_else(|| format!("unknown action {verb:?}"))?;
+        let classes: Vec<String> = words.map(|w| w.to_lowercase()).collect();
+        if classes.len() != action.arity() {
+            return Err(format!("\"{}\" takes {} object(s), got {}", action.name(), action.arity(), classes.len()));
+        }
+        let mut objects = Vec::new();
+        for (position, class_name) in classes.iter().enumerate() {
+            let ix = bind(&self.world, action, position, class_name)
+                .ok_or_else(|| format!("{class_name} could not be grounded from this pose"))?;
+            objects.push((class_name.clone(), self.world.graph.node(ix).id));
+        }
+        let mut text = format!("[{}]", action.name());
+        for (name, id) in &objects {
+            let _ = write!(text, " <{name}> ({id})");
+        }
+        Ok((ScriptLine { action, objects }, text))
+    }
+
+    fn goal_holds(&self, goal: &VhGoal) -> bool {
+        let g = &self.world.graph;
+        match goal {
+            VhGoal::State { node, state, .. } => g.index_of(*node).is_some_and(|ix| g.node(ix).states.contains(*state)),
+            VhGoal::Edge { from, relation, to } => match (g.index_of(*from), g.index_of(*to)) {
+                (Some(a), Some(b)) => g.has_edge(a, *relation, b),
+                _ => false,
+            },
+            VhGoal::Action { .. } => true,
+        }
+    }
+
+    /// The action goals not met, as EAI's `check_order_with_or_score` finds them: each
+    /// group's options (upper-cased, spaces removed) searched in order in the executed lines
+    /// joined by spaces; the first group not found and every later one are unmet.
+    fn unmet_action_goals(&self) -> Vec<String> {
+        let joined = self.executed.join(" ");
+        let mut start = 0;
+        let mut unmet = Vec::new();
+        for goal in &self.task.goals {
+            let VhGoal::Action { options } = goal else { continue };
+            if !unmet.is_empty() {
+                unmet.push(options.clone());
+                continue;
+            }
+            let found = options.split('|').find_map(|option| {
+                let option = option.to_uppercase().replace(' ', "");
+                joined.get(start..).and_then(|rest| rest.find(&option)).map(|at| start + at + option.len())
+            });
+            match found {
+                Some(end) => start = end,
+                None => unmet.push(options.clone()),
+            }
+        }
+        unmet
+    }
+}
+
+impl Environment for VirtualhomeEnv {
+    fn reset(&mut self) -> Observation {
+        self.world = self.task.init.clone();
+        self.executed.clear();
+        self.steps = 0;
+        Observation::text(self.observe())
+    }
+
+    fn step(&mut self, command: &str) -> StepResult {
+        self.steps += 1;
+        let outcome = self.resolve(command).and_then(|(line, text)| self.world.execute(&line).map(|()| text));
+        match outcome {
+            Ok(text) => {
+                let observation = Observation::text(format!("Executed {text}.\n{}", self.observe()));
+                self.executed.push(text);
+                StepResult { observation, event: Event::Executed }
+            }
+            Err(reason) => {
+                let observation = Observation::text(format!("Not executed: {reason}.\n{}", self.observe()));
+                StepResult { observation, event: Event::NotExecuted { reason } }
+            }
+        }
+    }
+
+    fn goal_reached(&self) -> bool {
+        self.unmet_goals().is_empty()
+    }
+
+    fn steps_taken(&self) -> usize {
+        self.steps
+    }
+
+    fn goal(&self) -> &GoalAnnotation {
+        &self.annotation
+    }
+
+    fn admissible_commands(&self) -> Option<Vec<String>> {
+        None
+    }
+}
+
+impl Judge for VirtualhomeEnv {
+    fn hidden_atoms(&self) -> Vec<JudgeAtom> {
+        let g = &self.world.graph;
+        let name = |ix: NodeIx| format!("{} ({})", g.node(ix).class_name, g.node(ix).id);
+        let mut atoms = Vec::new();
+        for ix in g.indices() {
+            for state in g.node(ix).states.iter() {
+                atoms.push(JudgeAtom { predicate: state.as_str().to_string(), args: vec![name(ix)] });
+            }
+        }
+        for (from, relation, to) in g.all_edges() {
+            atoms.push(JudgeAtom { predicate: relation.as_str().to_string(), args: vec![name(from), name(to)] });
+        }
+        atoms.sort();
+        atoms
+    }
+
+    fn unmet_goals(&self) -> Vec<String> {
+        let g = &self.world.graph;
+        let name = |id: u32| g.index_of(id).map_or_else(|| format!("? ({id})"), |ix| format!("{} ({})", g.node(ix).class_name, id));
+        let mut unmet = Vec::new();
+        for goal in &self.task.goals {
+            if self.goal_holds(goal) {
+                continue;
+            }
+            match goal {
+                VhGoal::State { node, state, .. } => unmet.push(format!("{} is {}", name(*node), state)),
+                VhGoal::Edge { from, relation, to } => unmet.push(format!("{} {} {}", name(*from), relation, name(*to))),
+                VhGoal::Action { .. } => {}
+            }
+        }
+        unmet.extend(self.unmet_action_goals().into_iter().map(|a| format!("action {a} not done")));
+        unmet
+    }
+}

@@ -1,0 +1,179 @@
+//! VirtualhomeEnv on a tiny hand-made scene: preconditions, effects, the CLOSE edges walking
+//! creates, visibility, class-level binding, the full goal check, and bad input.
+//!
+//! ```text
+//!   kitchen (1) ── character (2)           livingroom (50) ── tv (51) [OFF]
+//!     ├─ fridge (10) [CLOSED]  ⊃ apple (11)
+//!     ├─ table (20)  ◁ON─ plate (21), plate (22)
+//!     └─ dishwasher (30) [CLOSED, OFF]
+//! ```
+
+use household_sim::{Environment, Event, Judge, VirtualhomeEnv, VirtualhomeError, VirtualhomeTask};
+
+fn scene(goal: &str) -> String {
+    let node = |id: u32, class: &str, category: &str, props: &str, states: &str| {
+        format!(r#"{{"id":{id},"class_name":"{class}","category":"{category}","properties":[{props}],"states":[{states}]}}"#)
+    };
+    let nodes = [
+        node(1, "kitchen", "Rooms", "", ""),
+        node(2, "character", "Characters", "", ""),
+        node(10, "fridge", "Appliances", r#""CAN_OPEN","CONTAINERS""#, r#""CLOSED""#),
+        node(11, "apple", "food", r#""GRABBABLE","EATABLE""#, ""),
+        node(20, "table", "Furniture", r#""SURFACES""#, ""),
+        node(21, "plate", "placable_objects", r#""GRABBABLE","RECIPIENT""#, r#""DIRTY""#),
+        node(22, "plate", "placable_objects", r#""GRABBABLE","RECIPIENT""#, ""),
+        node(30, "dishwasher", "Appliances", r#""CAN_OPEN","HAS_SWITCH","CONTAINERS""#, r#""CLOSED","OFF""#),
+        node(50, "livingroom", "Rooms", "", ""),
+        node(51, "tv", "Electronics", r#""HAS_SWITCH","LOOKABLE""#, r#""OFF""#),
+    ]
+    .join(",");
+    let edge = |a: u32, r: &str, b: u32| format!(r#"{{"from_id":{a},"relation_type":"{r}","to_id":{b}}}"#);
+    let edges = [
+        edge(2, "INSIDE", 1),
+        edge(10, "INSIDE", 1),
+        edge(11, "INSIDE", 10),
+        edge(11, "INSIDE", 1),
+        edge(20, "INSIDE", 1),
+        edge(21, "INSIDE", 1),
+        edge(21, "ON", 20),
+        edge(22, "INSIDE", 1),
+        edge(22, "ON", 20),
+        edge(30, "INSIDE", 1),
+        edge(51, "INSIDE", 50),
+    ]
+    .join(",");
+    format!(
+        r#"{{"task_id":"t1","task_name":"Tiny","description":"Put a plate in the dishwasher.","vh_goal":{goal},"init_graph":{{"nodes":[{nodes}],"edges":[{edges}]}}}}"#
+    )
+}
+
+const PLATE_IN_DISHWASHER: &str =
+    r#"{"actions":[],"goal":[{"from_id":21,"relation_type":"INSIDE","to_id":30},{"id":30,"class_name":"dishwasher","state":"ON"}]}"#;
+
+fn env(goal: &str) -> VirtualhomeEnv {
+    let task = VirtualhomeTask::from_json(&scene(goal), "tiny.json").expect("tiny scene parses");
+    let mut env = VirtualhomeEnv::new(task, "virtualhome-eai");
+    env.reset();
+    env
+}
+
+/// Sends `commands` and checks each one's executed flag.
+fn check(env: &mut VirtualhomeEnv, commands: &[(&str, bool)]) {
+    for (i, (command, expected)) in commands.iter().enumerate() {
+        let result = env.step(command);
+        assert_eq!(result.event.executed(), *expected, "step {} {command}: {:?}", i + 1, result.event);
+    }
+}
+
+#[test]
+fn grabbing_needs_closeness_and_walking_makes_the_target_and_its_surface_close() {
+    let mut e = env(PLATE_IN_DISHWASHER);
+    check(&mut e, &[("[GRAB] <plate> (21)", false), ("[WALK] <plate> (21)", true), ("[GRAB] <plate> (21)", true)]);
+    // Walking to the plate made the table close; the other plate is on it, so close too (the loose rule).
+    check(&mut e, &[("[GRAB] <plate> (22)", true), ("[GRAB] <apple> (11)", false)]);
+}
+
+#[test]
+fn a_closed_container_hides_and_blocks_its_contents() {
+    let mut e = env(PLATE_IN_DISHWASHER);
+    let obs = e.reset().text;
+    assert!(obs.contains("fridge (10): CLOSED"), "{obs}");
+    assert!(!obs.contains("apple (11)"), "the apple inside the closed fridge is hidden:\n{obs}");
+    check(&mut e, &[("[WALK] <fridge> (10)", true), ("[GRAB] <apple> (11)", false), ("[OPEN] <fridge> (10)", true)]);
+    let obs = e.step("[GRAB] <apple> (11)");
+    assert_eq!(obs.event, Event::Executed);
+    assert!(obs.observation.text.contains("You hold: apple (11)."), "{}", obs.observation.text);
+}
+
+#[test]
+fn the_full_goal_needs_every_part_and_failed_steps_change_nothing() {
+    let mut e = env(PLATE_IN_DISHWASHER);
+    check(
+        &mut e,
+        &[
+            ("[WALK] <dishwasher> (30)", true),
+            ("[PUTIN] <plate> (21) <dishwasher> (30)", false),
+            ("[WALK] <plate> (21)", true),
+            ("[GRAB] <plate> (21)", true),
+            ("[WALK] <dishwasher> (30)", true),
+            ("[PUTIN] <plate> (21) <dishwasher> (30)", false),
+            ("[OPEN] <dishwasher> (30)", true),
+            ("[OPEN] <dishwasher> (30)", false),
+            ("[PUTIN] <plate> (21) <dishwasher> (30)", true),
+            ("[SWITCHON] <dishwasher> (30)", true),
+        ],
+    );
+    // The dishwasher is on but still open: switching on an open dishwasher is allowed by the
+    // executor; the goal asks only for the edge and ON.
+    assert!(e.goal_reached(), "{:?}", e.unmet_goals());
+    assert_eq!(e.steps_taken(), 10);
+    e.reset();
+    assert!(!e.goal_reached());
+    assert_eq!(e.unmet_goals(), vec!["plate (21) INSIDE dishwasher (30)".to_string(), "dishwasher (30) is ON".to_string()]);
+}
+
+#[test]
+fn action_goals_need_the_action_executed_in_order() {
+    let goal = r#"{"actions":["WATCH|LOOKAT"],"goal":[{"id":51,"class_name":"tv","state":"ON"}]}"#;
+    let mut e = env(goal);
+    check(&mut e, &[("[WALK] <tv> (51)", true), ("[SWITCHON] <tv> (51)", true)]);
+    assert_eq!(e.unmet_goals(), vec!["action WATCH|LOOKAT not done".to_string()]);
+    check(&mut e, &[("[WATCH] <tv> (51)", false), ("[TURNTO] <tv> (51)", true), ("[WATCH] <tv> (51)", true)]);
+    assert!(e.goal_reached());
+}
+
+#[test]
+fn class_level_commands_bind_to_visible_instances_or_say_why_not() {
+    let mut e = env(PLATE_IN_DISHWASHER);
+    let r = e.step("grab apple");
+    assert_eq!(r.event, Event::NotExecuted { reason: "apple could not be grounded from this pose".to_string() });
+    let r = e.step("walk tv");
+    assert!(!r.event.executed(), "the tv is in another room: not visible from the kitchen");
+    check(&mut e, &[("walk plate", true), ("grab plate", true), ("grab plate", true)]);
+    assert_eq!(&e.executed_lines()[1..], ["[GRAB] <plate> (21)", "[GRAB] <plate> (22)"]);
+    check(&mut e, &[("walk dishwasher", true), ("open dishwasher", false)]);
+    check(&mut e, &[("putback plate table", false)]);
+}
+
+#[test]
+fn bad_commands_are_answered_never_panicked_on() {
+    let mut e = env(PLATE_IN_DISHWASHER);
+    for bad in [
+        "",
+        "   ",
+        "[",
+        "[WALK]",
+        "[FLY] <x> (1)",
+        "[WALK] <plate> (999)",
+        "[WALK] <plate> (-1)",
+        "[PUTIN] <plate> (21)",
+        "fly kitchen",
+        "walk",
+    ] {
+        assert!(!e.step(bad).event.executed(), "{bad:?}");
+    }
+    let noise: String = (0..10_000u32).map(|i| char::from_u32(32 + (i * 7919) % 95).unwrap_or('x')).collect();
+    assert!(!e.step(&noise).event.executed());
+    assert_eq!(e.steps_taken(), 11);
+}
+
+#[test]
+fn bad_task_files_name_the_field() {
+    let err = |text: String| VirtualhomeTask::from_json(&text, "t.json").expect_err("must be rejected").to_string();
+    let missing_node = scene(r#"{"actions":[],"goal":[{"id":999,"class_name":"x","state":"ON"}]}"#);
+    assert!(err(missing_node).contains("vh_goal.goal[0].id"));
+    let bad_state = scene(PLATE_IN_DISHWASHER).replace(r#""DIRTY""#, r#""SHINY""#);
+    assert!(err(bad_state).contains("nodes[5].states[0]"));
+    let bad_edge = scene(PLATE_IN_DISHWASHER).replace(r#""relation_type":"ON","to_id":20"#, r#""relation_type":"UNDER","to_id":20"#);
+    assert!(err(bad_edge).contains("edges[6].relation_type"));
+    assert!(matches!(VirtualhomeTask::from_json("{", "t.json"), Err(VirtualhomeError::Json { .. })));
+}
+
+#[test]
+fn the_judge_sees_the_hidden_state_the_agent_does_not() {
+    let e = env(PLATE_IN_DISHWASHER);
+    let atoms: Vec<String> = e.hidden_atoms().iter().map(ToString::to_string).collect();
+    assert!(atoms.contains(&"(INSIDE apple (11) fridge (10))".to_string()), "{atoms:?}");
+    assert_eq!(e.goal().family, "Tiny");
+    assert_eq!(e.admissible_commands(), None);
+}

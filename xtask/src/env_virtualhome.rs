@@ -1,0 +1,134 @@
+//! `cargo xtask env --benchmark virtualhome-eai --task ID`: runs commands (a file, or a
+//! seeded random program over what is visible at each step) in `VirtualhomeEnv` and prints
+//! one JSON line per step and the goal verdict last.
+
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+use anyhow::{Context, bail};
+use household_sim::{Environment, Judge, VirtualhomeEnv, VirtualhomeTask};
+use serde_json::json;
+
+/// Arguments of the VirtualHome part of `cargo xtask env` (parsed there).
+#[derive(Debug)]
+pub struct VirtualhomeEnvArgs {
+    /// The benchmark.
+    pub benchmark: String,
+    /// EAI task id (`201_1`): `<task-dir>/<id>.json.gz`.
+    pub task: String,
+    /// Folder of task files [default: fixtures/virtualhome-eai/graphs, the 33 kitchen tasks].
+    pub task_dir: Option<PathBuf>,
+    /// Commands, one a line (script lines `[WALK] <plate> (1001)` or class-level `grab plate`);
+    /// blank lines and `#` lines skipped.
+    pub commands: Option<PathBuf>,
+    /// A random program of N steps: each step an action on an object visible at that step.
+    pub random: Option<usize>,
+    /// Seed of the random program.
+    pub seed: u64,
+    /// JSON lines (step, command, executed, message, observation; the last line the verdict).
+    pub json: bool,
+}
+
+/// Actions the random program draws from (uniformly), with their number of objects.
+const RANDOM_ACTIONS: &[(&str, usize)] = &[
+    ("WALK", 1),
+    ("FIND", 1),
+    ("GRAB", 1),
+    ("OPEN", 1),
+    ("CLOSE", 1),
+    ("PUTBACK", 2),
+    ("PUTIN", 2),
+    ("SWITCHON", 1),
+    ("SWITCHOFF", 1),
+    ("TURNTO", 1),
+    ("LOOKAT", 1),
+    ("WIPE", 1),
+    ("TOUCH", 1),
+    ("POUR", 2),
+    ("DRINK", 1),
+    ("PLUGIN", 1),
+    ("WASH", 1),
+];
+
+/// SplitMix64: a small, fixed generator, so `--seed S` means the same program everywhere.
+struct SplitMix(u64);
+
+impl SplitMix {
+    fn next(&mut self) -> u64 {
+        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        z ^ (z >> 31)
+    }
+
+    fn below(&mut self, n: usize) -> usize {
+        (self.next() % n as u64) as usize
+    }
+}
+
+fn random_command(env: &VirtualhomeEnv, rng: &mut SplitMix) -> String {
+    let (action, arity) = RANDOM_ACTIONS[rng.below(RANDOM_ACTIONS.len())];
+    let visible = env.visible_objects();
+    if visible.is_empty() {
+        return "[STANDUP]".to_string();
+    }
+    let mut line = format!("[{action}]");
+    for _ in 0..arity {
+        let (id, class) = &visible[rng.below(visible.len())];
+        line.push_str(&format!(" <{class}> ({id})"));
+    }
+    line
+}
+
+/// Runs `cargo xtask env` for a VirtualHome benchmark. Exit 0 when the goal holds at the
+/// end, 1 when not; errors (exit 2) for a missing task or an unreadable command file.
+pub fn run(args: &VirtualhomeEnvArgs) -> anyhow::Result<ExitCode> {
+    let dir = args.task_dir.clone().unwrap_or_else(|| benchmark_data::fixtures_dir().join("virtualhome-eai/graphs"));
+    let path = dir.join(format!("{}.json.gz", args.task));
+    if !path.is_file() {
+        bail!("no task {} in {} (task files there: the EAI kitchen tasks, `<id>.json.gz`)", args.task, dir.display());
+    }
+    let task = VirtualhomeTask::load(&path)?;
+    let mut env = VirtualhomeEnv::new(task, &args.benchmark);
+    let commands: Option<Vec<String>> = match &args.commands {
+        Some(file) => {
+            let text = std::fs::read_to_string(file).with_context(|| format!("{}: cannot read commands", file.display()))?;
+            Some(text.lines().map(str::trim).filter(|l| !l.is_empty() && !l.starts_with('#')).map(str::to_string).collect())
+        }
+        None => None,
+    };
+    let steps = commands.as_ref().map_or(args.random.unwrap_or(0), Vec::len);
+    let observation = env.reset();
+    emit(args.json, json!({"step": 0, "command": null, "executed": true, "message": "", "observation": observation.text}));
+    let mut rng = SplitMix(args.seed);
+    for step in 1..=steps {
+        let command = match &commands {
+            Some(list) => list[step - 1].clone(),
+            None => random_command(&env, &mut rng),
+        };
+        let result = env.step(&command);
+        let message = match &result.event {
+            household_sim::Event::Executed => String::new(),
+            household_sim::Event::NotExecuted { reason } => reason.clone(),
+        };
+        emit(
+            args.json,
+            json!({"step": step, "command": command, "executed": result.event.executed(), "message": message, "observation": result.observation.text}),
+        );
+    }
+    let reached = env.goal_reached();
+    emit(args.json, json!({"goal_reached": reached, "steps": env.steps_taken(), "unmet": env.unmet_goals()}));
+    Ok(if reached { ExitCode::SUCCESS } else { ExitCode::from(1) })
+}
+
+fn emit(json_lines: bool, value: serde_json::Value) {
+    if json_lines {
+        println!("{value}");
+    } else if let Some(step) = value.get("step") {
+        let command = value["command"].as_str().unwrap_or("(reset)");
+        println!("--- step {step}: {command}\n{}", value["observation"].as_str().unwrap_or_default());
+    } else {
+        println!("goal reached: {}; unmet: {}", value["goal_reached"], value["unmet"]);
+    }
+}
