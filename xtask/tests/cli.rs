@@ -298,6 +298,8 @@ fn env_prints_the_engines_lines_byte_for_byte() {
     let output = xtask(&["env", "--game", "no/such/game", "--json"]);
     assert_eq!(output.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&output.stderr).contains("no/such/game"));
+}
+
 #[test]
 fn env_virtualhome_prints_json_lines_and_the_verdict() {
     // EAI's gold program of task 201_1 (wash a plate with the dishwasher).
