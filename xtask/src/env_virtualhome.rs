@@ -6,7 +6,7 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 
 use anyhow::{Context, bail};
-use household_sim::{Environment, Judge, VirtualhomeEnv, VirtualhomeTask};
+use household_sim::{Environment, Judge, PythonRandom, VirtualhomeEnv, VirtualhomeTask};
 use serde_json::json;
 
 /// Arguments of the VirtualHome part of `cargo xtask env` (parsed there).
@@ -50,32 +50,15 @@ const RANDOM_ACTIONS: &[(&str, usize)] = &[
     ("WASH", 1),
 ];
 
-/// SplitMix64: a small, fixed generator, so `--seed S` means the same program everywhere.
-struct SplitMix(u64);
-
-impl SplitMix {
-    fn next(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^ (z >> 31)
-    }
-
-    fn below(&mut self, n: usize) -> usize {
-        (self.next() % n as u64) as usize
-    }
-}
-
-fn random_command(env: &VirtualhomeEnv, rng: &mut SplitMix) -> String {
-    let (action, arity) = RANDOM_ACTIONS[rng.below(RANDOM_ACTIONS.len())];
+fn random_command(env: &VirtualhomeEnv, rng: &mut PythonRandom) -> String {
+    let (action, arity) = RANDOM_ACTIONS[rng.choice_index(RANDOM_ACTIONS.len())];
     let visible = env.visible_objects();
     if visible.is_empty() {
         return "[STANDUP]".to_string();
     }
     let mut line = format!("[{action}]");
     for _ in 0..arity {
-        let (id, class) = &visible[rng.below(visible.len())];
+        let (id, class) = &visible[rng.choice_index(visible.len())];
         line.push_str(&format!(" <{class}> ({id})"));
     }
     line
@@ -101,7 +84,7 @@ pub fn run(args: &VirtualhomeEnvArgs) -> anyhow::Result<ExitCode> {
     let steps = commands.as_ref().map_or(args.random.unwrap_or(0), Vec::len);
     let observation = env.reset();
     emit(args.json, json!({"step": 0, "command": null, "executed": true, "message": "", "observation": observation.text}));
-    let mut rng = SplitMix(args.seed);
+    let mut rng = PythonRandom::new(args.seed);
     for step in 1..=steps {
         let command = match &commands {
             Some(list) => list[step - 1].clone(),
