@@ -13,8 +13,8 @@ use common::{fixtures, parse_traces, replay};
 
 #[test]
 fn random_walks_with_new_seeds_match_the_live_engine() {
-    // One game of each task type across both splits (the middle one), seeds 1000 and 1001,
-    // 30 steps: the unpatched engine takes about 0.2 s a step and 5 s a reset here.
+    // One game of each task type across both splits (the middle one), seed 1000, 30 steps:
+    // the unpatched engine takes about 0.2 s a step and 5 s a reset here, and CI runs this.
     let mut games: Vec<String> = Vec::new();
     for task_type in household_sim::TASK_TYPES {
         let mut of_type: Vec<String> = Vec::new();
@@ -35,7 +35,7 @@ fn random_walks_with_new_seeds_match_the_live_engine() {
     let scratch = std::env::temp_dir().join(format!("alfworld-live-{}.jsonl", std::process::id()));
     let _ = std::fs::remove_file(&scratch);
     let root = fixtures().join("alfworld");
-    let seeds: Vec<String> = (0..2).map(|i| (1000 + i).to_string()).collect();
+    let seeds = ["1000"];
     let status = Command::new("python3")
         .arg(fixtures().join("../tools/alfworld_record.py"))
         .args([root.as_os_str(), scratch.as_os_str()])
