@@ -227,23 +227,21 @@ impl SceneGraph {
 
     /// The nodes `from` has a `relation` edge to, in ascending index order.
     pub fn targets(&self, from: NodeIx, relation: Relation) -> Vec<NodeIx> {
-        let mut out: Vec<NodeIx> = self
-            .edges
-            .edges_directed(from, Direction::Outgoing)
-            .filter(|(_, _, set)| set.contains(relation))
-            .map(|(_, to, _)| to)
-            .collect();
-        out.sort_unstable();
-        out
+        self.neighbours(from, relation, Direction::Outgoing)
     }
 
     /// The nodes with a `relation` edge to `to`, in ascending index order.
     pub fn sources(&self, to: NodeIx, relation: Relation) -> Vec<NodeIx> {
+        self.neighbours(to, relation, Direction::Incoming)
+    }
+
+    /// The other ends of `node`'s `relation` edges in `direction`, in ascending index order.
+    fn neighbours(&self, node: NodeIx, relation: Relation, direction: Direction) -> Vec<NodeIx> {
         let mut out: Vec<NodeIx> = self
             .edges
-            .edges_directed(to, Direction::Incoming)
+            .edges_directed(node, direction)
             .filter(|(_, _, set)| set.contains(relation))
-            .map(|(from, _, _)| from)
+            .map(|(from, to, _)| if from == node { to } else { from })
             .collect();
         out.sort_unstable();
         out
