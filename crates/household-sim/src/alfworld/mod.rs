@@ -319,7 +319,7 @@ impl AlfworldEnv {
                 .collect();
             let template = parse(&text.template, &format!("the template of `{}`", text.name))?;
             let feedback = parse(&text.feedback, &format!("the feedback of `{}`", text.name))?;
-            let template_is_static = template_queries(&template).iter().all(|p| !changing.contains(*p));
+            let template_is_static = reads_only_static(&template, &changing);
             schemas.push(SchemaText { template, feedback, params, template_is_static });
         }
         let intro = parse("#intro#", "the intro")?;
@@ -514,23 +514,18 @@ impl AlfworldEnv {
     }
 }
 
-fn template_queries(symbols: &[Symbol]) -> Vec<&str> {
-    let mut out = Vec::new();
-    for symbol in symbols {
-        match symbol {
-            Symbol::Conditional { expression, given } => {
-                if let Some(q) = given {
-                    out.extend(q.predicate_names.iter().map(String::as_str));
-                }
-                out.extend(template_queries(std::slice::from_ref(expression)));
-            }
-            Symbol::List(inner) => out.extend(template_queries(std::slice::from_ref(inner))),
-            // A nonterminal's productions may read anything: treat it as reading a fluent.
-            Symbol::Nonterminal(_) => out.push("\u{0}nonterminal"),
-            Symbol::Terminal(_) | Symbol::Eval(_) => {}
+/// Whether deriving `symbols` reads only facts no action changes. A nonterminal's
+/// productions may read anything, so a template that names one is not static.
+fn reads_only_static(symbols: &[Symbol], changing: &FxHashSet<String>) -> bool {
+    symbols.iter().all(|symbol| match symbol {
+        Symbol::Conditional { expression, given } => {
+            given.as_ref().is_none_or(|q| q.predicate_names.iter().all(|p| !changing.contains(p)))
+                && reads_only_static(std::slice::from_ref(expression), changing)
         }
-    }
-    out
+        Symbol::List(inner) => reads_only_static(std::slice::from_ref(inner), changing),
+        Symbol::Nonterminal(_) => false,
+        Symbol::Terminal(_) | Symbol::Eval(_) => true,
+    })
 }
 
 impl Environment for AlfworldEnv {
