@@ -1,0 +1,139 @@
+//! [`ChatModel`], the interface every chat model answers to, and [`ChatClient`], a served
+//! model behind `/v1/chat/completions` (vLLM, llama.cpp's server, Ollama, hosted APIs).
+
+use std::time::Duration;
+
+use crate::error::{ChatError, ChatErrorKind};
+use crate::reply::{ChatReply, Usage, parse_reply};
+use crate::request::{ChatRequest, JsonMode};
+use crate::transport::{self, RetryPolicy};
+
+/// A chat model: messages in, one reply out. A request with a `json_schema` asks the model to
+/// answer in JSON; [`crate::chat_json`] reads and checks the reply and repairs it once.
+pub trait ChatModel {
+    fn chat(&mut self, request: &ChatRequest) -> Result<ChatReply, ChatError>;
+    /// Where the model is, for error messages (a URL, or `local:...`).
+    fn endpoint(&self) -> String;
+    /// Usage summed over every call so far.
+    fn usage(&self) -> Usage;
+}
+
+/// Where the server is and how to talk to it.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ClientConfig {
+    /// `http(s)://host[:port]/v1`: the path before `/chat/completions`.
+    pub base_url: String,
+    /// The `model` field of each request.
+    pub model: String,
+    /// The environment variable holding the API key, sent as `Authorization: Bearer ...`
+    /// (`None`: no key, as local servers want).
+    pub api_key_env: Option<String>,
+    pub retry: RetryPolicy,
+    /// The strongest way of asking for JSON to try first; a server that refuses a
+    /// `response_format` with a 400 is asked again the next weaker way, which is kept.
+    pub json_mode: JsonMode,
+}
+
+impl ClientConfig {
+    pub fn new(base_url: &str, model: &str) -> ClientConfig {
+        ClientConfig {
+            base_url: base_url.trim_end_matches('/').to_string(),
+            model: model.to_string(),
+            api_key_env: None,
+            retry: RetryPolicy::default(),
+            json_mode: JsonMode::Schema,
+        }
+    }
+}
+
+/// A served chat model.
+#[derive(Debug)]
+pub struct ChatClient {
+    config: ClientConfig,
+    endpoint: String,
+    agent: ureq::Agent,
+    api_key: Option<String>,
+    json_mode: JsonMode,
+    usage: Usage,
+}
+
+impl ChatClient {
+    /// A client; the URL is checked and the API key read here, so that a bad setting fails
+    /// before the first request.
+    pub fn new(config: ClientConfig) -> Result<ChatClient, ChatError> {
+        let refuse = |kind| ChatError { kind, url: config.base_url.clone(), attempts: 0, elapsed: Duration::ZERO };
+        transport::check_url(&config.base_url).map_err(refuse)?;
+        let api_key = match &config.api_key_env {
+            Some(name) => Some(std::env::var(name).map_err(|_| refuse(ChatErrorKind::MissingApiKey(name.clone())))?),
+            None => None,
+        };
+        Ok(ChatClient {
+            endpoint: format!("{}/chat/completions", config.base_url),
+            agent: transport::agent(config.retry.timeout),
+            json_mode: config.json_mode,
+            api_key,
+            usage: Usage::default(),
+            config,
+        })
+    }
+
+    pub fn config(&self) -> &ClientConfig {
+        &self.config
+    }
+
+    /// How JSON is asked for now (weaker than configured after a refusal).
+    pub fn json_mode(&self) -> JsonMode {
+        self.json_mode
+    }
+}
+
+impl ChatModel for ChatClient {
+    fn chat(&mut self, request: &ChatRequest) -> Result<ChatReply, ChatError> {
+        let images = request.image_count() as u64;
+        let mut extra_attempts = 0;
+        loop {
+            let body = request.body(&self.config.model, self.json_mode).to_string();
+            let result = transport::post_json(&self.agent, &self.endpoint, body.as_bytes(), self.api_key.as_deref(), &self.config.retry);
+            let delivered = match result {
+                Ok(delivered) => delivered,
+                Err(error) => {
+                    self.usage.requests += u64::from(error.attempts);
+                    let refused_format = matches!(error.kind, ChatErrorKind::Status { status: 400 | 422, .. });
+                    match self.json_mode.weaker() {
+                        Some(weaker) if refused_format && request.json_schema.is_some() => {
+                            self.json_mode = weaker;
+                            extra_attempts += error.attempts;
+                            continue;
+                        }
+                        _ => return Err(ChatError { attempts: error.attempts + extra_attempts, ..error }),
+                    }
+                }
+            };
+            let attempts = delivered.attempts + extra_attempts;
+            self.usage.requests += u64::from(delivered.attempts);
+            let mut reply = parse_reply(&delivered.body).map_err(|kind| ChatError {
+                kind,
+                url: self.endpoint.clone(),
+                attempts,
+                elapsed: delivered.elapsed,
+            })?;
+            reply.usage.requests = u64::from(attempts);
+            reply.usage.images = images;
+            reply.attempts = attempts;
+            reply.waited = delivered.waited;
+            reply.json_mode = request.json_schema.as_ref().map(|_| self.json_mode);
+            let mut counted = reply.usage;
+            counted.requests = 0;
+            self.usage.add(&counted);
+            return Ok(reply);
+        }
+    }
+
+    fn endpoint(&self) -> String {
+        self.endpoint.clone()
+    }
+
+    fn usage(&self) -> Usage {
+        self.usage
+    }
+}

@@ -1,0 +1,63 @@
+//! The crate's error type: what failed ([`ChatErrorKind`]), where, after how many attempts
+//! and how long.
+
+use std::time::Duration;
+
+/// A chat request that failed, after `attempts` tries over `elapsed` (both zero when the
+/// request was refused before anything was sent).
+#[derive(Debug, thiserror::Error)]
+#[error("{url}: {kind} (after {attempts} attempt(s), {:.1} s)", elapsed.as_secs_f64())]
+pub struct ChatError {
+    pub kind: ChatErrorKind,
+    /// The endpoint (or `local` for an in-process model).
+    pub url: String,
+    pub attempts: u32,
+    pub elapsed: Duration,
+}
+
+/// Why a chat request failed.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+pub enum ChatErrorKind {
+    /// The base URL is not `http(s)://host[:port][/path]`.
+    #[error("bad URL: {0}")]
+    BadUrl(String),
+    /// The configured API-key variable is not set (or not Unicode).
+    #[error("the API key variable `{0}` is not set")]
+    MissingApiKey(String),
+    /// An image that is neither PNG nor JPEG, or a message the API cannot carry.
+    #[error("bad input: {0}")]
+    BadInput(String),
+    /// The host name did not resolve, or the TCP/TLS connection could not be made.
+    #[error("cannot connect: {0}")]
+    Connect(String),
+    /// One attempt (DNS, connect, request and reply) ran past its deadline.
+    #[error("no complete reply within {0:?}")]
+    Timeout(Duration),
+    /// The connection broke mid-request or mid-reply (reset, truncated body).
+    #[error("connection failed: {0}")]
+    Io(String),
+    /// The server answered with a non-2xx status; `retry_after` is its `Retry-After`.
+    #[error("HTTP status {status}: {body}")]
+    Status { status: u16, body: String, retry_after: Option<Duration> },
+    /// The body is not the JSON of a chat completion.
+    #[error("malformed reply: {0}")]
+    MalformedReply(String),
+    /// The reply held no JSON value satisfying the schema, even after the repair turn.
+    #[error("the reply is not the JSON asked for: {error}; reply: {reply}")]
+    InvalidJson { error: String, reply: String },
+    /// An in-process model failed.
+    #[error("model: {0}")]
+    Model(String),
+}
+
+impl ChatErrorKind {
+    /// Errors worth another try: the server may recover (overload, restart, a dropped
+    /// connection, a timeout).
+    pub fn is_transient(&self) -> bool {
+        match self {
+            ChatErrorKind::Connect(_) | ChatErrorKind::Timeout(_) | ChatErrorKind::Io(_) => true,
+            ChatErrorKind::Status { status, .. } => *status >= 500 || *status == 429 || *status == 408,
+            _ => false,
+        }
+    }
+}
