@@ -90,7 +90,10 @@ fn crates_share_settings_and_respect_their_boundaries() {
         ("transition-model", &["grounding"]),
         ("heuristics", &["grounding", "transition-model"]),
         ("token-constraint", &["grounding", "transition-model"]),
-        ("lm", &[]),
+        ("vlm-client", &[]),
+        // The server backend's HTTP is vlm-client's transport; `LocalChat` is a vlm-client
+        // `ChatModel`.
+        ("lm", &["vlm-client"]),
         ("mcts", &["grounding", "transition-model", "heuristics", "token-constraint", "lm"]),
         ("household-sim", &["pddl-syntax", "grounding", "transition-model"]),
     ];

@@ -94,24 +94,21 @@ pub struct HttpError {
 /// Why a model server request failed.
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
 pub enum HttpErrorKind {
-    /// The URL is not `http://host[:port][/path]` (TLS is not built in; see `OpenAiConfig`).
+    /// The URL is not `http(s)://host[:port][/path]`.
     #[error("unsupported URL: {0}")]
     BadUrl(String),
-    /// The TCP connection could not be made (refused, unreachable, DNS).
+    /// The host did not resolve, or the TCP or TLS connection could not be made.
     #[error("cannot connect: {0}")]
     Connect(String),
-    /// No complete answer within the configured timeout.
+    /// One attempt (DNS, connect, request and answer) ran past the configured timeout.
     #[error("timed out after {0:?}")]
     Timeout(Duration),
-    /// The connection broke mid-request or mid-response.
+    /// The connection broke mid-request or mid-response (reset, truncated body, bad HTTP).
     #[error("connection failed: {0}")]
     Io(String),
-    /// The server answered with a non-2xx status.
+    /// The server answered with a non-2xx status; `retry_after` is its `Retry-After`.
     #[error("HTTP status {status}: {body}")]
-    Status { status: u16, body: String },
-    /// The response is not valid HTTP/1.x.
-    #[error("malformed HTTP response: {0}")]
-    MalformedHttp(String),
+    Status { status: u16, body: String, retry_after: Option<Duration> },
     /// The body is not JSON, or not the JSON of a completions response.
     #[error("malformed JSON response: {0}")]
     MalformedJson(String),
@@ -122,8 +119,8 @@ impl HttpErrorKind {
     pub fn is_transient(&self) -> bool {
         match self {
             HttpErrorKind::Connect(_) | HttpErrorKind::Timeout(_) | HttpErrorKind::Io(_) => true,
-            HttpErrorKind::Status { status, .. } => *status >= 500 || *status == 429,
-            HttpErrorKind::BadUrl(_) | HttpErrorKind::MalformedHttp(_) | HttpErrorKind::MalformedJson(_) => false,
+            HttpErrorKind::Status { status, .. } => *status >= 500 || *status == 429 || *status == 408,
+            HttpErrorKind::BadUrl(_) | HttpErrorKind::MalformedJson(_) => false,
         }
     }
 }

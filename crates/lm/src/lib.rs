@@ -15,10 +15,15 @@
 //!   length; its [`Tokenizer`] and [`ChatTemplate`] are built from the GGUF metadata.
 //! - [`OpenAiModel`]: a served model (vLLM, llama.cpp server, Ollama) through
 //!   `/v1/completions` with `max_tokens = 1` and top-k `logprobs` (plus vLLM's
-//!   `allowed_token_ids`), over a minimal HTTP/1.1 client with timeouts and bounded retries.
+//!   `allowed_token_ids`), over `vlm-client`'s HTTP transport (`ureq`: keep-alive, rustls,
+//!   one deadline per attempt, bounded retries honouring `Retry-After`).
 //! - [`UniformModel`]: every token equally likely (symbolic-only runs, a control), over any
 //!   [`Tokenizer`]: a GGUF file's, or a Hugging Face `tokenizer.json`'s
 //!   ([`Tokenizer::from_tokenizer_json`]), which needs no model file.
+//!
+//! With the `chat` feature, `LocalChat` makes a [`LocalModel`] a `vlm_client::ChatModel`:
+//! the chat template renders the messages and, when a JSON schema is asked for, llguidance
+//! masks every decoding step to it, so even a 135M model replies with schema-valid JSON.
 //!
 //! ```
 //! use lm::{LanguageModel, LocalModel, tiny};
@@ -39,9 +44,10 @@
 //! ```
 
 mod chat;
+#[cfg(feature = "chat")]
+mod chat_model;
 mod error;
 mod gguf;
-mod http;
 mod llama;
 mod local;
 mod model;
@@ -54,6 +60,8 @@ mod uniform;
 mod vocabulary;
 
 pub use chat::ChatTemplate;
+#[cfg(feature = "chat")]
+pub use chat_model::LocalChat;
 pub use error::{HttpError, HttpErrorKind, LmError};
 pub use gguf::{GgufFile, Metadata};
 pub use llama::{Architecture, KvCache, LlamaModel, ModelConfig, RopeConfig};

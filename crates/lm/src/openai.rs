@@ -10,15 +10,27 @@
 //! [`Prior::estimated`]. Prefix reuse across requests is the server's (vLLM's automatic prefix
 //! caching, llama.cpp's `cache_prompt`); this side remembers recent answers, so a repeated
 //! request costs nothing.
+//!
+//! The answer's logprobs are read in every layout the servers use: the legacy completions
+//! one, `choices[0].logprobs.top_logprobs[0]` as a `{token: logprob}` object (vLLM, OpenAI),
+//! and the chat-style one, `choices[0].logprobs.content[0].top_logprobs` as a list of
+//! `{token, logprob, bytes?, id?}` (llama.cpp's `llama-server`, Ollama). A token is named by
+//! its `id` where the server gives one, else by its `bytes`, else by `token_id:N`
+//! (vLLM's `return_tokens_as_token_ids`), else by its text.
+//!
+//! HTTP is `vlm-client`'s transport: one `ureq` agent per model (keep-alive, rustls, proxies
+//! from the environment), one deadline per attempt, bounded retries with jitter honouring
+//! `Retry-After`.
 
 use std::sync::Arc;
-use std::time::{Duration, Instant};
+use std::time::Duration;
 
 use rustc_hash::FxHashMap;
 use serde_json::{Value, json};
+use vlm_client::transport::{self, RetryPolicy};
+use vlm_client::{ChatError, ChatErrorKind};
 
 use crate::error::{HttpError, HttpErrorKind, LmError};
-use crate::http::{Url, post_json};
 use crate::model::{LanguageModel, Logprobs, Prior, Usage};
 use crate::tokenizer::Tokenizer;
 use crate::vocabulary::TokenId;
@@ -36,7 +48,7 @@ pub enum ServerDialect {
 /// Where the server is and how to talk to it.
 #[derive(Debug, Clone)]
 pub struct OpenAiConfig {
-    /// `http://host:port/v1` (the path before `/completions`).
+    /// `http(s)://host:port/v1` (the path before `/completions`).
     pub base_url: String,
     /// The `model` field of each request.
     pub model: String,
@@ -45,12 +57,14 @@ pub struct OpenAiConfig {
     /// The k of top-k `logprobs` (vLLM's default server limit is 20; OpenAI's is 5).
     pub top_logprobs: usize,
     pub dialect: ServerDialect,
-    /// For one attempt: connect, send and receive.
+    /// For one attempt: DNS, connect, send and receive.
     pub timeout: Duration,
     /// Further attempts after a transient failure (connection, timeout, 5xx, 429).
     pub max_retries: u32,
-    /// Wait before the first retry; doubled for each further one.
+    /// Wait before the first retry; doubled for each further one, times a jitter in [0.5, 1).
     pub retry_backoff: Duration,
+    /// The longest `Retry-After` honoured (429, 503); a longer one ends the retries.
+    pub max_retry_wait: Duration,
     /// Answers remembered for repeated requests.
     pub cache_entries: usize,
 }
@@ -66,6 +80,7 @@ impl OpenAiConfig {
             timeout: Duration::from_secs(60),
             max_retries: 2,
             retry_backoff: Duration::from_millis(250),
+            max_retry_wait: Duration::from_secs(60),
             cache_entries: 4096,
         }
     }
@@ -75,7 +90,8 @@ impl OpenAiConfig {
 #[derive(Debug)]
 pub struct OpenAiModel {
     config: OpenAiConfig,
-    url: Url,
+    endpoint: String,
+    agent: ureq::Agent,
     tokenizer: Arc<Tokenizer>,
     /// Token text → id, for servers that name tokens by text; built on first need.
     text_to_id: Option<FxHashMap<Vec<u8>, TokenId>>,
@@ -86,13 +102,22 @@ pub struct OpenAiModel {
 impl OpenAiModel {
     /// A client; `tokenizer` must be the served model's (prompts are sent as its ids).
     pub fn new(config: OpenAiConfig, tokenizer: Arc<Tokenizer>) -> Result<Self, LmError> {
-        let url = Url::parse(&config.base_url).map_err(|kind| HttpError {
-            kind,
+        let base = config.base_url.trim_end_matches('/');
+        transport::check_url(base).map_err(|kind| HttpError {
+            kind: http_kind(kind),
             url: config.base_url.clone(),
             attempts: 0,
             elapsed: Duration::ZERO,
         })?;
-        Ok(OpenAiModel { config, url, tokenizer, text_to_id: None, answers: FxHashMap::default(), usage: Usage::default() })
+        Ok(OpenAiModel {
+            endpoint: format!("{base}/completions"),
+            agent: transport::agent(config.timeout),
+            config,
+            tokenizer,
+            text_to_id: None,
+            answers: FxHashMap::default(),
+            usage: Usage::default(),
+        })
     }
 
     pub fn config(&self) -> &OpenAiConfig {
@@ -134,29 +159,27 @@ impl OpenAiModel {
             }
         }
         let body = body.to_string().into_bytes();
-        let start = Instant::now();
-        let mut attempts = 0;
-        let outcome = loop {
-            attempts += 1;
-            let result = post_json(&self.url, "/completions", &body, self.config.api_key.as_deref(), self.config.timeout).and_then(|r| {
-                if (200..300).contains(&r.status) {
-                    Ok(r.body)
-                } else {
-                    let text = String::from_utf8_lossy(&r.body);
-                    Err(HttpErrorKind::Status { status: r.status, body: text.chars().take(500).collect() })
-                }
-            });
-            match result {
-                Ok(body) => break self.parse(&body),
-                Err(kind) if kind.is_transient() && attempts <= self.config.max_retries => {
-                    std::thread::sleep(self.config.retry_backoff * 2u32.saturating_pow(attempts - 1));
-                }
-                Err(kind) => break Err(kind),
-            }
+        let policy = RetryPolicy {
+            timeout: self.config.timeout,
+            max_retries: self.config.max_retries,
+            backoff: self.config.retry_backoff,
+            max_wait: self.config.max_retry_wait,
         };
-        self.usage.forward_calls += attempts as u64;
-        let (logprobs, prompt_tokens) =
-            outcome.map_err(|kind| HttpError { kind, url: self.config.base_url.clone(), attempts, elapsed: start.elapsed() })?;
+        let delivered = transport::post_json(&self.agent, &self.endpoint, &body, self.config.api_key.as_deref(), &policy);
+        let (attempts, parsed) = match delivered {
+            Ok(delivered) => {
+                let parsed = self.parse(&delivered.body).map_err(|kind| HttpError {
+                    kind,
+                    url: self.endpoint.clone(),
+                    attempts: delivered.attempts,
+                    elapsed: delivered.elapsed,
+                });
+                (delivered.attempts, parsed)
+            }
+            Err(ChatError { kind, url, attempts, elapsed }) => (attempts, Err(HttpError { kind: http_kind(kind), url, attempts, elapsed })),
+        };
+        self.usage.forward_calls += u64::from(attempts);
+        let (logprobs, prompt_tokens) = parsed?;
         self.usage.tokens_prefilled += prompt_tokens.unwrap_or(tokens.len() as u64);
         if self.answers.len() >= self.config.cache_entries {
             self.answers.clear();
@@ -173,25 +196,44 @@ impl OpenAiModel {
         let value: Value = serde_json::from_slice(body).map_err(|e| malformed(format!("{e}")))?;
         let choice = value.get("choices").and_then(|c| c.get(0)).ok_or_else(|| malformed("no `choices[0]`".into()))?;
         let logprobs = choice.get("logprobs").filter(|l| !l.is_null()).ok_or_else(|| malformed("no `choices[0].logprobs`".into()))?;
-        let top = logprobs
-            .get("top_logprobs")
-            .and_then(|t| t.get(0))
-            .and_then(Value::as_object)
-            .ok_or_else(|| malformed("no `choices[0].logprobs.top_logprobs[0]` object".into()))?;
-        let mut entries: Vec<(TokenId, f32)> = Vec::with_capacity(top.len());
-        for (name, logprob) in top {
-            let logprob = logprob.as_f64().ok_or_else(|| malformed(format!("logprob of `{name}` is not a number")))?;
+        let mut entries: Vec<(TokenId, f32)> = Vec::new();
+        let mut listed = 0;
+        let mut check = |name: &str, logprob: Option<f64>| -> Result<f32, HttpErrorKind> {
+            listed += 1;
+            let logprob = logprob.ok_or_else(|| malformed(format!("logprob of `{name}` is not a number")))?;
             if logprob > 1e-4 || logprob.is_nan() {
                 return Err(malformed(format!("logprob {logprob} of `{name}` is not a log-probability")));
             }
-            match self.token_id(name) {
-                Some(id) => entries.push((id, logprob.min(0.0) as f32)),
+            Ok(logprob.min(0.0) as f32)
+        };
+        if let Some(top) = logprobs.get("top_logprobs").and_then(|t| t.get(0)).and_then(Value::as_object) {
+            // Legacy completions layout: `{token: logprob}`.
+            for (name, logprob) in top {
+                let logprob = check(name, logprob.as_f64())?;
                 // A token text this tokenizer cannot name: left out, its mass joins the rest.
-                None => continue,
+                if let Some(id) = self.token_id(name) {
+                    entries.push((id, logprob));
+                }
             }
+        } else if let Some(top) =
+            logprobs.get("content").and_then(|c| c.get(0)).and_then(|c| c.get("top_logprobs")).and_then(Value::as_array)
+        {
+            // Chat-style layout: `[{token, logprob, bytes?, id?}]`.
+            for entry in top {
+                let name = entry.get("token").and_then(Value::as_str).unwrap_or_default();
+                let logprob = check(name, entry.get("logprob").and_then(Value::as_f64))?;
+                if let Some(id) = self.entry_id(entry, name) {
+                    entries.push((id, logprob));
+                }
+            }
+        } else {
+            return Err(malformed(
+                "neither `choices[0].logprobs.top_logprobs[0]` (an object) nor `choices[0].logprobs.content[0].top_logprobs` (a list)"
+                    .into(),
+            ));
         }
         if entries.is_empty() {
-            return Err(malformed("no token of `top_logprobs[0]` is in the vocabulary".into()));
+            return Err(malformed(format!("no token of the {listed} top logprobs is in the vocabulary")));
         }
         entries.sort_by(|a, b| b.1.total_cmp(&a.1).then(a.0.cmp(&b.0)));
         entries.dedup_by_key(|e| e.0);
@@ -199,10 +241,30 @@ impl OpenAiModel {
         Ok((Logprobs::Sparse { top: entries, vocabulary_size: self.tokenizer.vocabulary().len() }, prompt_tokens))
     }
 
+    /// The id of a chat-style entry: its `id` where the server gives one (llama.cpp), else its
+    /// `bytes`, else its text.
+    fn entry_id(&mut self, entry: &Value, name: &str) -> Option<TokenId> {
+        if let Some(id) = entry.get("id").and_then(Value::as_u64) {
+            let id = TokenId::try_from(id).ok()?;
+            return self.tokenizer.vocabulary().check(id).is_ok().then_some(id);
+        }
+        if let Some(bytes) = entry.get("bytes").and_then(Value::as_array) {
+            let bytes: Option<Vec<u8>> = bytes.iter().map(|b| b.as_u64().and_then(|b| u8::try_from(b).ok())).collect();
+            if let Some(bytes) = bytes {
+                return self.id_of_bytes(&bytes);
+            }
+        }
+        self.token_id(name)
+    }
+
     fn token_id(&mut self, name: &str) -> Option<TokenId> {
         if let Some(id) = name.strip_prefix("token_id:").and_then(|n| n.parse::<TokenId>().ok()) {
             return (self.tokenizer.vocabulary().check(id).is_ok()).then_some(id);
         }
+        self.id_of_bytes(name.as_bytes())
+    }
+
+    fn id_of_bytes(&mut self, bytes: &[u8]) -> Option<TokenId> {
         let vocabulary = self.tokenizer.vocabulary();
         let map = self.text_to_id.get_or_insert_with(|| {
             let mut map = FxHashMap::default();
@@ -217,7 +279,21 @@ impl OpenAiModel {
             }
             map
         });
-        map.get(name.as_bytes()).copied()
+        map.get(bytes).copied()
+    }
+}
+
+/// The transport's error as this crate's.
+fn http_kind(kind: ChatErrorKind) -> HttpErrorKind {
+    match kind {
+        ChatErrorKind::BadUrl(why) => HttpErrorKind::BadUrl(why),
+        ChatErrorKind::Connect(why) => HttpErrorKind::Connect(why),
+        ChatErrorKind::Timeout(after) => HttpErrorKind::Timeout(after),
+        ChatErrorKind::Status { status, body, retry_after } => HttpErrorKind::Status { status, body, retry_after },
+        ChatErrorKind::MalformedReply(why) | ChatErrorKind::InvalidJson { error: why, .. } => HttpErrorKind::MalformedJson(why),
+        other @ (ChatErrorKind::Io(_) | ChatErrorKind::MissingApiKey(_) | ChatErrorKind::BadInput(_) | ChatErrorKind::Model(_)) => {
+            HttpErrorKind::Io(other.to_string())
+        }
     }
 }
 

@@ -27,50 +27,65 @@ enum Reply {
     Close,
 }
 
-/// A server on 127.0.0.1 that answers `connections` connections with `handler`, then stops.
-/// Returns its address and a handle yielding the request bodies it saw.
-fn serve(connections: usize, mut handler: impl FnMut(usize, &Value) -> Reply + Send + 'static) -> (SocketAddr, JoinHandle<Vec<Value>>) {
+/// A server on 127.0.0.1 that answers `requests` requests with `handler`, then stops. Requests
+/// may share a connection (the client keeps it alive) until a reply closes it. Returns its
+/// address and a handle yielding the request bodies it saw and the connections it accepted.
+fn serve(requests: usize, mut handler: impl FnMut(usize, &Value) -> Reply + Send + 'static) -> (SocketAddr, JoinHandle<Served>) {
     let listener = TcpListener::bind("127.0.0.1:0").expect("bind loopback");
     let address = listener.local_addr().expect("address");
     let handle = std::thread::spawn(move || {
-        let mut seen = Vec::new();
-        for index in 0..connections {
+        let mut served = Served { bodies: Vec::new(), connections: 0 };
+        while served.bodies.len() < requests {
             let (mut stream, _) = listener.accept().expect("accept");
+            served.connections += 1;
             // A bound on how long a broken client could hold the test.
             stream.set_read_timeout(Some(Duration::from_secs(20))).expect("timeout");
-            let Some(request) = read_request(&mut stream) else { continue };
-            match handler(index, &request) {
-                Reply::Send { status, body, chunked } => {
-                    let head = if chunked {
-                        format!("HTTP/1.1 {status} X\r\nContent-Type: application/json\r\nTransfer-Encoding: chunked\r\n\r\n")
-                    } else {
-                        format!("HTTP/1.1 {status} X\r\nContent-Type: application/json\r\nContent-Length: {}\r\n\r\n", body.len())
-                    };
-                    let mut bytes = head.into_bytes();
-                    if chunked {
-                        // Uneven chunks, to cross the client's read boundaries.
-                        for piece in body.as_bytes().chunks(7) {
-                            bytes.extend_from_slice(format!("{:x}\r\n", piece.len()).as_bytes());
-                            bytes.extend_from_slice(piece);
-                            bytes.extend_from_slice(b"\r\n");
+            while served.bodies.len() < requests {
+                let Some(request) = read_request(&mut stream) else { break };
+                let reply = handler(served.bodies.len(), &request);
+                served.bodies.push(request);
+                match reply {
+                    Reply::Send { status, body, chunked } => {
+                        let head = if chunked {
+                            format!("HTTP/1.1 {status} X\r\nContent-Type: application/json\r\nTransfer-Encoding: chunked\r\n\r\n")
+                        } else {
+                            format!("HTTP/1.1 {status} X\r\nContent-Type: application/json\r\nContent-Length: {}\r\n\r\n", body.len())
+                        };
+                        let mut bytes = head.into_bytes();
+                        if chunked {
+                            // Uneven chunks, to cross the client's read boundaries.
+                            for piece in body.as_bytes().chunks(7) {
+                                bytes.extend_from_slice(format!("{:x}\r\n", piece.len()).as_bytes());
+                                bytes.extend_from_slice(piece);
+                                bytes.extend_from_slice(b"\r\n");
+                            }
+                            bytes.extend_from_slice(b"0\r\n\r\n");
+                        } else {
+                            bytes.extend_from_slice(body.as_bytes());
                         }
-                        bytes.extend_from_slice(b"0\r\n\r\n");
-                    } else {
-                        bytes.extend_from_slice(body.as_bytes());
+                        if stream.write_all(&bytes).is_err() {
+                            break;
+                        }
                     }
-                    stream.write_all(&bytes).ok();
+                    Reply::Hang => {
+                        let mut sink = [0u8; 64];
+                        while matches!(stream.read(&mut sink), Ok(n) if n > 0) {}
+                        break;
+                    }
+                    Reply::Close => break,
                 }
-                Reply::Hang => {
-                    let mut sink = [0u8; 64];
-                    while matches!(stream.read(&mut sink), Ok(n) if n > 0) {}
-                }
-                Reply::Close => {}
             }
-            seen.push(request);
         }
-        seen
+        served
     });
     (address, handle)
+}
+
+/// What a test server saw.
+#[derive(Debug)]
+struct Served {
+    bodies: Vec<Value>,
+    connections: usize,
 }
 
 fn read_request(stream: &mut TcpStream) -> Option<Value> {
@@ -188,12 +203,15 @@ fn vllm_style_server_gives_the_local_models_prior() {
         assert!((full[id as usize] - l).abs() < 1e-5);
     }
     assert_eq!(sparse.argmax(), Logprobs::Dense(full).argmax());
-    // Repeats are answered from memory: the server handled exactly two connections.
+    // Repeats are answered from memory: the server handled exactly two requests, on one
+    // kept-alive connection.
     remote.next_logprobs_among(&prompt, &allowed).expect("cached");
     let usage = remote.usage();
     assert_eq!((usage.forward_calls, usage.cache_hits, usage.tokens_generated), (2, 1, 3));
     assert_eq!(usage.tokens_prefilled, 2 * prompt.len() as u64);
-    let requests = server.join().expect("server");
+    let served = server.join().expect("server");
+    assert_eq!(served.connections, 1, "keep-alive");
+    let requests = served.bodies;
     assert_eq!(requests[0]["allowed_token_ids"], json!(allowed));
     assert_eq!(requests[0]["max_tokens"], json!(1));
     assert_eq!(requests[0]["logprobs"], json!(4));
@@ -224,7 +242,7 @@ fn plain_server_with_text_tokens_and_chunked_bodies_is_renormalised_here() {
     assert!((p[0] / p[1] - exact_ratio).abs() < 1e-3 * exact_ratio, "listed tokens keep their exact ratio");
     assert!(p[2] <= p[1], "an unlisted token is never likelier than a listed one");
     assert!((p.iter().sum::<f32>() - 1.0).abs() < 1e-5);
-    let requests = server.join().expect("server");
+    let requests = server.join().expect("server").bodies;
     assert!(requests[0].get("allowed_token_ids").is_none());
     assert!(requests[0].get("return_tokens_as_token_ids").is_none());
 }
@@ -238,7 +256,7 @@ fn a_server_that_never_answers_times_out_after_bounded_retries() {
     let error = http_error(remote.next_logprobs(&[5, 6]));
     assert_eq!(error.kind, HttpErrorKind::Timeout(Duration::from_millis(500)));
     assert_eq!(error.attempts, 3);
-    assert_eq!(server.join().expect("server").len(), 3);
+    assert_eq!(server.join().expect("server").bodies.len(), 3);
     assert_eq!(remote.usage().forward_calls, 3);
 }
 
@@ -249,9 +267,9 @@ fn server_errors_are_retried_then_reported_with_the_status() {
     let (address, server) = serve(3, |_, _| Reply::Send { status: 500, body: "{\"error\": \"overloaded\"}".into(), chunked: false });
     let mut remote = client(address, ServerDialect::Vllm, 5, &local);
     let error = http_error(remote.next_logprobs(&[5]));
-    assert!(matches!(&error.kind, HttpErrorKind::Status { status: 500, body } if body.contains("overloaded")), "{error}");
+    assert!(matches!(&error.kind, HttpErrorKind::Status { status: 500, body, .. } if body.contains("overloaded")), "{error}");
     assert_eq!(error.attempts, 3);
-    assert_eq!(server.join().expect("server").len(), 3);
+    assert_eq!(server.join().expect("server").bodies.len(), 3);
     assert!(error.to_string().contains("3 attempt(s)"));
 }
 
@@ -279,6 +297,8 @@ fn malformed_answers_are_typed_errors_without_retries() {
     let bodies = [
         ("{\"choices\": [", "EOF"),
         ("{\"choices\": [{\"text\": \"x\"}]}", "logprobs"),
+        ("{\"choices\": [{\"logprobs\": {\"content\": []}}]}", "neither"),
+        ("{\"choices\": [{\"logprobs\": {\"content\": [{\"top_logprobs\": [{\"token\": \"a\", \"logprob\": null}]}]}}]}", "not a number"),
         ("{\"choices\": [{\"logprobs\": {\"top_logprobs\": [{\"token_id:5\": \"high\"}]}}]}", "not a number"),
         ("{\"choices\": [{\"logprobs\": {\"top_logprobs\": [{\"token_id:5\": 3.5}]}}]}", "not a log-probability"),
         ("{\"choices\": [{\"logprobs\": {\"top_logprobs\": [{\"token_id:99999\": -0.1}]}}]}", "vocabulary"),
@@ -292,7 +312,7 @@ fn malformed_answers_are_typed_errors_without_retries() {
         assert!(matches!(&error.kind, HttpErrorKind::MalformedJson(m) if m.contains(fragment)), "{error} should mention {fragment}");
         assert_eq!(error.attempts, 1);
     }
-    assert_eq!(server.join().expect("server").len(), count);
+    assert_eq!(server.join().expect("server").bodies.len(), count);
 }
 
 #[test]
@@ -318,9 +338,85 @@ fn an_unreachable_server_and_a_bad_url_are_typed_errors() {
     let error = http_error(remote.next_logprobs(&[5]));
     assert!(matches!(error.kind, HttpErrorKind::Connect(_)), "{error}");
     assert_eq!(error.attempts, 3);
-    let error =
-        OpenAiModel::new(OpenAiConfig::new("https://example.invalid/v1", "m"), Arc::clone(local.shared_tokenizer())).expect_err("https");
-    assert!(matches!(error, LmError::Http(HttpError { kind: HttpErrorKind::BadUrl(_), .. })));
+    for url in ["ftp://example.invalid/v1", "127.0.0.1:8000/v1", "http://:80/v1"] {
+        let error = OpenAiModel::new(OpenAiConfig::new(url, "m"), Arc::clone(local.shared_tokenizer())).expect_err(url);
+        assert!(matches!(error, LmError::Http(HttpError { kind: HttpErrorKind::BadUrl(_), attempts: 0, .. })), "{url}: {error}");
+    }
+    // https is a URL the client takes (rustls); nothing is sent until the first request.
+    OpenAiModel::new(OpenAiConfig::new("https://example.invalid/v1", "m"), Arc::clone(local.shared_tokenizer())).expect("https");
     assert!(matches!(remote.next_logprobs(&[]), Err(LmError::EmptySequence)));
     assert!(matches!(remote.next_logprobs_among(&[5], &[9999]), Err(LmError::TokenOutOfRange { .. })));
+}
+
+/// The answer llama.cpp's `llama-server` gives on `/v1/completions` with `logprobs`: the
+/// chat-style layout, `choices[0].logprobs.content[0].top_logprobs` as a list of entries with
+/// `id`, `token`, `bytes` and `logprob`; `name_by` picks which of them the entries carry.
+fn chat_style_reply(model: &mut LocalModel, request: &Value, name_by: &str) -> String {
+    let prompt: Vec<u32> = request["prompt"].as_array().expect("token prompt").iter().map(|v| v.as_u64().expect("id") as u32).collect();
+    let k = request["logprobs"].as_u64().expect("logprobs") as usize;
+    let Logprobs::Dense(all) = model.next_logprobs(&prompt).expect("runs") else { unreachable!() };
+    let mut scored: Vec<(u32, f32)> = all.iter().enumerate().map(|(i, &l)| (i as u32, l)).collect();
+    scored.sort_by(|a, b| b.1.total_cmp(&a.1));
+    scored.truncate(k);
+    let entry = |id: u32, logprob: f32| {
+        let bytes = model.vocabulary().token_bytes(id).expect("in range").to_vec();
+        let token = String::from_utf8_lossy(&bytes).into_owned();
+        match name_by {
+            "id" => json!({ "id": id, "token": token, "bytes": bytes, "logprob": logprob }),
+            "bytes" => json!({ "token": token, "bytes": bytes, "logprob": logprob }),
+            _ => json!({ "token": token, "logprob": logprob }),
+        }
+    };
+    let top: Vec<Value> = scored.iter().map(|&(id, l)| entry(id, l)).collect();
+    let mut first = entry(scored[0].0, scored[0].1);
+    first["top_logprobs"] = json!(top);
+    json!({
+        "choices": [{ "index": 0, "text": first["token"], "logprobs": { "content": [first] }, "finish_reason": "length" }],
+        "usage": { "prompt_tokens": prompt.len(), "completion_tokens": 1 }
+    })
+    .to_string()
+}
+
+#[test]
+fn llama_server_style_logprobs_are_read_by_id_bytes_or_text() {
+    let dir = TempDir::new("openai-chat-style");
+    let mut local = tiny(&dir);
+    let mut served = tiny(&dir);
+    let ways = ["id", "bytes", "text"];
+    let (address, server) = serve(ways.len(), move |index, request| Reply::Send {
+        status: 200,
+        body: chat_style_reply(&mut served, request, ways[index]),
+        chunked: false,
+    });
+    let mut remote = client(address, ServerDialect::Generic, 8, &local);
+    for (index, way) in ways.iter().enumerate() {
+        // A new prompt each time, so that no answer comes from the client's memory.
+        let prompt = [5, 6 + index as u32];
+        let Logprobs::Dense(full) = local.next_logprobs(&prompt).expect("local") else { unreachable!() };
+        let Logprobs::Sparse { top, .. } = remote.next_logprobs(&prompt).expect("served") else { panic!("sparse") };
+        // By id or bytes every entry is named; by text, only those that are valid UTF-8.
+        if *way != "text" {
+            assert_eq!(top.len(), 8, "{way}");
+        }
+        assert!(top.len() >= 2, "{way}: at least two entries named");
+        for &(id, l) in &top {
+            assert!((full[id as usize] - l).abs() < 1e-5, "{way}: token {id}");
+        }
+    }
+    assert_eq!(server.join().expect("server").connections, 1);
+}
+
+#[test]
+fn a_429_is_retried() {
+    let dir = TempDir::new("openai-429");
+    let local = tiny(&dir);
+    let mut served = tiny(&dir);
+    let (address, server) = serve(2, move |index, request| match index {
+        0 => Reply::Send { status: 429, body: "slow down".into(), chunked: false },
+        _ => Reply::Send { status: 200, body: model_reply(&mut served, request), chunked: false },
+    });
+    let mut remote = client(address, ServerDialect::Vllm, 5, &local);
+    remote.next_logprobs(&[5, 6]).expect("the second attempt answers");
+    assert_eq!(remote.usage().forward_calls, 2);
+    server.join().expect("server");
 }

@@ -29,7 +29,12 @@ pub struct JsonReply {
 /// a second failure is [`ChatErrorKind::InvalidJson`].
 pub fn chat_json(model: &mut dyn ChatModel, request: &ChatRequest) -> Result<JsonReply, ChatError> {
     let schema = request.json_schema.clone().unwrap_or_else(|| serde_json::json!({ "type": "object" }));
-    check_schema(&schema).map_err(|e| ChatError { kind: ChatErrorKind::BadInput(e), url: model.endpoint(), attempts: 0, elapsed: Default::default() })?;
+    check_schema(&schema).map_err(|e| ChatError {
+        kind: ChatErrorKind::BadInput(e),
+        url: model.endpoint(),
+        attempts: 0,
+        elapsed: Default::default(),
+    })?;
     let first = model.chat(request)?;
     let mut usage = first.usage;
     let error = match read_json(&first.text, &schema) {
@@ -312,8 +317,14 @@ mod tests {
         assert_eq!(check_schema(&json!(true)), Ok(()));
         let check = |schema: Value, error: &str| assert_eq!(check_schema(&schema), Err(error.to_string()));
         check(json!("object"), r#"#: a schema must be an object or a boolean, found "object""#);
-        check(json!({"type": "dict"}), r#"#/type: unknown type "dict" (expected one of object, array, string, number, integer, boolean, null)"#);
-        check(json!({"properties": {"a": {"type": 3}}}), "#/properties/a/type: unknown type 3 (expected one of object, array, string, number, integer, boolean, null)");
+        check(
+            json!({"type": "dict"}),
+            r#"#/type: unknown type "dict" (expected one of object, array, string, number, integer, boolean, null)"#,
+        );
+        check(
+            json!({"properties": {"a": {"type": 3}}}),
+            "#/properties/a/type: unknown type 3 (expected one of object, array, string, number, integer, boolean, null)",
+        );
         check(json!({"required": "a"}), "#/required: expected an array of property names");
         check(json!({"anyOf": []}), "#/anyOf: expected a non-empty array");
         check(json!({"maxLength": -1}), "#/maxLength: expected a non-negative integer");

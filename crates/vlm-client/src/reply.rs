@@ -113,7 +113,13 @@ mod tests {
 
     #[test]
     fn bodies_that_are_not_chat_completions_are_typed_errors() {
-        for body in [&b"{\"choices\": [{\"message\": {\"content\": \"x\"}"[..], b"<html>", b"{}", b"{\"choices\":[{\"text\":\"x\"}]}", b"{\"error\":{\"message\":\"overloaded\"}}"] {
+        for body in [
+            &b"{\"choices\": [{\"message\": {\"content\": \"x\"}"[..],
+            b"<html>",
+            b"{}",
+            b"{\"choices\":[{\"text\":\"x\"}]}",
+            b"{\"error\":{\"message\":\"overloaded\"}}",
+        ] {
             assert!(matches!(parse_reply(body), Err(ChatErrorKind::MalformedReply(_))), "{}", String::from_utf8_lossy(body));
         }
         assert_eq!(parse_reply(br#"{"choices":[{"message":{"content":null}}]}"#).unwrap().text, "");

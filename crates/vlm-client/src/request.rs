@@ -90,10 +90,9 @@ impl ChatRequest {
         let s = &self.sampling;
         let settings =
             [("temperature", s.temperature.map(|v| json!(v))), ("top_p", s.top_p.map(|v| json!(v))), ("top_k", s.top_k.map(|v| json!(v)))];
-        for (name, value) in settings.into_iter().chain([
-            ("max_tokens", s.max_tokens.map(|v| json!(v))),
-            ("seed", s.seed.map(|v| json!(v))),
-        ]) {
+        for (name, value) in
+            settings.into_iter().chain([("max_tokens", s.max_tokens.map(|v| json!(v))), ("seed", s.seed.map(|v| json!(v)))])
+        {
             if let Some(value) = value {
                 body.insert(name.into(), value);
             }

@@ -78,7 +78,8 @@ fn serve(script: Vec<Reply>) -> (SocketAddr, Seen) {
                 sender.send((connection, request)).ok();
                 match next {
                     Reply::Send { status, headers, body } => {
-                        let mut head = format!("HTTP/1.1 {status} X\r\nContent-Type: application/json\r\nContent-Length: {}\r\n", body.len());
+                        let mut head =
+                            format!("HTTP/1.1 {status} X\r\nContent-Type: application/json\r\nContent-Length: {}\r\n", body.len());
                         for (name, value) in headers {
                             head.push_str(&format!("{name}: {value}\r\n"));
                         }
@@ -93,7 +94,8 @@ fn serve(script: Vec<Reply>) -> (SocketAddr, Seen) {
                         break;
                     }
                     Reply::Truncated { body } => {
-                        let head = format!("HTTP/1.1 200 OK\r\nContent-Type: application/json\r\nContent-Length: {}\r\n\r\n", body.len() + 100);
+                        let head =
+                            format!("HTTP/1.1 200 OK\r\nContent-Type: application/json\r\nContent-Length: {}\r\n\r\n", body.len() + 100);
                         stream.write_all(head.as_bytes()).and_then(|_| stream.write_all(body.as_bytes())).ok();
                         break;
                     }
@@ -135,16 +137,23 @@ fn read_request(stream: &mut TcpStream) -> Option<Value> {
 
 fn client(address: SocketAddr) -> ChatClient {
     let mut config = ClientConfig::new(&format!("http://{address}/v1"), "test-model");
-    config.retry = RetryPolicy { timeout: Duration::from_millis(400), max_retries: 2, backoff: Duration::from_millis(1), max_wait: Duration::from_secs(2) };
+    config.retry = RetryPolicy {
+        timeout: Duration::from_millis(400),
+        max_retries: 2,
+        backoff: Duration::from_millis(1),
+        max_wait: Duration::from_secs(2),
+    };
     ChatClient::new(config).expect("client")
 }
 
 fn skill_request() -> ChatRequest {
-    ChatRequest::new(vec![Message::user("Pick a skill: Goto(fridge 1) or Done.")]).with_sampling(Sampling::greedy(32)).with_json_schema(json!({
-        "type": "object",
-        "properties": { "skill": { "enum": ["Goto(fridge 1)", "Done"] } },
-        "required": ["skill"]
-    }))
+    ChatRequest::new(vec![Message::user("Pick a skill: Goto(fridge 1) or Done.")]).with_sampling(Sampling::greedy(32)).with_json_schema(
+        json!({
+            "type": "object",
+            "properties": { "skill": { "enum": ["Goto(fridge 1)", "Done"] } },
+            "required": ["skill"]
+        }),
+    )
 }
 
 #[test]
@@ -202,8 +211,12 @@ fn two_bad_replies_are_an_invalid_json_error() {
 #[test]
 fn a_server_refusing_response_format_is_asked_more_plainly() {
     let refusal = "{\"error\": {\"message\": \"response_format json_schema is not supported\"}}";
-    let (address, seen) =
-        serve(vec![status(400, Vec::new(), refusal), status(400, Vec::new(), refusal), ok(completion("{\"skill\": \"Done\"}")), ok(completion("{\"skill\": \"Done\"}"))]);
+    let (address, seen) = serve(vec![
+        status(400, Vec::new(), refusal),
+        status(400, Vec::new(), refusal),
+        ok(completion("{\"skill\": \"Done\"}")),
+        ok(completion("{\"skill\": \"Done\"}")),
+    ]);
     let mut client = client(address);
     let reply = chat_json(&mut client, &skill_request()).expect("json");
     assert_eq!((reply.value, reply.reply.json_mode, reply.reply.attempts), (json!({ "skill": "Done" }), Some(JsonMode::Text), 3));

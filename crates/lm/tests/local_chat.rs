@@ -1,0 +1,131 @@
+//! `LocalChat` (feature `chat`): a local model behind `vlm-client`'s chat interface, its reply
+//! decoded under the JSON schema by llguidance. The tiny model's weights are random, so a valid
+//! reply here is the schema's doing; with the `real-model` feature SmolLM2-135M must pick a
+//! listed skill for a household prompt.
+
+#![cfg(feature = "chat")]
+
+mod common;
+
+use common::{TempDir, tiny_file};
+use lm::LocalChat;
+use lm::LocalModel;
+use lm::tiny::TinySpec;
+use serde_json::{Value, json};
+use vlm_client::{ChatErrorKind, ChatModel, ChatRequest, Image, Message, Sampling, chat_json, validate};
+
+fn tiny_chat(dir: &TempDir) -> LocalChat {
+    let model = LocalModel::load(&tiny_file(dir, "tiny.gguf", &TinySpec::default())).expect("loads");
+    LocalChat::new(model, "tiny").expect("has a chat template")
+}
+
+fn request(schema: Value, sampling: Sampling) -> ChatRequest {
+    ChatRequest::new(vec![Message::system("Answer in JSON."), Message::user("Which skill next?")])
+        .with_sampling(sampling)
+        .with_json_schema(schema)
+}
+
+#[test]
+fn random_weights_still_reply_with_schema_valid_json() {
+    let dir = TempDir::new("local-chat-schema");
+    let mut chat = tiny_chat(&dir);
+    let schemas = [
+        json!({ "type": "object", "properties": { "skill": { "enum": ["Goto(fridge 1)", "Open(fridge 1)", "Done"] } }, "required": ["skill"], "additionalProperties": false }),
+        json!({
+            "type": "object",
+            "properties": {
+                "seen": { "type": "array", "items": { "enum": ["mug", "apple"] }, "minItems": 1, "maxItems": 2 },
+                "ready": { "type": "boolean" },
+                "count": { "type": "integer", "minimum": 0, "maximum": 9 }
+            },
+            "required": ["seen", "ready", "count"],
+            "additionalProperties": false
+        }),
+    ];
+    for schema in schemas {
+        for sampling in
+            [Sampling::greedy(128), Sampling { temperature: Some(1.0), seed: Some(3), max_tokens: Some(128), ..Sampling::default() }]
+        {
+            let reply = chat_json(&mut chat, &request(schema.clone(), sampling.clone())).expect("valid JSON");
+            assert_eq!(validate(&reply.value, &schema, "$"), Ok(()), "{}", reply.reply.text);
+            assert!(!reply.repaired, "decoded under the schema: {}", reply.reply.text);
+            assert_eq!(reply.reply.finish_reason.as_deref(), Some("stop"), "{sampling:?}");
+            assert!(reply.usage.prompt_tokens > 0 && reply.usage.completion_tokens > 0);
+        }
+    }
+    assert_eq!(chat.usage().requests, 4);
+    assert_eq!(chat.endpoint(), "local:tiny");
+}
+
+#[test]
+fn greedy_replies_repeat_and_seeds_steer_sampling() {
+    let dir = TempDir::new("local-chat-repeat");
+    let mut chat = tiny_chat(&dir);
+    let schema = json!({ "type": "object", "properties": { "note": { "type": "string", "maxLength": 12 } }, "required": ["note"] });
+    let text = |chat: &mut LocalChat, sampling: Sampling| chat.chat(&request(schema.clone(), sampling)).expect("reply").text;
+    assert_eq!(text(&mut chat, Sampling::greedy(40)), text(&mut chat, Sampling::greedy(40)));
+    let seeded = |seed| Sampling { temperature: Some(1.0), seed: Some(seed), max_tokens: Some(40), ..Sampling::default() };
+    assert_eq!(text(&mut chat, seeded(9)), text(&mut chat, seeded(9)));
+}
+
+#[test]
+fn images_and_unusable_schemas_are_bad_input() {
+    let dir = TempDir::new("local-chat-bad");
+    let mut chat = tiny_chat(&dir);
+    let image = Image::from_bytes(b"\x89PNG\r\n\x1a\n".to_vec()).expect("png");
+    let with_image = ChatRequest::new(vec![Message::user("What is this?").with_image(image)]);
+    let error = chat.chat(&with_image).expect_err("text only");
+    assert!(matches!(&error.kind, ChatErrorKind::BadInput(m) if m.contains("text only")), "{error}");
+    let unsatisfiable = request(
+        json!({ "type": "object", "properties": { "a": { "$ref": "#/definitions/missing" } }, "required": ["a"] }),
+        Sampling::greedy(8),
+    );
+    let error = chat.chat(&unsatisfiable).expect_err("llguidance refuses");
+    assert!(matches!(&error.kind, ChatErrorKind::BadInput(m) if m.contains("JSON schema")), "{error}");
+}
+
+#[test]
+fn without_a_schema_the_reply_is_free_text_up_to_max_tokens() {
+    let dir = TempDir::new("local-chat-free");
+    let mut chat = tiny_chat(&dir);
+    let reply = chat.chat(&ChatRequest::new(vec![Message::user("Hi")]).with_sampling(Sampling::greedy(5))).expect("reply");
+    assert!(reply.usage.completion_tokens <= 5);
+    assert_eq!(reply.json_mode, None);
+    if reply.usage.completion_tokens == 5 {
+        assert_eq!(reply.finish_reason.as_deref(), Some("length"));
+    }
+}
+
+#[cfg(feature = "real-model")]
+#[test]
+fn smollm2_picks_a_listed_skill() {
+    let path = std::env::var_os("NSEA_MODEL_DIR")
+        .map(std::path::PathBuf::from)
+        .unwrap_or_else(|| {
+            std::env::var_os("XDG_CACHE_HOME")
+                .map(std::path::PathBuf::from)
+                .unwrap_or_else(|| std::path::PathBuf::from(std::env::var_os("HOME").unwrap_or_default()).join(".cache"))
+                .join("nsea/models")
+        })
+        .join("SmolLM2-135M-Instruct.Q4_1.gguf");
+    let mut chat = LocalChat::new(LocalModel::load(&path).expect("fetch-model first"), "smollm2").expect("chat template");
+    let skills = ["Goto(countertop 1)", "Open(fridge 1)", "Goto(sinkbasin 1)", "Done"];
+    let schema = json!({
+        "type": "object",
+        "properties": { "skill": { "enum": skills }, "reason": { "type": "string", "maxLength": 60 } },
+        "required": ["skill", "reason"],
+        "additionalProperties": false
+    });
+    let request = ChatRequest::new(vec![
+        Message::system("You control a household robot. Reply with JSON."),
+        Message::user(format!(
+            "Goal: a cold apple on the table. The apple is in the closed fridge. Skills: {}. Which skill next?",
+            skills.join(", ")
+        )),
+    ])
+    .with_sampling(Sampling::greedy(160))
+    .with_json_schema(schema.clone());
+    let reply = chat_json(&mut chat, &request).expect("valid JSON");
+    assert_eq!(validate(&reply.value, &schema, "$"), Ok(()), "{}", reply.reply.text);
+    assert!(skills.contains(&reply.value["skill"].as_str().expect("skill")));
+}

@@ -1,0 +1,73 @@
+//! The completions backend against a real llama.cpp `llama-server` serving the default model
+//! (SmolLM2-135M-Instruct Q4_1), behind the `real-server` feature. `.ci/run` builds the server
+//! (`../shared/anchors/build_llamacpp.sh`), starts it on loopback and passes its base URL in
+//! `NSEA_LLAMA_SERVER_URL` (e.g. `http://127.0.0.1:8088/v1`).
+//!
+//! llama-server answers `/v1/completions` logprobs in the chat-style layout
+//! (`choices[0].logprobs.content[0].top_logprobs`); the backend must read it and give the same
+//! greedy continuation as this crate's own forward pass on the same file.
+
+#![cfg(feature = "real-server")]
+
+use std::path::PathBuf;
+use std::sync::Arc;
+
+use lm::{LanguageModel, LocalModel, OpenAiConfig, OpenAiModel, ServerDialect, generate_greedy};
+
+fn model_path() -> PathBuf {
+    let dir = std::env::var_os("NSEA_MODEL_DIR").map(PathBuf::from).unwrap_or_else(|| {
+        std::env::var_os("XDG_CACHE_HOME")
+            .map(PathBuf::from)
+            .unwrap_or_else(|| PathBuf::from(std::env::var_os("HOME").unwrap_or_default()).join(".cache"))
+            .join("nsea/models")
+    });
+    let path = dir.join("SmolLM2-135M-Instruct.Q4_1.gguf");
+    assert!(path.is_file(), "{} is missing: run `cargo xtask fetch-model` first", path.display());
+    path
+}
+
+fn server_url() -> String {
+    std::env::var("NSEA_LLAMA_SERVER_URL").expect("NSEA_LLAMA_SERVER_URL: the base URL of a llama-server serving SmolLM2 (see .ci/run)")
+}
+
+fn served(local: &LocalModel) -> OpenAiModel {
+    let mut config = OpenAiConfig::new(&server_url(), "smollm2");
+    config.dialect = ServerDialect::Generic;
+    config.top_logprobs = 10;
+    OpenAiModel::new(config, Arc::clone(local.shared_tokenizer())).expect("client")
+}
+
+#[test]
+fn the_served_greedy_continuation_equals_the_local_one() {
+    let mut local = LocalModel::load(&model_path()).expect("loads");
+    let mut remote = served(&local);
+    for question in ["What is the capital of France?", "Name three things you find in a kitchen."] {
+        let prompt = local.chat_prompt("You are a helpful assistant.", question).expect("renders");
+        let ids = local.tokenizer().encode_prompt(&prompt).expect("encodes");
+        let expected = generate_greedy(&mut local, &ids, 24).expect("local");
+        let got = generate_greedy(&mut remote, &ids, 24).expect("served");
+        assert_eq!(
+            local.tokenizer().decode_lossy(&got).expect("decodes"),
+            local.tokenizer().decode_lossy(&expected).expect("decodes"),
+            "{question}"
+        );
+        assert_eq!(got, expected, "{question}");
+    }
+    let usage = remote.usage();
+    assert!(usage.forward_calls >= 2, "{usage:?}");
+}
+
+#[test]
+fn served_logprobs_are_close_to_the_local_ones() {
+    let mut local = LocalModel::load(&model_path()).expect("loads");
+    let mut remote = served(&local);
+    let ids = local.tokenizer().encode_prompt(&local.chat_prompt("You plan.", "Open the fridge.").expect("renders")).expect("encodes");
+    let local_logprobs = local.next_logprobs(&ids).expect("local");
+    let lm::Logprobs::Sparse { top, .. } = remote.next_logprobs(&ids).expect("served") else { panic!("a served model is sparse") };
+    assert!(top.len() >= 5, "{top:?}");
+    for &(id, logprob) in &top {
+        let mine = local_logprobs.get(id).expect("in range");
+        // llama.cpp's kernels and ours round differently (Q8 activations there): close, not equal.
+        assert!((mine - logprob).abs() < 0.1, "token {id}: local {mine}, served {logprob}");
+    }
+}
