@@ -6,6 +6,7 @@
 mod bench;
 mod env;
 mod env_virtualhome;
+mod chat;
 mod eval;
 mod input;
 mod lm;
@@ -72,6 +73,9 @@ enum Command {
     FetchModel(lm::FetchArgs),
     /// Greedy generation with a local GGUF model; prints the continuation and tokens/s.
     Generate(lm::GenerateArgs),
+    /// One chat turn with a local or served model (images, a JSON schema); prints the reply,
+    /// the parsed JSON and the usage; exit 1 when the model fails after its retries.
+    Chat(chat::ChatArgs),
 }
 
 fn main() -> ExitCode {
@@ -160,5 +164,6 @@ fn run(command: Command) -> anyhow::Result<ExitCode> {
         Command::Bench(args) => bench::run(args),
         Command::FetchModel(args) => lm::fetch_model(args),
         Command::Generate(args) => lm::generate(args),
+        Command::Chat(args) => chat::run(args),
     }
 }

@@ -11,7 +11,7 @@ use std::time::{Duration, Instant};
 
 use anyhow::Context;
 use benchmark_data::{Benchmark, Extra, TaskFiles};
-use lm::{LanguageModel, OpenAiConfig, OpenAiModel, Tokenizer, UniformModel};
+use lm::{LanguageModel, OpenAiConfig, OpenAiModel, ServerDialect, Tokenizer, UniformModel};
 use mcts::prompt::{PromptOptions, Relevance, planning_prompt};
 use mcts::{Backup, DecodeConfig, Decoder, MctsConfig, Mode, Normalization, Outcome, SamplingConfig, Strategy, Tokenization, ValueConfig};
 use serde::{Deserialize, Serialize};
@@ -35,6 +35,11 @@ pub struct LmArgs {
     /// The model name an `openai:` server serves.
     #[arg(long, default_value = "default")]
     pub served_model: String,
+    /// What an `openai:` server understands: `vllm` (server-side `allowed_token_ids`, tokens
+    /// named by id) or `generic` (llama.cpp's `llama-server`, Ollama: top-k logprobs only,
+    /// renormalised here).
+    #[arg(long, default_value = "vllm", value_parser = ["vllm", "generic"])]
+    pub server_dialect: String,
 }
 
 /// How the plan is decoded (defaults: the paper's, Appendix A.4 and Table 6).
@@ -230,8 +235,9 @@ pub fn load_lm(args: &LmArgs) -> anyhow::Result<Box<dyn LanguageModel>> {
     }
     if let Some(url) = args.lm.strip_prefix("openai:") {
         let tokenizer = Arc::new(tokenizer_at(&tokenizer_path)?);
-        let model =
-            OpenAiModel::new(OpenAiConfig::new(url, &args.served_model), tokenizer).map_err(|e| InputError(format!("{url}: {e}")))?;
+        let mut config = OpenAiConfig::new(url, &args.served_model);
+        config.dialect = if args.server_dialect == "generic" { ServerDialect::Generic } else { ServerDialect::Vllm };
+        let model = OpenAiModel::new(config, tokenizer).map_err(|e| InputError(format!("{url}: {e}")))?;
         return Ok(Box::new(model));
     }
     let path = crate::lm::resolve_model(&args.lm)?;

@@ -1,0 +1,155 @@
+//! `cargo xtask chat`: a local model's reply decoded under a JSON schema, a served model's
+//! reply over loopback, and the exit codes: 2 for bad input (an unreadable or non-image file,
+//! a schema that is not one), 1 for a server that still fails after its retries.
+
+use std::io::{Read, Write};
+use std::net::TcpListener;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+use serde_json::{Value, json};
+
+fn xtask(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_xtask"))
+        .args(args)
+        .current_dir(Path::new(env!("CARGO_MANIFEST_DIR")).join(".."))
+        .output()
+        .expect("xtask runs")
+}
+
+fn scratch_dir() -> PathBuf {
+    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(format!("xtask-chat-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("temp dir");
+    dir
+}
+
+fn scratch(name: &str, bytes: &[u8]) -> String {
+    let path = scratch_dir().join(name);
+    std::fs::write(&path, bytes).expect("write");
+    path.display().to_string()
+}
+
+fn skill_schema() -> String {
+    let schema = json!({
+        "type": "object",
+        "properties": { "skill": { "enum": ["Goto(fridge 1)", "Open(fridge 1)", "Done"] } },
+        "required": ["skill"],
+        "additionalProperties": false
+    });
+    scratch("skill.schema.json", schema.to_string().as_bytes())
+}
+
+fn stdout_json(output: &Output) -> Value {
+    serde_json::from_str(String::from_utf8_lossy(&output.stdout).trim()).expect("one JSON object")
+}
+
+#[test]
+fn a_local_model_replies_with_schema_valid_json() {
+    // The tiny model's weights are random: only the schema makes its reply JSON.
+    let model = scratch_dir().join("tiny.gguf");
+    lm::tiny::write_tiny_gguf(&model, &lm::tiny::TinySpec::default()).expect("tiny model");
+    let output =
+        xtask(&["chat", "--model", &model.display().to_string(), "--prompt", "Which skill next?", "--schema", &skill_schema(), "--json"]);
+    assert_eq!(output.status.code(), Some(0), "{}", String::from_utf8_lossy(&output.stderr));
+    let summary = stdout_json(&output);
+    let skill = summary["json"]["skill"].as_str().expect("a skill");
+    assert!(["Goto(fridge 1)", "Open(fridge 1)", "Done"].contains(&skill), "{summary}");
+    assert_eq!(summary["json"], serde_json::from_str::<Value>(summary["reply"].as_str().expect("text")).expect("the reply is the JSON"));
+    assert_eq!(summary["repaired"], false);
+    assert!(summary["usage"]["prompt_tokens"].as_u64().expect("count") > 0);
+
+    // A local model reads text only.
+    let image = scratch("pixel.png", b"\x89PNG\r\n\x1a\n\0\0\0\rIHDR");
+    let output = xtask(&["chat", "--model", &model.display().to_string(), "--prompt", "What is this?", "--image", &image]);
+    assert_eq!(output.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&output.stderr).contains("text only"), "{}", String::from_utf8_lossy(&output.stderr));
+}
+
+#[test]
+fn a_served_model_gets_the_image_and_its_reply_is_printed() {
+    let listener = TcpListener::bind("127.0.0.1:0").expect("bind");
+    let address = listener.local_addr().expect("address");
+    let server = std::thread::spawn(move || {
+        let (mut stream, _) = listener.accept().expect("accept");
+        let mut buffer = Vec::new();
+        let mut chunk = [0u8; 65536];
+        let body_start = loop {
+            let n = stream.read(&mut chunk).expect("read");
+            assert!(n > 0, "the client closed early");
+            buffer.extend_from_slice(&chunk[..n]);
+            if let Some(end) = buffer.windows(4).position(|w| w == b"\r\n\r\n") {
+                break end + 4;
+            }
+        };
+        let head = String::from_utf8_lossy(&buffer[..body_start]).to_ascii_lowercase();
+        let length: usize = head.lines().find_map(|l| l.strip_prefix("content-length:")).expect("length").trim().parse().expect("number");
+        while buffer.len() < body_start + length {
+            let n = stream.read(&mut chunk).expect("read");
+            buffer.extend_from_slice(&chunk[..n]);
+        }
+        let request: Value = serde_json::from_slice(&buffer[body_start..body_start + length]).expect("JSON");
+        let reply = json!({
+            "choices": [{ "message": { "role": "assistant", "content": "{\"skill\": \"Open(fridge 1)\"}" }, "finish_reason": "stop" }],
+            "usage": { "prompt_tokens": 90, "completion_tokens": 9 }
+        })
+        .to_string();
+        let response = format!(
+            "HTTP/1.1 200 OK\r\nContent-Type: application/json\r\nContent-Length: {}\r\nConnection: close\r\n\r\n{reply}",
+            reply.len()
+        );
+        stream.write_all(response.as_bytes()).expect("write");
+        request
+    });
+    let image = scratch("photo.jpg", &[0xff, 0xd8, 0xff, 0xe0, 1, 2, 3]);
+    let url = format!("openai:http://{address}/v1");
+    let output = xtask(&[
+        "chat",
+        "--model",
+        &url,
+        "--served-model",
+        "qwen3-vl",
+        "--prompt",
+        "Next?",
+        "--image",
+        &image,
+        "--schema",
+        &skill_schema(),
+        "--json",
+    ]);
+    assert_eq!(output.status.code(), Some(0), "{}", String::from_utf8_lossy(&output.stderr));
+    let summary = stdout_json(&output);
+    assert_eq!(summary["json"], json!({ "skill": "Open(fridge 1)" }));
+    assert_eq!(
+        summary["usage"],
+        json!({ "requests": 1, "prompt_tokens": 90, "completion_tokens": 9, "reasoning_tokens": null, "images": 1 })
+    );
+    let request = server.join().expect("server");
+    assert_eq!(request["model"], "qwen3-vl");
+    assert_eq!(request["messages"][0]["content"][1]["image_url"]["url"], "data:image/jpeg;base64,/9j/4AECAw==");
+    assert_eq!(request["response_format"]["json_schema"]["schema"]["required"], json!(["skill"]));
+}
+
+#[test]
+fn bad_input_exits_2_and_a_failing_server_exits_1() {
+    // A port nothing listens on any more.
+    let port = TcpListener::bind("127.0.0.1:0").expect("bind").local_addr().expect("address").port();
+    let url = &format!("openai:http://127.0.0.1:{port}/v1");
+    let check = |args: &[&str], code: i32, message: &str| {
+        let output = xtask(args);
+        let stderr = String::from_utf8_lossy(&output.stderr);
+        assert_eq!(output.status.code(), Some(code), "{args:?}: {stderr}");
+        assert!(stderr.contains(message), "{args:?}: `{stderr}` should mention `{message}`");
+    };
+    let missing = scratch_dir().join("missing.png").display().to_string();
+    check(&["chat", "--model", url, "--prompt", "x", "--image", &missing], 2, "cannot read");
+    let gif = scratch("anim.gif", b"GIF89a....");
+    check(&["chat", "--model", url, "--prompt", "x", "--image", &gif], 2, "not a PNG or JPEG image");
+    let not_json = scratch("bad.schema.json", b"{ type: object }");
+    check(&["chat", "--model", url, "--prompt", "x", "--schema", &not_json], 2, "not JSON");
+    let bad_type = scratch("type.schema.json", br#"{"type": "dict"}"#);
+    check(&["chat", "--model", url, "--prompt", "x", "--schema", &bad_type], 2, "unknown type \"dict\"");
+    check(&["chat", "--model", "openai:ftp://host/v1", "--prompt", "x"], 2, "bad URL");
+    check(&["chat", "--model", url, "--prompt", "x", "--api-key-env", "XTASK_CHAT_TEST_NO_SUCH_KEY"], 2, "XTASK_CHAT_TEST_NO_SUCH_KEY");
+    // Connection refused on every attempt.
+    check(&["chat", "--model", url, "--prompt", "x", "--retries", "1", "--timeout", "5"], 1, "cannot connect");
+}
