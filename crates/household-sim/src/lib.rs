@@ -16,6 +16,7 @@ pub use alfworld::{AlfworldEnv, NOTHING_HAPPENS, TASK_TYPES};
 pub use env::{Environment, Event, GoalAnnotation, Image, Judge, JudgeAtom, Observation, StepResult};
 pub use error::EnvError;
 pub use python_random::PythonRandom;
+pub use virtualhome::pddl as vh_pddl;
 pub use virtualhome::{
     Action as VhAction, NodeIx as VhNodeIx, NodeState as VhNodeState, Property as VhProperty, Relation as VhRelation, SceneGraph,
     SceneNode, ScriptLine, VhGoal, VirtualhomeEnv, VirtualhomeError, VirtualhomeTask, World as VhWorld, bind as vh_bind,

@@ -678,10 +678,10 @@ impl World {
     fn sit_or_lie(&mut self, node: NodeIx, lie: bool) -> Result<(), Failure> {
         let c = self.character;
         self.require_close(node)?;
-        let (state, other, property, table) = if lie {
-            (NodeState::Lying, NodeState::Sitting, Property::Lieable, LIE_MAX)
+        let (state, other, property) = if lie {
+            (NodeState::Lying, NodeState::Sitting, Property::Lieable)
         } else {
-            (NodeState::Sitting, NodeState::Lying, Property::Sittable, SIT_MAX)
+            (NodeState::Sitting, NodeState::Lying, Property::Sittable)
         };
         if self.has_state(c, state) {
             return Err(format!("{} is {}", self.label(c), if lie { "lying" } else { "sitting" }));
@@ -689,9 +689,7 @@ impl World {
         if !self.has_property(node, property) {
             return Err(format!("{} is not {}", self.label(node), if lie { "lieable" } else { "sittable" }));
         }
-        let class = self.graph.node(node).class_name.as_str();
-        let max = table.iter().find(|(name, _)| *name == class).map_or(1, |(_, n)| *n);
-        if self.graph.sources(node, Relation::On).len() >= max {
+        if !self.has_seat(node, lie) {
             return Err(format!("Too many things on {}", self.label(node)));
         }
         self.graph.add_edge(c, Relation::On, node);
@@ -702,6 +700,15 @@ impl World {
         }
         self.set_states(c, &[other], state);
         Ok(())
+    }
+
+    /// Whether `node` has room for one more on it to sit (or lie): fewer nodes ON it than the
+    /// executor's per-class limit (one for classes it does not list).
+    pub fn has_seat(&self, node: NodeIx, lie: bool) -> bool {
+        let table = if lie { LIE_MAX } else { SIT_MAX };
+        let class = self.graph.node(node).class_name.as_str();
+        let max = table.iter().find(|(name, _)| *name == class).map_or(1, |(_, n)| *n);
+        self.graph.sources(node, Relation::On).len() < max
     }
 
     fn pour(&mut self, src: NodeIx, dest: NodeIx) -> Result<(), Failure> {

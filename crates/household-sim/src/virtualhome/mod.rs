@@ -8,6 +8,7 @@
 
 mod exec;
 mod graph;
+pub mod pddl;
 
 use std::fmt::Write as _;
 use std::io::Read as _;

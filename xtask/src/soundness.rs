@@ -1,0 +1,226 @@
+//! `cargo xtask soundness`: the sound VirtualHome domain on every task of a folder of task
+//! files. Per task: (a) A* with LM-cut on the problem `household_sim::vh_pddl::problem` writes,
+//! and (b) EAI's gold PDDL plan rewritten for the domain (its classes bound to instances); both
+//! validated under the domain, spelled as the executor's script lines and run in our
+//! `VirtualhomeEnv`. One JSON line per task; `tools/virtualhome_record.py check` runs the same
+//! script lines in the real evolving graph.
+
+use std::collections::BTreeMap;
+use std::io::Write as _;
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+use std::time::{Duration, Instant};
+
+use anyhow::Context;
+use heuristics::search::{Algorithm, SearchConfig, SearchStatus, search};
+use household_sim::vh_pddl::{self, SOUND_DOMAIN, VhProblem};
+use household_sim::{Environment, Event, Judge, VhGoal, VirtualhomeEnv, VirtualhomeTask};
+use serde_json::json;
+use transition_model::{Spelling, TransitionModel};
+
+use crate::input::InputError;
+
+#[derive(Debug, clap::Args)]
+pub struct SoundnessArgs {
+    /// Folder of task files `<id>.json.gz` [default: fixtures/virtualhome-eai/graphs; every EAI
+    /// task: the folder `cargo xtask fetch-data` prints].
+    #[arg(long)]
+    tasks: Option<PathBuf>,
+    /// EAI's problem files (their objects name the task-relevant classes) and gold PDDL plans.
+    #[arg(long, default_value = "fixtures/virtualhome-eai")]
+    eai: PathBuf,
+    /// Search time limit per task, seconds.
+    #[arg(long, default_value_t = 60.0, value_parser = positive_seconds)]
+    time_limit: f64,
+    /// Only the first N tasks (sorted ids).
+    #[arg(long)]
+    limit: Option<usize>,
+    /// JSON lines go here (one per task) instead of standard output.
+    #[arg(long)]
+    out: Option<PathBuf>,
+}
+
+pub fn run(args: SoundnessArgs) -> anyhow::Result<ExitCode> {
+    let dir = args.tasks.clone().unwrap_or_else(|| PathBuf::from("fixtures/virtualhome-eai/graphs"));
+    let mut files: Vec<PathBuf> = std::fs::read_dir(&dir)
+        .map_err(|e| InputError(format!("{}: cannot read the task folder: {e}", dir.display())))?
+        .flatten()
+        .map(|e| e.path())
+        .filter(|p| p.to_string_lossy().ends_with(".json.gz") || p.extension().is_some_and(|e| e == "json"))
+        .collect();
+    files.sort();
+    if let Some(n) = args.limit {
+        files.truncate(n);
+    }
+    let classes = eai_problem_classes(&args.eai.join("problem_pddl"))?;
+    let gold_path = args.eai.join("gold_pddl_plan.json");
+    let gold: BTreeMap<String, Vec<String>> = serde_json::from_str(
+        &std::fs::read_to_string(&gold_path).map_err(|e| InputError(format!("{}: cannot read: {e}", gold_path.display())))?,
+    )
+    .map_err(|e| InputError(format!("{}: {e}", gold_path.display())))?;
+    let domain = pddl_syntax::parse_domain(SOUND_DOMAIN).map_err(|e| anyhow::anyhow!("the sound domain does not parse: {e:?}"))?;
+
+    let mut out: Box<dyn std::io::Write> = match &args.out {
+        Some(path) => Box::new(std::fs::File::create(path).with_context(|| format!("cannot write {}", path.display()))?),
+        None => Box::new(std::io::stdout().lock()),
+    };
+    let (mut solved, mut ours_ok, mut gold_valid, mut gold_ok) = (0, 0, 0, 0);
+    for path in &files {
+        let task = VirtualhomeTask::load(path).map_err(|e| InputError(e.to_string()))?;
+        let id = task.task_id.clone();
+        let task_classes: Vec<&str> = classes.get(&id).map(|c| c.iter().map(String::as_str).collect()).unwrap_or_default();
+        let mut row = json!({"task": id, "task_name": task.task_name});
+        let problem = match vh_pddl::problem(&task, &task_classes) {
+            Ok(p) => p,
+            Err(e) => {
+                row["status"] = json!("unexpressible");
+                row["error"] = json!(e.to_string());
+                writeln!(out, "{row}")?;
+                continue;
+            }
+        };
+        let parsed =
+            pddl_syntax::parse_problem(&problem.text).map_err(|e| anyhow::anyhow!("{id}: the written problem does not parse: {e:?}"))?;
+        let model = TransitionModel::new(grounding::ground(&domain, &parsed).with_context(|| format!("{id}: grounding"))?);
+        row["objects"] = json!(problem.objects.len());
+        row["actions"] = json!(model.task().actions.len());
+
+        // (a) A* with LM-cut.
+        let mut h = heuristics::by_name("lmcut", &model).context("lmcut")?;
+        let mut config = SearchConfig::new(Algorithm::AStar);
+        config.time_limit = Some(Duration::from_secs_f64(args.time_limit));
+        let start = Instant::now();
+        let result = search(&model, h.as_mut(), &config, None);
+        row["millis"] = json!(start.elapsed().as_secs_f64() * 1e3);
+        row["status"] = json!(match result.status {
+            SearchStatus::Solved => "solved",
+            SearchStatus::Unsolvable => "unsolvable",
+            SearchStatus::OutOfBudget => "out-of-budget",
+        });
+        if result.status == SearchStatus::Solved {
+            solved += 1;
+            let plan: Vec<String> = result.plan.iter().map(|&a| model.task().action_name(a)).collect();
+            let script = spell(&problem, &task, &plan)?;
+            let (executed, goal) = run_in_env(&task, &script);
+            ours_ok += usize::from(executed && goal);
+            row["plan"] = json!(plan);
+            row["script"] = json!(script);
+            row["ours_executed"] = json!(executed);
+            row["ours_goal"] = json!(goal);
+        }
+
+        // (b) EAI's gold PDDL plan, its classes bound to instances.
+        if let Some(steps) = gold.get(&id) {
+            match rewrite_gold(&task, &problem, steps) {
+                Ok(plan) => {
+                    let verdict = validate(&model, &plan);
+                    gold_valid += usize::from(verdict.is_ok());
+                    let script = spell(&problem, &task, &plan)?;
+                    let (executed, goal) = run_in_env(&task, &script);
+                    gold_ok += usize::from(executed && goal);
+                    row["gold_plan"] = json!(plan);
+                    row["gold_script"] = json!(script);
+                    row["gold_valid"] = json!(verdict.is_ok());
+                    if let Err(why) = verdict {
+                        row["gold_invalid"] = json!(why);
+                    }
+                    row["gold_ours_executed"] = json!(executed);
+                    row["gold_ours_goal"] = json!(goal);
+                }
+                Err(why) => row["gold_error"] = json!(why),
+            }
+        }
+        writeln!(out, "{row}")?;
+        out.flush()?;
+    }
+    eprintln!(
+        "{} tasks: (a) A* solved {solved}, executed and reached the goal in our executor {ours_ok}; (b) gold PDDL plans {}: valid under the sound domain {gold_valid}, reached the goal in our executor {gold_ok}",
+        files.len(),
+        gold.len()
+    );
+    Ok(ExitCode::SUCCESS)
+}
+
+/// Task id → the object names of EAI's problem file (`<dir>/<Category>/<id>.pddl`).
+fn eai_problem_classes(dir: &Path) -> anyhow::Result<BTreeMap<String, Vec<String>>> {
+    let mut out = BTreeMap::new();
+    let categories = std::fs::read_dir(dir).map_err(|e| InputError(format!("{}: cannot read: {e}", dir.display())))?;
+    for category in categories.flatten() {
+        for file in std::fs::read_dir(category.path())?.flatten() {
+            let path = file.path();
+            let Some(id) = path.file_stem().and_then(|s| s.to_str()).map(str::to_string) else { continue };
+            let text = std::fs::read_to_string(&path).with_context(|| format!("cannot read {}", path.display()))?;
+            let problem = pddl_syntax::parse_problem(&text).map_err(|e| InputError(e.render(&path.display().to_string(), &text)))?;
+            out.insert(id, problem.objects.iter().map(|o| o.name.text.clone()).collect());
+        }
+    }
+    Ok(out)
+}
+
+fn spell(problem: &VhProblem, task: &VirtualhomeTask, plan: &[String]) -> anyhow::Result<Vec<String>> {
+    plan.iter().map(|step| problem.script_line(&task.init, step).map_err(|e| anyhow::anyhow!("{}: {step}: {e}", task.task_id))).collect()
+}
+
+/// Runs script lines in our executor: (every line executed, every goal holds at the end).
+fn run_in_env(task: &VirtualhomeTask, script: &[String]) -> (bool, bool) {
+    let mut env = VirtualhomeEnv::new(task.clone(), "virtualhome-eai");
+    env.reset();
+    let executed = script.iter().all(|line| !matches!(env.step(line).event, Event::NotExecuted { .. }));
+    (executed, executed && env.unmet_goals().is_empty())
+}
+
+/// `Ok` when the plan is applicable at every step and reaches the goal, else why not.
+fn validate(model: &TransitionModel, plan: &[String]) -> Result<(), String> {
+    model.validate_text(&Spelling::pddl(model.task()), plan).map(|_| ()).map_err(|e| e.describe(model.task()))
+}
+
+fn positive_seconds(text: &str) -> Result<f64, String> {
+    match text.parse::<f64>() {
+        Ok(s) if s.is_finite() && s > 0.0 && s < 1e9 => Ok(s),
+        _ => Err(format!("`{text}` is not a positive number of seconds")),
+    }
+}
+
+/// EAI's gold plan (`walk_towards character plate`) with each class bound to an instance: the
+/// instance of that class named by the task's goal, else the lowest id of the class in the
+/// problem (the rule of `../shared/anchors/virtualhome_replay.py` without the gold program),
+/// written by its name in `problem`.
+fn rewrite_gold(task: &VirtualhomeTask, problem: &VhProblem, steps: &[String]) -> Result<Vec<String>, String> {
+    let g = &task.init.graph;
+    let by_id: BTreeMap<u32, &str> = problem.objects.iter().map(|(n, &id)| (id, n.as_str())).collect();
+    let class_of = |id: u32| g.index_of(id).map(|ix| g.node(ix).class_name.as_str());
+    let mut bound: BTreeMap<&str, u32> = BTreeMap::new();
+    for goal in &task.goals {
+        let ids = match goal {
+            VhGoal::State { node, .. } => vec![*node],
+            VhGoal::Edge { from, to, .. } => vec![*from, *to],
+            VhGoal::Action { .. } => vec![],
+        };
+        for id in ids {
+            if let Some(class) = class_of(id) {
+                bound.entry(class).or_insert(id);
+            }
+        }
+    }
+    let mut plan = Vec::with_capacity(steps.len());
+    for step in steps {
+        let words: Vec<&str> = step.split_whitespace().collect();
+        let mut out = Vec::with_capacity(words.len());
+        for (i, word) in words.iter().enumerate() {
+            if i == 0 || *word == vh_pddl::CHARACTER {
+                out.push(word.to_string());
+                continue;
+            }
+            let id = match bound.get(word) {
+                Some(&id) => id,
+                None => *by_id
+                    .keys()
+                    .find(|&&id| class_of(id) == Some(word))
+                    .ok_or_else(|| format!("`{word}` names no instance in the problem ({step})"))?,
+            };
+            out.push(by_id.get(&id).ok_or_else(|| format!("{word} ({id}) is not in the problem"))?.to_string());
+        }
+        plan.push(format!("({})", out.join(" ")));
+    }
+    Ok(plan)
+}
