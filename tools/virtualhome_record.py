@@ -11,6 +11,17 @@ Usage:
         tasks: the 33 kitchen tasks copied to ../shared/data/virtualhome-eai.
     virtualhome_record.py record TASK_DIR OUT.jsonl.gz [--random K] [--steps N] [--shard I/N]
     virtualhome_record.py merge OUT.jsonl.gz PART.jsonl.gz...
+    virtualhome_record.py time TASK_ID...
+        Times the real executor per task: building the planner on the task's init graph (read
+        from the dataset, as EAI does: "load and reset") and every line of EAI's gold program;
+        one JSON line per task {task, reset_s, steps, step_s (all steps together)}.
+    virtualhome_record.py check SOUNDNESS.jsonl OUT.jsonl [--shard I/N]
+        The sound domain's figures: for every line of `cargo xtask soundness --out`, EAI's gold
+        program, the A* plan's script (`script`) and the rewritten gold PDDL plan's script
+        (`gold_script`) run in the real evolving graph, each judged on every goal; one JSON line
+        per task {task, gold_program_ok, a_executed, a_goal, b_executed, b_goal, ...}, and the
+        counts on standard error. Exit 1 when an A* plan fails on a task whose gold program
+        reaches its goal (the domain would not be sound).
         For every task file in TASK_DIR: EAI's gold program and K random programs of N
         steps (default 5 and 15; seeds 0..K-1), one JSON line each:
         {task, program, lines, executed, messages, goal, unmet}.
@@ -250,6 +261,64 @@ def record(task_dir, out, k, steps, shard):
     print(f"recorded {len(rows)} programs on {len(tasks)} tasks to {out}")
 
 
+def time_tasks(tasks):
+    import time
+    for tid in tasks:
+        start = time.perf_counter()
+        planner, gold = new_planner(tid)
+        reset_s = time.perf_counter() - start
+        start = time.perf_counter()
+        for line in gold:
+            planner.my_execute_primitive_action_eval(line)
+        step_s = time.perf_counter() - start
+        print(json.dumps({"task": tid, "reset_s": reset_s, "steps": len(gold), "step_s": step_s}), flush=True)
+
+
+def check(plans, out, shard):
+    index, count = shard
+    rows = [json.loads(line) for line in open(plans)][index::count]
+    counts = {"tasks": 0, "gold_program_ok": 0, "a_ok": 0, "a_ok_given_gold": 0, "b_plans": 0,
+              "b_ok": 0, "b_ok_given_gold": 0, "b_gold_tasks": 0, "b_valid": 0, "b_valid_ok": 0}
+    with open(out, "w") as f:
+        for row in rows:
+            tid = row["task"]
+            print(f"task {tid}", file=sys.stderr, flush=True)
+            vh_goal = goals_of(tid)
+            result = {"task": tid}
+            planner, gold = new_planner(tid)
+            executed, messages, history = run(planner, list(gold))
+            gold_ok = all(executed) and strict_goal(planner, vh_goal, history)[0]
+            result["gold_program_ok"] = gold_ok
+            for key, tag in (("script", "a"), ("gold_script", "b")):
+                if key not in row:
+                    continue
+                planner, _ = new_planner(tid)
+                executed, messages, history = run(planner, row[key])
+                ok, unmet = strict_goal(planner, vh_goal, history)
+                result[f"{tag}_executed"] = all(executed)
+                result[f"{tag}_goal"] = ok
+                result[f"{tag}_failed"] = [f"{n}: {row[key][n]}: {m}" for n, m in enumerate(messages) if m][:1]
+                result[f"{tag}_unmet"] = [json.dumps(u) if isinstance(u, dict) else u for u in unmet]
+            a_ok = result.get("a_executed", False) and result.get("a_goal", False)
+            b_ok = result.get("b_executed", False) and result.get("b_goal", False)
+            counts["tasks"] += 1
+            counts["gold_program_ok"] += gold_ok
+            counts["a_ok"] += a_ok
+            counts["a_ok_given_gold"] += gold_ok and a_ok
+            if "gold_script" in row:
+                counts["b_plans"] += 1
+                counts["b_ok"] += b_ok
+                counts["b_gold_tasks"] += gold_ok
+                counts["b_ok_given_gold"] += gold_ok and b_ok
+                counts["b_valid"] += bool(row.get("gold_valid"))
+                counts["b_valid_ok"] += bool(row.get("gold_valid")) and b_ok
+            f.write(json.dumps(result, separators=(",", ":")) + "\n")
+            f.flush()
+    print(json.dumps(counts), file=sys.stderr)
+    # Exit 1 when an A* plan fails where the gold program succeeds: the domain is not sound.
+    return 0 if counts["a_ok_given_gold"] == counts["gold_program_ok"] else 1
+
+
 def write_rows(out, rows):
     data = "".join(json.dumps(r, separators=(",", ":")) + "\n" for r in rows).encode()
     with open(out, "wb") as f:
@@ -276,6 +345,12 @@ def main():
     r.add_argument("--random", type=int, default=5)
     r.add_argument("--steps", type=int, default=15)
     r.add_argument("--shard", default="0/1", help="I/N: every N-th task from the I-th (sorted ids)")
+    t = sub.add_parser("time")
+    t.add_argument("tasks", nargs="+")
+    c = sub.add_parser("check")
+    c.add_argument("plans")
+    c.add_argument("out")
+    c.add_argument("--shard", default="0/1")
     m = sub.add_parser("merge")
     m.add_argument("out")
     m.add_argument("parts", nargs="+")
@@ -288,6 +363,11 @@ def main():
             tasks = sorted(t for t, n in names.items() if n.replace(" ", "_") in KITCHEN
                            and os.path.exists(os.path.join(ROOT, "init_and_final_graphs", SUB, f"file{t}.json")))
         export(args.out_dir, tasks)
+    elif args.cmd == "time":
+        time_tasks(args.tasks)
+    elif args.cmd == "check":
+        index, count = (int(x) for x in args.shard.split("/"))
+        sys.exit(check(args.plans, args.out, (index, count)))
     elif args.cmd == "merge":
         merge(args.out, args.parts)
     else:

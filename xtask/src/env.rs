@@ -221,6 +221,7 @@ pub fn bench(subset: &str, limit: usize, runs: usize, no_reference: bool, json: 
     let (ours_load, ours_reset, ours_step) = (mean("ours_load_reset_ms"), mean("ours_reset_us"), mean("ours_step_us"));
     let (engine_reset, engine_step) = (mean("engine_reset_ms"), mean("engine_step_us"));
     let ratio = |engine: Option<f64>, ours: Option<f64>| engine.zip(ours).map(|(e, o)| e / o);
+    let virtualhome = bench_virtualhome(runs, no_reference)?;
     let summary = serde_json::json!({
         "subset": subset,
         "games": rows.len(),
@@ -235,6 +236,7 @@ pub fn bench(subset: &str, limit: usize, runs: usize, no_reference: bool, json: 
         "step_speedup": ratio(engine_step, ours_step),
         "note": engine_note,
         "per_game": rows,
+        "virtualhome": virtualhome,
     });
     if json {
         println!("{summary}");
@@ -251,6 +253,109 @@ pub fn bench(subset: &str, limit: usize, runs: usize, no_reference: bool, json: 
         if let Some(note) = &summary["note"].as_str() {
             println!("  {note}");
         }
+        let vh = &summary["virtualhome"];
+        let show = |x: &serde_json::Value| x.as_f64().map_or("-".to_string(), |v| format!("{v:.3}"));
+        println!("VirtualHome, {} EAI kitchen tasks, gold programs ({runs} runs of ours each):", vh["tasks"]);
+        println!(
+            "  ours:   load+reset {} ms, reset {} us, step {} us",
+            show(&vh["ours_load_reset_ms"]),
+            show(&vh["ours_reset_us"]),
+            show(&vh["ours_step_us"])
+        );
+        println!("  engine: load+reset {} ms, step {} us", show(&vh["engine_load_reset_ms"]), show(&vh["engine_step_us"]));
+        println!("  speed-up: load+reset {}x, step {}x", show(&vh["load_reset_speedup"]), show(&vh["step_speedup"]));
+        if let Some(note) = vh["note"].as_str() {
+            println!("  {note}");
+        }
     }
     Ok(ExitCode::SUCCESS)
+}
+
+/// VirtualHome's part of `bench env`: every fixture kitchen task, its gold program (as the
+/// parity recordings hold it): ours (load the task file and reset; reset alone; each step,
+/// observation included) beside the real evolving graph (`tools/virtualhome_record.py time`:
+/// building its planner from the dataset's graph, and executing each line), in one run.
+fn bench_virtualhome(runs: usize, no_reference: bool) -> anyhow::Result<serde_json::Value> {
+    use anyhow::Context;
+    use household_sim::{Environment, VirtualhomeEnv, VirtualhomeTask};
+    let root = benchmark_data::fixtures_dir().join("virtualhome-eai");
+    let mut text = String::new();
+    std::io::Read::read_to_string(
+        &mut flate2::read::GzDecoder::new(std::fs::File::open(root.join("parity/programs.jsonl.gz")).context("parity recordings")?),
+        &mut text,
+    )?;
+    let gold: Vec<(String, Vec<String>)> = text
+        .lines()
+        .filter_map(|l| serde_json::from_str::<serde_json::Value>(l).ok())
+        .filter(|r| r["program"] == "gold")
+        .map(|r| {
+            let lines = r["lines"].as_array().into_iter().flatten().filter_map(|x| x.as_str().map(str::to_string)).collect();
+            (r["task"].as_str().unwrap_or_default().to_string(), lines)
+        })
+        .collect();
+    let mut rows = Vec::new();
+    for (task_id, lines) in &gold {
+        let path = root.join("graphs").join(format!("{task_id}.json.gz"));
+        let (mut load, mut reset, mut step) = (Vec::new(), Vec::new(), Vec::new());
+        for _ in 0..runs {
+            let start = std::time::Instant::now();
+            let task = VirtualhomeTask::load(&path).map_err(|e| InputError(e.to_string()))?;
+            let mut env = VirtualhomeEnv::new(task, "virtualhome-eai");
+            env.reset();
+            load.push(start.elapsed().as_secs_f64());
+            let start = std::time::Instant::now();
+            env.reset();
+            reset.push(start.elapsed().as_secs_f64());
+            let start = std::time::Instant::now();
+            for line in lines {
+                env.step(line);
+            }
+            step.push(start.elapsed().as_secs_f64() / lines.len().max(1) as f64);
+        }
+        rows.push(serde_json::json!({
+            "task": task_id, "steps": lines.len(),
+            "ours_load_reset_ms": median(load) * 1e3, "ours_reset_us": median(reset) * 1e6, "ours_step_us": median(step) * 1e6,
+        }));
+    }
+    let mut note = None;
+    if !no_reference {
+        let script = benchmark_data::fixtures_dir().join("../tools/virtualhome_record.py");
+        let output = std::process::Command::new("python3")
+            .arg(&script)
+            .arg("time")
+            .args(gold.iter().map(|(t, _)| t))
+            .output()
+            .context("running python3")?;
+        let stdout = String::from_utf8_lossy(&output.stdout);
+        let lines: Vec<serde_json::Value> = stdout.lines().filter_map(|l| serde_json::from_str(l).ok()).collect();
+        if output.status.success() && lines.len() == rows.len() {
+            for (row, line) in rows.iter_mut().zip(&lines) {
+                let step_s = line["step_s"].as_f64().unwrap_or(f64::NAN) / line["steps"].as_f64().unwrap_or(1.0).max(1.0);
+                row["engine_load_reset_ms"] = serde_json::json!(line["reset_s"].as_f64().unwrap_or(f64::NAN) * 1e3);
+                row["engine_step_us"] = serde_json::json!(step_s * 1e6);
+            }
+        } else {
+            note = Some(format!(
+                "the real executor did not run (bash ../shared/anchors/install.sh virtualhome installs it): {}",
+                String::from_utf8_lossy(&output.stderr).lines().last().unwrap_or("")
+            ));
+        }
+    }
+    let mean = |key: &str| -> Option<f64> {
+        let xs: Vec<f64> = rows.iter().filter_map(|r| r[key].as_f64()).collect();
+        (xs.len() == rows.len() && !xs.is_empty()).then(|| xs.iter().sum::<f64>() / xs.len() as f64)
+    };
+    let ratio = |engine: Option<f64>, ours: Option<f64>| engine.zip(ours).map(|(e, o)| e / o);
+    Ok(serde_json::json!({
+        "tasks": rows.len(),
+        "ours_load_reset_ms": mean("ours_load_reset_ms"),
+        "ours_reset_us": mean("ours_reset_us"),
+        "ours_step_us": mean("ours_step_us"),
+        "engine_load_reset_ms": mean("engine_load_reset_ms"),
+        "engine_step_us": mean("engine_step_us"),
+        "load_reset_speedup": ratio(mean("engine_load_reset_ms"), mean("ours_load_reset_ms")),
+        "step_speedup": ratio(mean("engine_step_us"), mean("ours_step_us")),
+        "note": note,
+        "per_task": rows,
+    }))
 }

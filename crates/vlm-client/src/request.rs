@@ -123,8 +123,22 @@ mod tests {
     use super::*;
     use crate::message::Image;
 
+    /// Pretty JSON with keys sorted at every level, whether or not another crate in the build
+    /// turns on serde_json's `preserve_order` (feature unification would otherwise change the
+    /// snapshot with the set of crates built).
     fn pretty(body: &Value) -> String {
-        serde_json::to_string_pretty(body).expect("serialises")
+        fn sorted(v: &Value) -> Value {
+            match v {
+                Value::Object(map) => {
+                    let mut keys: Vec<&String> = map.keys().collect();
+                    keys.sort();
+                    Value::Object(keys.into_iter().map(|k| (k.clone(), sorted(&map[k]))).collect())
+                }
+                Value::Array(items) => Value::Array(items.iter().map(sorted).collect()),
+                other => other.clone(),
+            }
+        }
+        serde_json::to_string_pretty(&sorted(body)).expect("serialises")
     }
 
     fn request() -> ChatRequest {

@@ -45,14 +45,19 @@ pub struct Delivered {
     pub elapsed: Duration,
 }
 
-/// An agent for `timeout`-bounded attempts. Statuses are returned, not raised.
+/// An agent for `timeout`-bounded attempts. Statuses are returned, not raised. Connections
+/// are kept alive and reused unless the environment sets `NSEA_HTTP_KEEPALIVE=0`, which opens
+/// one connection per request (for servers that mishandle keep-alive, and to measure what
+/// keep-alive saves).
 pub fn agent(timeout: Duration) -> ureq::Agent {
-    ureq::Agent::config_builder()
+    let mut config = ureq::Agent::config_builder()
         .timeout_global(Some(timeout))
         .http_status_as_error(false)
-        .user_agent(concat!("nsea-vlm-client/", env!("CARGO_PKG_VERSION")))
-        .build()
-        .into()
+        .user_agent(concat!("nsea-vlm-client/", env!("CARGO_PKG_VERSION")));
+    if std::env::var("NSEA_HTTP_KEEPALIVE").is_ok_and(|v| v == "0") {
+        config = config.max_idle_connections(0).max_idle_connections_per_host(0);
+    }
+    config.build().into()
 }
 
 /// Checks that `url` is `http(s)://host[...]`.

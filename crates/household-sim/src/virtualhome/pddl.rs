@@ -66,6 +66,10 @@ const VERBS: &[(&str, &str, usize)] = &[
     ("sleep", "SLEEP", 0),
 ];
 
+/// Categories of the building itself (walls, floors, ceilings): no action changes them, so a
+/// class of EAI's problem brings them in only when the goal names them.
+const STRUCTURE: &[&str] = &["Walls", "Floor", "Floors", "Ceiling"];
+
 /// The name of the character object in every problem.
 pub const CHARACTER: &str = "character";
 
@@ -87,7 +91,8 @@ pub struct UnexpressibleGoal {
 }
 
 /// Writes the problem of `task` for [`SOUND_DOMAIN`]. Objects: the goal's nodes, every
-/// instance of `classes` (e.g. the classes of EAI's own problem file for the task), what the
+/// instance of `classes` (e.g. the classes of EAI's own problem file for the task) but walls,
+/// floors and ceilings, what the
 /// character holds, every room, and, until nothing changes, the non-room nodes these are
 /// directly INSIDE. Instances of a class that occurs once are named by the class; otherwise
 /// `class_1`, `class_2`, ... in id order.
@@ -105,7 +110,7 @@ pub fn problem(task: &VirtualhomeTask, classes: &[&str]) -> Result<VhProblem, Un
     }
     chosen.extend(g.indices().filter(|&ix| {
         let node = g.node(ix);
-        node.is_room() || classes.contains(&node.class_name.as_str())
+        node.is_room() || (classes.contains(&node.class_name.as_str()) && !STRUCTURE.contains(&node.category.as_str()))
     }));
     chosen.extend(world.held());
     loop {

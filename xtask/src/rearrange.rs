@@ -1,0 +1,266 @@
+//! `cargo xtask rearrange`: the VirtualHome rearrangement set in the paper's four families
+//! (objects into the dishwasher, into the microwave, into the fridge; preparing food), since
+//! the paper's 200 problems are not public. Written to `fixtures/virtualhome-rearrange/`.
+//!
+//! The program, for family f and candidate k (random draws from Python's `random.Random` with
+//! seed `1000 * f + k`, as `household_sim::PythonRandom` draws them):
+//! 1. a base scene: one of the fixture kitchen tasks' init graphs that has the family's
+//!    appliance (`dishwasher`; `microwave`; `freezer`, EAI's fridge; `microwave` for food);
+//! 2. 1-3 novel objects (1-2 for the microwave, 1 for food): new nodes, with ids above every id
+//!    of the scene, of classes drawn from the family's list, copying the class's category and
+//!    properties from an instance in some fixture scene (states `CLEAN`);
+//! 3. a start placement for each: drawn among the kitchen's (`dining_room`) and living room's (`home_office`) furniture that
+//!    has SURFACES (the object is ON it) or can open and contains (INSIDE it, often closed),
+//!    never the target appliance; edges ON/INSIDE the place, INSIDE its room, CLOSE both ways;
+//! 4. the goal, in EAI's `vh_goal` notation: each object INSIDE the appliance and the appliance
+//!    CLOSED (preparing food: also ON);
+//! 5. kept only if A* with LM-cut finds a plan under the sound domain within the time limit and
+//!    that plan executes and reaches the goal in `VirtualhomeEnv`; its script lines are stored as
+//!    `reference_program`. `tools/virtualhome_record.py check` runs them in the real evolving
+//!    graph (the closing figures).
+//!
+//! Candidates are drawn until each family has 50 tasks.
+
+use std::collections::BTreeMap;
+use std::io::Write as _;
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+use std::time::Duration;
+
+use anyhow::Context;
+use heuristics::search::{Algorithm, SearchConfig, SearchStatus, search};
+use household_sim::vh_pddl::{self, SOUND_DOMAIN};
+use household_sim::{Environment, Event, Judge, PythonRandom, VirtualhomeEnv, VirtualhomeTask};
+use serde_json::{Value, json};
+use transition_model::TransitionModel;
+
+use crate::input::InputError;
+
+/// (family id, task name, appliance class, object classes, most objects, switch on).
+const FAMILIES: &[(&str, &str, &str, &[&str], usize, bool)] = &[
+    ("dishwasher", "Put dishes in the dishwasher", "dishwasher", &["plate", "cup", "bowl", "fork", "spoon", "knife", "pot"], 3, false),
+    (
+        "microwave",
+        "Put objects in the microwave",
+        "microwave",
+        &["food_food", "food_egg", "food_onion", "food_steak", "food_cake", "cup", "bowl", "plate"],
+        2,
+        false,
+    ),
+    (
+        "fridge",
+        "Put groceries in the fridge",
+        "freezer",
+        &["milk", "juice", "food_food", "food_egg", "food_onion", "food_steak", "food_cake", "food_vegetable", "food_orange"],
+        3,
+        false,
+    ),
+    (
+        "food",
+        "Prepare food in the microwave",
+        "microwave",
+        &["food_food", "food_egg", "food_steak", "food_cake", "food_vegetable", "food_onion"],
+        1,
+        true,
+    ),
+];
+const PER_FAMILY: usize = 50;
+const ROOMS: &[&str] = &["dining_room", "home_office"];
+
+#[derive(Debug, clap::Args)]
+pub struct RearrangeArgs {
+    /// Folder of the base scenes (task files).
+    #[arg(long, default_value = "fixtures/virtualhome-eai/graphs")]
+    scenes: PathBuf,
+    /// Output folder: `<family>-<k>.json.gz` task files and `MANIFEST.tsv`.
+    #[arg(long, default_value = "fixtures/virtualhome-rearrange")]
+    out: PathBuf,
+    /// A* time limit per candidate, seconds.
+    #[arg(long, default_value_t = 30)]
+    time_limit: u64,
+}
+
+pub fn run(args: RearrangeArgs) -> anyhow::Result<ExitCode> {
+    let mut files: Vec<PathBuf> = std::fs::read_dir(&args.scenes)
+        .map_err(|e| InputError(format!("{}: cannot read: {e}", args.scenes.display())))?
+        .flatten()
+        .map(|e| e.path())
+        .filter(|p| p.to_string_lossy().ends_with(".json.gz"))
+        .collect();
+    files.sort();
+    let scenes: Vec<Value> = files.iter().map(|p| read_task(p)).collect::<anyhow::Result<_>>()?;
+    // Class → (category, properties) of its first grabbable instance over all scenes.
+    let mut templates: BTreeMap<String, (Value, Value)> = BTreeMap::new();
+    for scene in &scenes {
+        for node in scene["init_graph"]["nodes"].as_array().into_iter().flatten() {
+            let class = node["class_name"].as_str().unwrap_or_default().to_string();
+            let grabbable = node["properties"].as_array().is_some_and(|p| p.iter().any(|x| x == "GRABBABLE"));
+            if grabbable {
+                templates.entry(class).or_insert_with(|| (node["category"].clone(), node["properties"].clone()));
+            }
+        }
+    }
+    std::fs::create_dir_all(&args.out).with_context(|| format!("cannot create {}", args.out.display()))?;
+    let domain = pddl_syntax::parse_domain(SOUND_DOMAIN).map_err(|e| anyhow::anyhow!("sound domain: {e:?}"))?;
+    let mut manifest = String::from("task\tfamily\tbase\tobjects\tplacements\treference_steps\n");
+    for (f, &(family, task_name, appliance, classes, most, switch_on)) in FAMILIES.iter().enumerate() {
+        let classes: Vec<&str> = classes.iter().copied().filter(|c| templates.contains_key(*c)).collect();
+        let bases: Vec<&Value> = scenes.iter().filter(|s| node_of_class(s, appliance).is_some()).collect();
+        let (mut kept, mut k) = (0, 0u64);
+        while kept < PER_FAMILY {
+            k += 1;
+            anyhow::ensure!(k < 20 * PER_FAMILY as u64, "family {family}: too few candidates solve");
+            let mut rng = PythonRandom::new(1000 * f as u64 + k);
+            let base = bases[rng.choice_index(bases.len())];
+            let id = format!("{family}-{kept:03}");
+            let Some((task, summary)) = candidate(&mut rng, base, &templates, &classes, appliance, most, switch_on, &id, task_name) else {
+                continue;
+            };
+            let loaded = VirtualhomeTask::from_json(&task.to_string(), &id).map_err(|e| anyhow::anyhow!("{id}: {e}"))?;
+            let Some(script) = reference(&domain, &loaded, Duration::from_secs(args.time_limit))? else { continue };
+            let mut task = task;
+            task["reference_program"] = json!(script);
+            let path = args.out.join(format!("{id}.json.gz"));
+            let mut gz = flate2::write::GzEncoder::new(std::fs::File::create(&path)?, flate2::Compression::best());
+            gz.write_all(serde_json::to_string(&task)?.as_bytes())?;
+            gz.finish()?;
+            manifest.push_str(&format!("{id}\t{family}\t{}\t{summary}\t{}\n", base["task_id"].as_str().unwrap_or("?"), script.len()));
+            kept += 1;
+            eprintln!("{id}: {} steps (candidate {k})", script.len());
+        }
+    }
+    std::fs::write(args.out.join("MANIFEST.tsv"), manifest)?;
+    Ok(ExitCode::SUCCESS)
+}
+
+fn read_task(path: &Path) -> anyhow::Result<Value> {
+    let mut text = String::new();
+    std::io::Read::read_to_string(&mut flate2::read::GzDecoder::new(std::fs::File::open(path)?), &mut text)
+        .with_context(|| format!("{}: bad gzip", path.display()))?;
+    serde_json::from_str(&text).with_context(|| format!("{}: not JSON", path.display()))
+}
+
+fn node_of_class<'a>(scene: &'a Value, class: &str) -> Option<&'a Value> {
+    scene["init_graph"]["nodes"].as_array()?.iter().find(|n| n["class_name"] == class)
+}
+
+/// A candidate task (its JSON and a summary "objects<TAB>placements"), or `None` when the
+/// scene has no place to start from.
+#[allow(clippy::too_many_arguments)]
+fn candidate(
+    rng: &mut PythonRandom,
+    base: &Value,
+    templates: &BTreeMap<String, (Value, Value)>,
+    classes: &[&str],
+    appliance: &str,
+    most: usize,
+    switch_on: bool,
+    id: &str,
+    task_name: &str,
+) -> Option<(Value, String)> {
+    let graph = &base["init_graph"];
+    let nodes = graph["nodes"].as_array()?;
+    let edges = graph["edges"].as_array()?;
+    let by_id: BTreeMap<i64, &Value> = nodes.iter().filter_map(|n| Some((n["id"].as_i64()?, n))).collect();
+    let target = node_of_class(base, appliance)?["id"].as_i64()?;
+    // Furniture in the kitchen and the living room: (id, room id, relation).
+    let room_of = |id: i64| {
+        edges.iter().find_map(|e| {
+            let to = e["to_id"].as_i64()?;
+            (e["from_id"].as_i64()? == id && e["relation_type"] == "INSIDE" && by_id.get(&to).is_some_and(|n| n["category"] == "Rooms"))
+                .then_some(to)
+        })
+    };
+    let mut places: Vec<(i64, i64, &str)> = Vec::new();
+    for n in nodes {
+        let props = n["properties"].as_array()?;
+        let has = |p: &str| props.iter().any(|x| x == p);
+        let nid = n["id"].as_i64()?;
+        if has("GRABBABLE") || nid == target {
+            continue;
+        }
+        let Some(room) = room_of(nid) else { continue };
+        if !by_id.get(&room).is_some_and(|r| ROOMS.contains(&r["class_name"].as_str().unwrap_or_default())) {
+            continue;
+        }
+        if has("CAN_OPEN") && has("CONTAINERS") {
+            places.push((nid, room, "INSIDE"));
+        } else if has("SURFACES") && n["category"] == "Furniture" {
+            places.push((nid, room, "ON"));
+        }
+    }
+    if places.is_empty() {
+        return None;
+    }
+    let count = 1 + rng.choice_index(most);
+    let mut next_id = by_id.keys().max()? + 1;
+    let mut new_nodes = nodes.clone();
+    let mut new_edges = edges.clone();
+    let mut goal = Vec::new();
+    let (mut objects, mut placements) = (Vec::new(), Vec::new());
+    for _ in 0..count {
+        let class = classes[rng.choice_index(classes.len())];
+        let (category, properties) = &templates[class];
+        let (place, room, relation) = places[rng.choice_index(places.len())];
+        let oid = next_id;
+        next_id += 1;
+        new_nodes.push(json!({"id": oid, "class_name": class, "category": category, "properties": properties, "states": ["CLEAN"], "prefab_name": null, "bounding_box": null}));
+        for (from, rel, to) in [(oid, relation, place), (oid, "INSIDE", room), (oid, "CLOSE", place), (place, "CLOSE", oid)] {
+            new_edges.push(json!({"from_id": from, "relation_type": rel, "to_id": to}));
+        }
+        goal.push(json!({"from_id": oid, "relation_type": "INSIDE", "to_id": target}));
+        objects.push(class.to_string());
+        placements.push(format!("{} {}", relation.to_lowercase(), by_id[&place]["class_name"].as_str().unwrap_or("?")));
+    }
+    goal.push(json!({"id": target, "class_name": appliance, "state": "CLOSED"}));
+    if switch_on {
+        goal.push(json!({"id": target, "class_name": appliance, "state": "ON"}));
+    }
+    let named = match objects.as_slice() {
+        [one] => format!("the {}", one.replace('_', " ")),
+        many => {
+            let parts: Vec<String> = many.iter().map(|o| format!("the {}", o.replace('_', " "))).collect();
+            format!("{} and {}", parts[..parts.len() - 1].join(", "), parts[parts.len() - 1])
+        }
+    };
+    let appliance_name = if appliance == "freezer" { "fridge" } else { appliance };
+    let description = if switch_on {
+        format!("Put {named} in the {appliance_name}, close it and switch it on.")
+    } else {
+        format!("Put {named} in the {appliance_name} and close it.")
+    };
+    let task = json!({
+        "task_id": id, "task_name": task_name, "description": description,
+        "vh_goal": {"goal": goal, "actions": []},
+        "init_graph": {"nodes": new_nodes, "edges": new_edges},
+    });
+    Some((task, format!("{}\t{}", objects.join(","), placements.join(","))))
+}
+
+/// A* with LM-cut under the sound domain; the plan's script lines when it executes and reaches
+/// the goal in our executor.
+fn reference(domain: &pddl_syntax::Domain, task: &VirtualhomeTask, limit: Duration) -> anyhow::Result<Option<Vec<String>>> {
+    let problem = match vh_pddl::problem(task, &[]) {
+        Ok(p) => p,
+        Err(_) => return Ok(None),
+    };
+    let parsed = pddl_syntax::parse_problem(&problem.text).map_err(|e| anyhow::anyhow!("{}: {e:?}", task.task_id))?;
+    let model = TransitionModel::new(grounding::ground(domain, &parsed).with_context(|| format!("{}: grounding", task.task_id))?);
+    let mut h = heuristics::by_name("lmcut", &model).context("lmcut")?;
+    let mut config = SearchConfig::new(Algorithm::AStar);
+    config.time_limit = Some(limit);
+    let result = search(&model, h.as_mut(), &config, None);
+    if result.status != SearchStatus::Solved || result.plan.is_empty() {
+        return Ok(None);
+    }
+    let script: Vec<String> = result
+        .plan
+        .iter()
+        .map(|&a| problem.script_line(&task.init, &model.task().action_name(a)))
+        .collect::<Result<_, _>>()
+        .map_err(|e| anyhow::anyhow!(e))?;
+    let mut env = VirtualhomeEnv::new(task.clone(), "virtualhome-rearrange");
+    env.reset();
+    let executed = script.iter().all(|line| !matches!(env.step(line).event, Event::NotExecuted { .. }));
+    Ok((executed && env.unmet_goals().is_empty()).then_some(script))
+}
