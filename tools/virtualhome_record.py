@@ -15,7 +15,7 @@ Usage:
         Times the real executor per task: building the planner on the task's init graph (read
         from the dataset, as EAI does: "load and reset") and every line of EAI's gold program;
         one JSON line per task {task, reset_s, steps, step_s (all steps together)}.
-    virtualhome_record.py check SOUNDNESS.jsonl OUT.jsonl [--shard I/N]
+    virtualhome_record.py check SOUNDNESS.jsonl OUT.jsonl [--shard I/N] [--task-dir DIR]
         The sound domain's figures: for every line of `cargo xtask soundness --out`, EAI's gold
         program, the A* plan's script (`script`) and the rewritten gold PDDL plan's script
         (`gold_script`) run in the real evolving graph, each judged on every goal; one JSON line
@@ -100,6 +100,8 @@ def id2task():
 
 
 def goals_of(task_id):
+    if task_id in TASK_FILES:
+        return TASK_FILES[task_id]["vh_goal"]
     task = id2task()[task_id]
     return json.load(open(os.path.join(RES, "task_state_LTL_formula_accurate.json")))["scene_1"][task][task_id]["vh_goal"]
 
@@ -166,11 +168,32 @@ def run(planner, lines):
     return executed, messages, history
 
 
+# Task files that are not EAI tasks (the rearrangement set): id -> the file's JSON.
+TASK_FILES = {}
+
+
 def new_planner(tid):
+    """The executor on the task's init graph and the task's reference program: EAI's gold
+    program for an EAI task, `reference_program` for a task file registered in TASK_FILES."""
+    if tid in TASK_FILES:
+        from virtualhome_eval.simulation.evolving_graph.environment import EnvironmentGraph
+        from virtualhome_eval.simulation.evolving_graph.motion_planner import MotionPlanner
+        task = TASK_FILES[tid]
+        planner = MotionPlanner(EnvironmentGraph(copy.deepcopy(task["init_graph"])), copy.deepcopy(task["init_graph"]),
+                                acting_char_id=65)
+        return planner, list(task.get("reference_program", []))
     planner, _, gold, _, _ = construct_planner(
         utils.load_name_equivalence(), utils.load_properties_data(), utils.load_object_placing(),
         scenegraph_id=1, script_id=tid, dataset_root=ROOT)
     return planner, gold
+
+
+def register_task_files(task_dir):
+    for name in sorted(os.listdir(task_dir)):
+        if name.endswith(".json.gz"):
+            task = json.load(gzip.open(os.path.join(task_dir, name), "rt"))
+            if task["task_id"] not in id2task():
+                TASK_FILES[task["task_id"]] = task
 
 
 def visible_nodes(state, char):
@@ -351,6 +374,7 @@ def main():
     c.add_argument("plans")
     c.add_argument("out")
     c.add_argument("--shard", default="0/1")
+    c.add_argument("--task-dir", help="task files of tasks that are not EAI's (their reference_program is the gold program)")
     m = sub.add_parser("merge")
     m.add_argument("out")
     m.add_argument("parts", nargs="+")
@@ -367,6 +391,8 @@ def main():
         time_tasks(args.tasks)
     elif args.cmd == "check":
         index, count = (int(x) for x in args.shard.split("/"))
+        if args.task_dir:
+            register_task_files(args.task_dir)
         sys.exit(check(args.plans, args.out, (index, count)))
     elif args.cmd == "merge":
         merge(args.out, args.parts)

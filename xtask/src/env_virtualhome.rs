@@ -1,4 +1,4 @@
-//! `cargo xtask env --benchmark virtualhome-eai --task ID`: runs commands (a file, or a
+//! `cargo xtask env --benchmark virtualhome-eai|virtualhome-rearrange --task ID`: runs commands (a file, or a
 //! seeded random program over what is visible at each step) in `VirtualhomeEnv` and prints
 //! one JSON line per step and the goal verdict last.
 
@@ -67,7 +67,8 @@ fn random_command(env: &VirtualhomeEnv, rng: &mut PythonRandom) -> String {
 /// Runs `cargo xtask env` for a VirtualHome benchmark. Exit 0 when the goal holds at the
 /// end, 1 when not; errors (exit 2) for a missing task or an unreadable command file.
 pub fn run(args: &VirtualhomeEnvArgs) -> anyhow::Result<ExitCode> {
-    let dir = args.task_dir.clone().unwrap_or_else(|| benchmark_data::fixtures_dir().join("virtualhome-eai/graphs"));
+    let default = if args.benchmark == "virtualhome-rearrange" { "virtualhome-rearrange" } else { "virtualhome-eai/graphs" };
+    let dir = args.task_dir.clone().unwrap_or_else(|| benchmark_data::fixtures_dir().join(default));
     let path = dir.join(format!("{}.json.gz", args.task));
     if !path.is_file() {
         bail!("no task {} in {} (task files there: the EAI kitchen tasks, `<id>.json.gz`)", args.task, dir.display());

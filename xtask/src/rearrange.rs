@@ -36,33 +36,52 @@ use transition_model::TransitionModel;
 
 use crate::input::InputError;
 
-/// (family id, task name, appliance class, object classes, most objects, switch on).
-const FAMILIES: &[(&str, &str, &str, &[&str], usize, bool)] = &[
-    ("dishwasher", "Put dishes in the dishwasher", "dishwasher", &["plate", "cup", "bowl", "fork", "spoon", "knife", "pot"], 3, false),
-    (
-        "microwave",
-        "Put objects in the microwave",
-        "microwave",
-        &["food_food", "food_egg", "food_onion", "food_steak", "food_cake", "cup", "bowl", "plate"],
-        2,
-        false,
-    ),
-    (
-        "fridge",
-        "Put groceries in the fridge",
-        "freezer",
-        &["milk", "juice", "food_food", "food_egg", "food_onion", "food_steak", "food_cake", "food_vegetable", "food_orange"],
-        3,
-        false,
-    ),
-    (
-        "food",
-        "Prepare food in the microwave",
-        "microwave",
-        &["food_food", "food_egg", "food_steak", "food_cake", "food_vegetable", "food_onion"],
-        1,
-        true,
-    ),
+/// One family of the set.
+struct Family {
+    id: &'static str,
+    task_name: &'static str,
+    /// The appliance class (EAI names the fridge `freezer`).
+    appliance: &'static str,
+    classes: &'static [&'static str],
+    /// Most novel objects per task.
+    most: usize,
+    /// The goal also asks for the appliance switched on.
+    switch_on: bool,
+}
+
+const FAMILIES: &[Family] = &[
+    Family {
+        id: "dishwasher",
+        task_name: "Put dishes in the dishwasher",
+        appliance: "dishwasher",
+        classes: &["plate", "cup", "bowl", "fork", "spoon", "knife", "pot"],
+        most: 3,
+        switch_on: false,
+    },
+    Family {
+        id: "microwave",
+        task_name: "Put objects in the microwave",
+        appliance: "microwave",
+        classes: &["food_food", "food_egg", "food_onion", "food_steak", "food_cake", "cup", "bowl", "plate"],
+        most: 2,
+        switch_on: false,
+    },
+    Family {
+        id: "fridge",
+        task_name: "Put groceries in the fridge",
+        appliance: "freezer",
+        classes: &["milk", "juice", "food_food", "food_egg", "food_onion", "food_steak", "food_cake", "food_vegetable", "food_orange"],
+        most: 3,
+        switch_on: false,
+    },
+    Family {
+        id: "food",
+        task_name: "Prepare food in the microwave",
+        appliance: "microwave",
+        classes: &["food_food", "food_egg", "food_steak", "food_cake", "food_vegetable", "food_onion"],
+        most: 1,
+        switch_on: true,
+    },
 ];
 const PER_FAMILY: usize = 50;
 const ROOMS: &[&str] = &["dining_room", "home_office"];
@@ -103,17 +122,17 @@ pub fn run(args: RearrangeArgs) -> anyhow::Result<ExitCode> {
     std::fs::create_dir_all(&args.out).with_context(|| format!("cannot create {}", args.out.display()))?;
     let domain = pddl_syntax::parse_domain(SOUND_DOMAIN).map_err(|e| anyhow::anyhow!("sound domain: {e:?}"))?;
     let mut manifest = String::from("task\tfamily\tbase\tobjects\tplacements\treference_steps\n");
-    for (f, &(family, task_name, appliance, classes, most, switch_on)) in FAMILIES.iter().enumerate() {
-        let classes: Vec<&str> = classes.iter().copied().filter(|c| templates.contains_key(*c)).collect();
-        let bases: Vec<&Value> = scenes.iter().filter(|s| node_of_class(s, appliance).is_some()).collect();
+    for (f, family) in FAMILIES.iter().enumerate() {
+        let classes: Vec<&str> = family.classes.iter().copied().filter(|c| templates.contains_key(*c)).collect();
+        let bases: Vec<&Value> = scenes.iter().filter(|s| node_of_class(s, family.appliance).is_some()).collect();
         let (mut kept, mut k) = (0, 0u64);
         while kept < PER_FAMILY {
             k += 1;
-            anyhow::ensure!(k < 20 * PER_FAMILY as u64, "family {family}: too few candidates solve");
+            anyhow::ensure!(k < 20 * PER_FAMILY as u64, "family {}: too few candidates solve", family.id);
             let mut rng = PythonRandom::new(1000 * f as u64 + k);
             let base = bases[rng.choice_index(bases.len())];
-            let id = format!("{family}-{kept:03}");
-            let Some((task, summary)) = candidate(&mut rng, base, &templates, &classes, appliance, most, switch_on, &id, task_name) else {
+            let id = format!("{}-{kept:03}", family.id);
+            let Some((task, summary)) = candidate(&mut rng, base, &templates, &classes, family, &id) else {
                 continue;
             };
             let loaded = VirtualhomeTask::from_json(&task.to_string(), &id).map_err(|e| anyhow::anyhow!("{id}: {e}"))?;
@@ -124,7 +143,7 @@ pub fn run(args: RearrangeArgs) -> anyhow::Result<ExitCode> {
             let mut gz = flate2::write::GzEncoder::new(std::fs::File::create(&path)?, flate2::Compression::best());
             gz.write_all(serde_json::to_string(&task)?.as_bytes())?;
             gz.finish()?;
-            manifest.push_str(&format!("{id}\t{family}\t{}\t{summary}\t{}\n", base["task_id"].as_str().unwrap_or("?"), script.len()));
+            manifest.push_str(&format!("{id}\t{}\t{}\t{summary}\t{}\n", family.id, base["task_id"].as_str().unwrap_or("?"), script.len()));
             kept += 1;
             eprintln!("{id}: {} steps (candidate {k})", script.len());
         }
@@ -146,18 +165,15 @@ fn node_of_class<'a>(scene: &'a Value, class: &str) -> Option<&'a Value> {
 
 /// A candidate task (its JSON and a summary "objects<TAB>placements"), or `None` when the
 /// scene has no place to start from.
-#[allow(clippy::too_many_arguments)]
 fn candidate(
     rng: &mut PythonRandom,
     base: &Value,
     templates: &BTreeMap<String, (Value, Value)>,
     classes: &[&str],
-    appliance: &str,
-    most: usize,
-    switch_on: bool,
+    family: &Family,
     id: &str,
-    task_name: &str,
 ) -> Option<(Value, String)> {
+    let Family { appliance, task_name, most, switch_on, .. } = *family;
     let graph = &base["init_graph"];
     let nodes = graph["nodes"].as_array()?;
     let edges = graph["edges"].as_array()?;
@@ -193,17 +209,15 @@ fn candidate(
         return None;
     }
     let count = 1 + rng.choice_index(most);
-    let mut next_id = by_id.keys().max()? + 1;
+    let first_id = by_id.keys().max()? + 1;
     let mut new_nodes = nodes.clone();
     let mut new_edges = edges.clone();
     let mut goal = Vec::new();
     let (mut objects, mut placements) = (Vec::new(), Vec::new());
-    for _ in 0..count {
+    for oid in (first_id..).take(count) {
         let class = classes[rng.choice_index(classes.len())];
         let (category, properties) = &templates[class];
         let (place, room, relation) = places[rng.choice_index(places.len())];
-        let oid = next_id;
-        next_id += 1;
         new_nodes.push(json!({"id": oid, "class_name": class, "category": category, "properties": properties, "states": ["CLEAN"], "prefab_name": null, "bounding_box": null}));
         for (from, rel, to) in [(oid, relation, place), (oid, "INSIDE", room), (oid, "CLOSE", place), (place, "CLOSE", oid)] {
             new_edges.push(json!({"from_id": from, "relation_type": rel, "to_id": to}));

@@ -53,6 +53,9 @@ pub struct VirtualhomeTask {
     pub goals: Vec<VhGoal>,
     /// `vh_goal` as EAI writes it, for the goal annotation.
     pub goal_json: String,
+    /// Script lines that reach the goal, where the task file has them (`reference_program`:
+    /// the rearrangement set's; EAI's task files carry none).
+    pub reference_program: Vec<String>,
 }
 
 #[derive(Deserialize)]
@@ -63,11 +66,14 @@ struct TaskFile {
     description: String,
     vh_goal: serde_json::Value,
     init_graph: graph::JsonGraph,
+    #[serde(default)]
+    reference_program: Vec<String>,
 }
 
 impl VirtualhomeTask {
     /// Reads a task file (`fixtures/virtualhome-eai/graphs/<id>.json.gz`, or the same JSON
-    /// uncompressed): `{task_id, task_name, description, vh_goal, init_graph}`.
+    /// uncompressed): `{task_id, task_name, description, vh_goal, init_graph}` and, optionally,
+    /// `reference_program`.
     pub fn load(path: &Path) -> Result<VirtualhomeTask, VirtualhomeError> {
         let origin = path.display().to_string();
         let bytes = std::fs::read(path).map_err(|source| VirtualhomeError::Io { path: origin.clone(), source })?;
@@ -99,6 +105,7 @@ impl VirtualhomeTask {
             init,
             goals,
             goal_json: file.vh_goal.to_string(),
+            reference_program: file.reference_program,
         })
     }
 }
