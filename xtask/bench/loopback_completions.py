@@ -21,6 +21,10 @@ LOCK = threading.Lock()
 
 class Handler(BaseHTTPRequestHandler):
     protocol_version = "HTTP/1.1"
+    # TCP_NODELAY, as model servers (uvicorn under vLLM, llama-server) set it: without it the
+    # reply's body waits for the client's delayed ACK of its headers (40 ms) on a kept-alive
+    # connection, which would measure Nagle's algorithm instead of the client.
+    disable_nagle_algorithm = True
 
     def setup(self):
         super().setup()

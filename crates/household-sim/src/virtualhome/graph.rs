@@ -274,6 +274,22 @@ impl SceneGraph {
         out
     }
 
+    /// For every node, the nodes it has a `relation` edge to, in ascending index order: one
+    /// pass over the edges, for callers that would otherwise ask [`SceneGraph::targets`] of
+    /// most nodes (each such call walks all of a node's edges, most of them CLOSE).
+    pub fn targets_of_all(&self, relation: Relation) -> Vec<Vec<NodeIx>> {
+        let mut out = vec![Vec::new(); self.nodes.len()];
+        for (from, to, set) in self.edges.all_edges() {
+            if set.contains(relation) {
+                out[from as usize].push(to);
+            }
+        }
+        for list in &mut out {
+            list.sort_unstable();
+        }
+        out
+    }
+
     /// `<class> (id)`, as the executor prints a node.
     pub fn label(&self, ix: NodeIx) -> String {
         let node = self.node(ix);

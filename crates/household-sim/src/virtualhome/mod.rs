@@ -160,19 +160,28 @@ fn parse_goals(value: &serde_json::Value, graph: &SceneGraph) -> Result<Vec<VhGo
 /// INSIDE several nodes, EAI's rule reads one of them, depending on edge order; this reads
 /// all of them, so a node inside any closed container is hidden.)
 pub fn visible_nodes(world: &World) -> Vec<NodeIx> {
+    visible_given(world, &world.graph.targets_of_all(Relation::Inside))
+}
+
+/// [`visible_nodes`], given every node's INSIDE targets (`targets_of_all(Inside)`).
+fn visible_given(world: &World, inside: &[Vec<NodeIx>]) -> Vec<NodeIx> {
     let g = &world.graph;
+    let mut contents: Vec<Vec<NodeIx>> = vec![Vec::new(); g.len()];
+    for (ix, targets) in inside.iter().enumerate() {
+        for &t in targets {
+            contents[t as usize].push(ix as NodeIx);
+        }
+    }
     let mut seen = vec![false; g.len()];
-    let hidden = |ix: NodeIx| {
-        g.targets(ix, Relation::Inside).into_iter().any(|p| !g.node(p).is_room() && !g.node(p).states.contains(NodeState::Open))
-    };
-    for room in g.targets(world.character, Relation::Inside) {
-        let mut frontier = g.sources(room, Relation::Inside);
+    let hidden = |ix: NodeIx| inside[ix as usize].iter().any(|&p| !g.node(p).is_room() && !g.node(p).states.contains(NodeState::Open));
+    for &room in &inside[world.character as usize] {
+        let mut frontier = contents[room as usize].clone();
         while let Some(ix) = frontier.pop() {
             if seen[ix as usize] {
                 continue;
             }
             seen[ix as usize] = true;
-            frontier.extend(g.sources(ix, Relation::Inside));
+            frontier.extend_from_slice(&contents[ix as usize]);
         }
     }
     let mut out: Vec<NodeIx> = g.indices().filter(|&ix| seen[ix as usize] && !hidden(ix)).collect();
@@ -291,7 +300,9 @@ impl VirtualhomeEnv {
         let _ = writeln!(out, "You are in the {}.", if rooms.is_empty() { "nowhere".to_string() } else { rooms.join(", ") });
         let held: Vec<String> = w.held().into_iter().map(name).collect();
         let _ = writeln!(out, "You hold: {}.", if held.is_empty() { "nothing".to_string() } else { held.join(", ") });
-        let mut visible = visible_nodes(w);
+        let inside = g.targets_of_all(Relation::Inside);
+        let on = g.targets_of_all(Relation::On);
+        let mut visible = visible_given(w, &inside);
         visible.sort_by_key(|&ix| g.node(ix).id);
         let all_rooms: Vec<String> = visible.iter().copied().filter(|&ix| g.node(ix).is_room()).map(name).collect();
         let _ = writeln!(out, "Rooms: {}.", all_rooms.join(", "));
@@ -306,8 +317,8 @@ impl VirtualhomeEnv {
             if !states.is_empty() {
                 parts.push(states.join(", "));
             }
-            for (relation, word) in [(Relation::On, "on"), (Relation::Inside, "inside")] {
-                let mut targets = g.targets(ix, relation);
+            for (targets, word) in [(&on, "on"), (&inside, "inside")] {
+                let mut targets = targets[ix as usize].clone();
                 targets.sort_by_key(|&t| g.node(t).id);
                 for t in targets {
                     if !g.node(t).is_room() && is_visible(t) {
