@@ -96,6 +96,20 @@ fn crates_share_settings_and_respect_their_boundaries() {
         ("lm", &["vlm-client"]),
         ("mcts", &["grounding", "transition-model", "heuristics", "token-constraint", "lm"]),
         ("household-sim", &["pddl-syntax", "grounding", "transition-model"]),
+        (
+            "exploration-harness",
+            &[
+                "pddl-syntax",
+                "household-sim",
+                "vlm-client",
+                "lm",
+                "mcts",
+                "grounding",
+                "transition-model",
+                "heuristics",
+                "token-constraint",
+            ],
+        ),
     ];
     let architecture = std::fs::read_to_string(root().join("docs/ARCHITECTURE.md")).expect("docs/ARCHITECTURE.md");
     for (dir, name) in crates().iter().zip(&names) {

@@ -20,5 +20,5 @@ pub use virtualhome::pddl as vh_pddl;
 pub use virtualhome::{
     Action as VhAction, NodeIx as VhNodeIx, NodeState as VhNodeState, Property as VhProperty, Relation as VhRelation, SceneGraph,
     SceneNode, ScriptLine, VhGoal, VirtualhomeEnv, VirtualhomeError, VirtualhomeTask, World as VhWorld, bind as vh_bind,
-    visible_nodes as vh_visible_nodes,
+    class_level_goal as vh_class_level_goal, visible_nodes as vh_visible_nodes,
 };

@@ -58,3 +58,33 @@ fn the_real_executor_reached_every_goal_with_the_reference_programs() {
         assert_eq!(row["gold_program_ok"], true, "{row}");
     }
 }
+
+/// The goal the agent is told names classes, never node ids, on every fixture task of both sets.
+#[test]
+fn goal_annotations_are_class_level() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../fixtures");
+    for folder in [root.join("virtualhome-eai/graphs"), dir()] {
+        for entry in std::fs::read_dir(&folder).unwrap() {
+            let path = entry.unwrap().path();
+            if !path.to_string_lossy().ends_with(".json.gz") {
+                continue;
+            }
+            let task = VirtualhomeTask::load(&path).unwrap();
+            let goals = task.goals.len();
+            let id = task.task_id.clone();
+            let node_ids: Vec<u32> = task.init.graph.indices().map(|ix| task.init.graph.node(ix).id).collect();
+            let env = VirtualhomeEnv::new(task, "virtualhome");
+            let formula = &env.goal().formula;
+            let value: serde_json::Value = serde_json::from_str(formula).unwrap_or_else(|e| panic!("{id}: {e}: {formula}"));
+            let entries = value["goal"].as_array().unwrap().len() + value["actions"].as_array().unwrap().len();
+            assert_eq!(entries, goals, "{id}: {formula}");
+            for key in ["\"id\"", "from_id", "to_id"] {
+                assert!(!formula.contains(key), "{id}: {formula}");
+            }
+            for number in formula.split(|c: char| !c.is_ascii_digit()).filter(|s| !s.is_empty()) {
+                let n: u32 = number.parse().unwrap();
+                assert!(!node_ids.contains(&n), "{id}: node id {n} in {formula}");
+            }
+        }
+    }
+}

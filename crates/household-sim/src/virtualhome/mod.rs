@@ -51,7 +51,8 @@ pub struct VirtualhomeTask {
     pub description: String,
     pub init: World,
     pub goals: Vec<VhGoal>,
-    /// `vh_goal` as EAI writes it, for the goal annotation.
+    /// `vh_goal` as EAI writes it (with node ids: for the judge and records, never for an
+    /// agent; the goal annotation is [`class_level_goal`]).
     pub goal_json: String,
     /// Script lines that reach the goal, where the task file has them (`reference_program`:
     /// the rearrangement set's; EAI's task files carry none).
@@ -154,6 +155,33 @@ fn parse_goals(value: &serde_json::Value, graph: &SceneGraph) -> Result<Vec<VhGo
     Ok(goals)
 }
 
+/// The task's goal in EAI's `vh_goal` notation at class level, as the agent may be told it:
+/// node goals `{"class_name": C, "state": S}`, edge goals `{"from": C1, "relation_type": R,
+/// "to": C2}` (the acting character is `character`), then `"actions"`; no node id. Two goals
+/// that differ only in their instances stay two entries (two plates on the table).
+pub fn class_level_goal(task: &VirtualhomeTask) -> String {
+    let g = &task.init.graph;
+    let class = |id: u32| g.index_of(id).map_or("?", |ix| g.node(ix).class_name.as_str());
+    let quote = |s: &str| serde_json::Value::String(s.to_string()).to_string();
+    let mut goals = Vec::new();
+    let mut actions = Vec::new();
+    for goal in &task.goals {
+        match goal {
+            VhGoal::State { node, state, .. } => {
+                goals.push(format!("{{\"class_name\": {}, \"state\": {}}}", quote(class(*node)), quote(state.as_str())));
+            }
+            VhGoal::Edge { from, relation, to } => goals.push(format!(
+                "{{\"from\": {}, \"relation_type\": {}, \"to\": {}}}",
+                quote(class(*from)),
+                quote(relation.as_str()),
+                quote(class(*to))
+            )),
+            VhGoal::Action { options } => actions.push(quote(options)),
+        }
+    }
+    format!("{{\"goal\": [{}], \"actions\": [{}]}}", goals.join(", "), actions.join(", "))
+}
+
 /// The nodes the agent sees, by VirtualHome's `get_visible_nodes`: every node transitively
 /// INSIDE the character's room that is not directly INSIDE a non-room node lacking the
 /// state OPEN, every room, and what the character holds. Sorted by index. (Where a node is
@@ -251,7 +279,7 @@ impl VirtualhomeEnv {
         let annotation = GoalAnnotation {
             benchmark: benchmark.to_string(),
             sentence: if task.description.is_empty() { task.task_name.clone() } else { task.description.clone() },
-            formula: task.goal_json.clone(),
+            formula: class_level_goal(&task),
             family: task.task_name.clone(),
         };
         let world = task.init.clone();

@@ -1,0 +1,10 @@
+//! Phase I of the paper's agent (§3.1): from the benchmark's own goal annotation and what the
+//! environment shows, a grounded initial state for Phase II.
+//!
+//! Built so far: [`goal`], the fixed, rule-based parse of each benchmark's goal annotation
+//! into G at class level (never an instance identifier). The controller H, the policy f_φ,
+//! the evidence update U, Ready and the binding β are the next parts of this crate.
+
+pub mod goal;
+
+pub use goal::{ClassGoal, ClassLiteral, GoalError, Symbol, parse_goal};
