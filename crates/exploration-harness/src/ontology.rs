@@ -1,0 +1,157 @@
+//! F_str (paper Eq. 4): the fixed, class-level ontology shared by every task of a benchmark,
+//! added to the facts Phase I establishes when the grounded problem is written. It is derived
+//! once, by the functions here, from a benchmark's training split or its published constants,
+//! never from the task being solved, and its output is committed (`fixtures/ontology/`);
+//! `tests/ontology.rs` derives it again and requires the committed files to match.
+//!
+//! - ALFWorld ([`alfworld_from_problems`], over the `valid_train` games): a class has an
+//!   affordance (`openable`, `heatable`, `pickupable`, ...: the static unary predicates of the
+//!   games' initial states) when every instance of that class in the split has it; classes
+//!   whose instances disagree are listed with the affordances they share and the ones only some
+//!   instances have. `canContain` pairs (receptacle class, object class) are the union over the
+//!   split (ALFWorld writes them between class constants).
+//! - VirtualHome ([`virtualhome_from_properties`], over EAI's published `properties_data.json`):
+//!   a class's affordances are its property list, lower-cased (`grabbable`, `can_open`, ...).
+
+use std::collections::{BTreeMap, BTreeSet};
+
+/// Static unary predicates of ALFWorld's initial states that are class affordances.
+pub const ALFWORLD_AFFORDANCES: &[&str] =
+    &["pickupable", "openable", "cleanable", "coolable", "heatable", "sliceable", "toggleable", "isreceptacleobject"];
+
+/// A benchmark's class-level ontology.
+#[derive(Debug, Clone, PartialEq, Eq, Default)]
+pub struct Ontology {
+    /// class → the affordances every instance of it has.
+    pub affordances: BTreeMap<String, BTreeSet<String>>,
+    /// (receptacle class, object class) pairs: the object can be put in or on the receptacle.
+    pub can_contain: BTreeSet<(String, String)>,
+    /// class → affordances only some of its instances have (left out of `affordances`).
+    pub disagreements: BTreeMap<String, BTreeSet<String>>,
+}
+
+/// Why an ontology cannot be derived.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error("{origin}: {message}")]
+pub struct OntologyError {
+    pub origin: String,
+    pub message: String,
+}
+
+/// ALFWorld's ontology from problem files: `(origin, PDDL problem text)` pairs.
+pub fn alfworld_from_problems<'a>(problems: impl IntoIterator<Item = (&'a str, &'a str)>) -> Result<Ontology, OntologyError> {
+    // class → (instances seen, affordance → instances that have it)
+    let mut seen: BTreeMap<String, (usize, BTreeMap<String, usize>)> = BTreeMap::new();
+    let mut can_contain = BTreeSet::new();
+    for (origin, text) in problems {
+        let problem =
+            pddl_syntax::parse_problem(text).map_err(|e| OntologyError { origin: origin.to_string(), message: format!("{e:?}") })?;
+        let mut class_of: BTreeMap<String, String> = BTreeMap::new();
+        let mut unary: Vec<(String, String)> = Vec::new();
+        for element in &problem.init {
+            let pddl_syntax::InitElement::Atom(atom) = element else { continue };
+            let args: Vec<String> = atom.args.iter().map(|t| term_text(t).to_ascii_lowercase()).collect();
+            let predicate = atom.predicate.text.to_ascii_lowercase();
+            match (predicate.as_str(), args.as_slice()) {
+                ("objecttype" | "receptacletype", [instance, class]) => {
+                    class_of.insert(instance.clone(), class_name(class));
+                }
+                ("cancontain", [receptacle, object]) => {
+                    can_contain.insert((class_name(receptacle), class_name(object)));
+                }
+                (p, [instance]) if ALFWORLD_AFFORDANCES.contains(&p) => unary.push((instance.clone(), p.to_string())),
+                _ => {}
+            }
+        }
+        for class in class_of.values() {
+            seen.entry(class.clone()).or_default().0 += 1;
+        }
+        for (instance, predicate) in unary {
+            let class = class_of.get(&instance).ok_or_else(|| OntologyError {
+                origin: origin.to_string(),
+                message: format!("`{instance}` has `{predicate}` but no objectType or receptacleType"),
+            })?;
+            *seen.entry(class.clone()).or_default().1.entry(predicate).or_default() += 1;
+        }
+    }
+    let mut ontology = Ontology { can_contain, ..Ontology::default() };
+    for (class, (instances, counts)) in seen {
+        let all: BTreeSet<String> = counts.iter().filter(|(_, n)| **n == instances).map(|(p, _)| p.clone()).collect();
+        let some: BTreeSet<String> = counts.iter().filter(|(_, n)| **n < instances).map(|(p, _)| p.clone()).collect();
+        if !some.is_empty() {
+            ontology.disagreements.insert(class.clone(), some);
+        }
+        ontology.affordances.insert(class, all);
+    }
+    Ok(ontology)
+}
+
+/// VirtualHome's ontology from EAI's `properties_data.json` (`{class: [PROPERTY, ...]}`).
+pub fn virtualhome_from_properties(json: &str, origin: &str) -> Result<Ontology, OntologyError> {
+    let bad = |message: String| OntologyError { origin: origin.to_string(), message };
+    let value: serde_json::Value = serde_json::from_str(json).map_err(|e| bad(format!("not JSON: {e}")))?;
+    let map = value.as_object().ok_or_else(|| bad("not an object of classes".into()))?;
+    let mut ontology = Ontology::default();
+    for (class, properties) in map {
+        let list = properties.as_array().ok_or_else(|| bad(format!("`{class}`: not a list")))?;
+        let set = list
+            .iter()
+            .map(|p| p.as_str().map(str::to_ascii_lowercase).ok_or_else(|| bad(format!("`{class}`: a property that is not a string"))))
+            .collect::<Result<BTreeSet<_>, _>>()?;
+        ontology.affordances.insert(class.clone(), set);
+    }
+    Ok(ontology)
+}
+
+impl Ontology {
+    /// The committed form: one line per fact, sorted, `affordance CLASS A1 A2 ...`,
+    /// `cancontain RECEPTACLE OBJECT`, `disagree CLASS A1 ...`.
+    pub fn to_text(&self) -> String {
+        let mut out = String::new();
+        for (class, set) in &self.affordances {
+            out.push_str(&format!("affordance {class}{}\n", set.iter().map(|a| format!(" {a}")).collect::<String>()));
+        }
+        for (receptacle, object) in &self.can_contain {
+            out.push_str(&format!("cancontain {receptacle} {object}\n"));
+        }
+        for (class, set) in &self.disagreements {
+            out.push_str(&format!("disagree {class}{}\n", set.iter().map(|a| format!(" {a}")).collect::<String>()));
+        }
+        out
+    }
+
+    /// Reads [`Ontology::to_text`]'s form; errors name the line.
+    pub fn from_text(text: &str, origin: &str) -> Result<Ontology, OntologyError> {
+        let mut ontology = Ontology::default();
+        for (n, line) in text.lines().enumerate() {
+            let words: Vec<&str> = line.split_whitespace().collect();
+            let bad = || OntologyError { origin: format!("{origin}:{}", n + 1), message: format!("cannot read `{line}`") };
+            match words.as_slice() {
+                [] => {}
+                ["affordance", class, rest @ ..] => {
+                    ontology.affordances.insert(class.to_string(), rest.iter().map(|s| s.to_string()).collect());
+                }
+                ["cancontain", receptacle, object] => {
+                    ontology.can_contain.insert((receptacle.to_string(), object.to_string()));
+                }
+                ["disagree", class, rest @ ..] => {
+                    ontology.disagreements.insert(class.to_string(), rest.iter().map(|s| s.to_string()).collect());
+                }
+                _ => return Err(bad()),
+            }
+        }
+        Ok(ontology)
+    }
+}
+
+fn term_text(term: &pddl_syntax::Term) -> &str {
+    match term {
+        pddl_syntax::Term::Variable(n) | pddl_syntax::Term::Constant(n) => &n.text,
+    }
+}
+
+/// `MugType` / `mugtype` → `mug`.
+fn class_name(constant: &str) -> String {
+    let lower = constant.to_ascii_lowercase();
+    lower.strip_suffix("type").filter(|s| !s.is_empty()).unwrap_or(&lower).to_string()
+}

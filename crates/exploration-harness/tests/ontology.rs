@@ -1,0 +1,67 @@
+//! F_str: the committed ontologies in `fixtures/ontology/` are what the derivation functions
+//! produce from their sources (ALFWorld's `valid_train` games; EAI's `properties_data.json`),
+//! and they say what the benchmarks need.
+
+use std::path::{Path, PathBuf};
+
+use exploration_harness::Ontology;
+use exploration_harness::ontology::{alfworld_from_problems, virtualhome_from_properties};
+
+fn fixtures() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../fixtures")
+}
+
+/// `(origin, problem text)` of every game of an ALFWorld split.
+pub fn alfworld_problems(split: &str) -> Vec<(String, String)> {
+    let mut out = Vec::new();
+    let root = fixtures().join("alfworld").join(split);
+    for family in std::fs::read_dir(&root).unwrap() {
+        for trial in std::fs::read_dir(family.unwrap().path()).unwrap() {
+            let path = trial.unwrap().path().join("game.tw-pddl");
+            let game: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&path).unwrap()).unwrap();
+            out.push((path.display().to_string(), game["pddl_problem"].as_str().unwrap().to_string()));
+        }
+    }
+    out.sort();
+    out
+}
+
+#[test]
+fn the_committed_alfworld_ontology_is_derived_from_the_training_split() {
+    let problems = alfworld_problems("valid_train");
+    assert_eq!(problems.len(), 200);
+    let derived = alfworld_from_problems(problems.iter().map(|(o, t)| (o.as_str(), t.as_str()))).unwrap();
+    let path = fixtures().join("ontology/alfworld.txt");
+    let committed = std::fs::read_to_string(&path).unwrap_or_default();
+    assert_eq!(committed, derived.to_text(), "{} is stale: `cargo xtask ontology` writes it again", path.display());
+    assert_eq!(Ontology::from_text(&committed, "alfworld.txt").unwrap(), derived);
+    // What the six task types need.
+    for (class, affordance) in [
+        ("fridge", "openable"),
+        ("microwave", "openable"),
+        ("apple", "heatable"),
+        ("apple", "pickupable"),
+        ("desklamp", "toggleable"),
+        ("mug", "cleanable"),
+    ] {
+        assert!(derived.affordances.get(class).is_some_and(|a| a.contains(affordance)), "{class} {affordance}");
+    }
+    assert!(derived.can_contain.contains(&("fridge".to_string(), "apple".to_string())));
+}
+
+#[test]
+fn the_committed_virtualhome_ontology_is_eais_properties() {
+    let source = fixtures().join("virtualhome-eai/properties_data.json");
+    let derived = virtualhome_from_properties(&std::fs::read_to_string(&source).unwrap(), "properties_data.json").unwrap();
+    let path = fixtures().join("ontology/virtualhome.txt");
+    let committed = std::fs::read_to_string(&path).unwrap_or_default();
+    assert_eq!(committed, derived.to_text(), "{} is stale: `cargo xtask ontology` writes it again", path.display());
+    assert!(derived.affordances["dishwasher"].contains("can_open"));
+    assert!(derived.affordances["plate"].contains("grabbable"));
+}
+
+#[test]
+fn bad_ontology_text_names_the_line() {
+    let error = Ontology::from_text("affordance mug pickupable\ncancontain fridge\n", "x.txt").unwrap_err();
+    assert_eq!(error.origin, "x.txt:2");
+}
