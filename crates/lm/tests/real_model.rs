@@ -8,24 +8,11 @@
 
 mod common;
 
-use std::path::PathBuf;
-
 #[cfg(feature = "reference")]
 use common::max_abs_diff;
+use common::model_path;
 use lm::{LanguageModel, LocalModel, Logprobs, Usage, generate_greedy};
 use serde_json::Value;
-
-fn model_path() -> PathBuf {
-    let dir = std::env::var_os("NSEA_MODEL_DIR").map(PathBuf::from).unwrap_or_else(|| {
-        std::env::var_os("XDG_CACHE_HOME")
-            .map(PathBuf::from)
-            .unwrap_or_else(|| PathBuf::from(std::env::var_os("HOME").unwrap_or_default()).join(".cache"))
-            .join("nsea/models")
-    });
-    let path = dir.join("SmolLM2-135M-Instruct.Q4_1.gguf");
-    assert!(path.is_file(), "{} is missing: run `cargo xtask fetch-model` before the real-model tests", path.display());
-    path
-}
 
 fn dense(logprobs: Logprobs) -> Vec<f32> {
     match logprobs {

@@ -9,22 +9,13 @@
 
 #![cfg(feature = "real-server")]
 
-use std::path::PathBuf;
+mod common;
+
 use std::sync::Arc;
 
-use lm::{LanguageModel, LocalModel, OpenAiConfig, OpenAiModel, ServerDialect, generate_greedy};
+use common::model_path;
 
-fn model_path() -> PathBuf {
-    let dir = std::env::var_os("NSEA_MODEL_DIR").map(PathBuf::from).unwrap_or_else(|| {
-        std::env::var_os("XDG_CACHE_HOME")
-            .map(PathBuf::from)
-            .unwrap_or_else(|| PathBuf::from(std::env::var_os("HOME").unwrap_or_default()).join(".cache"))
-            .join("nsea/models")
-    });
-    let path = dir.join("SmolLM2-135M-Instruct.Q4_1.gguf");
-    assert!(path.is_file(), "{} is missing: run `cargo xtask fetch-model` first", path.display());
-    path
-}
+use lm::{LanguageModel, LocalModel, OpenAiConfig, OpenAiModel, ServerDialect, generate_greedy};
 
 fn server_url() -> String {
     std::env::var("NSEA_LLAMA_SERVER_URL").expect("NSEA_LLAMA_SERVER_URL: the base URL of a llama-server serving SmolLM2 (see .ci/run)")

