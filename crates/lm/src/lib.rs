@@ -43,6 +43,7 @@
 //! # Ok::<(), lm::LmError>(())
 //! ```
 
+pub mod cache;
 mod chat;
 #[cfg(feature = "chat")]
 mod chat_model;
@@ -59,6 +60,7 @@ mod tokenizer;
 mod uniform;
 mod vocabulary;
 
+pub use cache::{DEFAULT_MODEL_FILE, default_model_path, model_dir};
 pub use chat::ChatTemplate;
 #[cfg(feature = "chat")]
 pub use chat_model::LocalChat;

@@ -99,15 +99,7 @@ fn without_a_schema_the_reply_is_free_text_up_to_max_tokens() {
 #[cfg(feature = "real-model")]
 #[test]
 fn smollm2_picks_a_listed_skill() {
-    let path = std::env::var_os("NSEA_MODEL_DIR")
-        .map(std::path::PathBuf::from)
-        .unwrap_or_else(|| {
-            std::env::var_os("XDG_CACHE_HOME")
-                .map(std::path::PathBuf::from)
-                .unwrap_or_else(|| std::path::PathBuf::from(std::env::var_os("HOME").unwrap_or_default()).join(".cache"))
-                .join("nsea/models")
-        })
-        .join("SmolLM2-135M-Instruct.Q4_1.gguf");
+    let path = lm::default_model_path();
     let mut chat = LocalChat::new(LocalModel::load(&path).expect("fetch-model first"), "smollm2").expect("chat template");
     let skills = ["Goto(countertop 1)", "Open(fridge 1)", "Goto(sinkbasin 1)", "Done"];
     let schema = json!({

@@ -15,14 +15,7 @@ pub fn xtask(args: &[&str]) -> Output {
         .expect("xtask runs")
 }
 
-/// The default model file in the model cache (`$NSEA_MODEL_DIR`, else
-/// `$XDG_CACHE_HOME/nsea/models`, else `~/.cache/nsea/models`).
+/// The default model file in the model cache.
 pub fn model_path() -> PathBuf {
-    let dir = std::env::var_os("NSEA_MODEL_DIR").map(PathBuf::from).unwrap_or_else(|| {
-        std::env::var_os("XDG_CACHE_HOME")
-            .map(PathBuf::from)
-            .unwrap_or_else(|| PathBuf::from(std::env::var_os("HOME").unwrap_or_default()).join(".cache"))
-            .join("nsea/models")
-    });
-    dir.join("SmolLM2-135M-Instruct.Q4_1.gguf")
+    lm::default_model_path()
 }

@@ -70,16 +70,9 @@ pub fn max_abs_diff(a: &[f32], b: &[f32]) -> f32 {
     a.iter().zip(b).map(|(x, y)| (x - y).abs()).fold(0.0, f32::max)
 }
 
-/// The default model file in the model cache (`$NSEA_MODEL_DIR`, else
-/// `$XDG_CACHE_HOME/nsea/models`, else `~/.cache/nsea/models`); it must have been fetched.
+/// The default model file in the model cache; it must have been fetched.
 pub fn model_path() -> PathBuf {
-    let dir = std::env::var_os("NSEA_MODEL_DIR").map(PathBuf::from).unwrap_or_else(|| {
-        std::env::var_os("XDG_CACHE_HOME")
-            .map(PathBuf::from)
-            .unwrap_or_else(|| PathBuf::from(std::env::var_os("HOME").unwrap_or_default()).join(".cache"))
-            .join("nsea/models")
-    });
-    let path = dir.join("SmolLM2-135M-Instruct.Q4_1.gguf");
+    let path = lm::default_model_path();
     assert!(path.is_file(), "{} is missing: run `cargo xtask fetch-model` before the real-model tests", path.display());
     path
 }

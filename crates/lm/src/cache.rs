@@ -1,0 +1,24 @@
+//! Where local model files live: the model cache, outside any repository. `cargo xtask
+//! fetch-model` fills it; tests, benchmarks and the command line read the default model there.
+
+use std::path::PathBuf;
+
+/// The default model's file name (SmolLM2-135M-Instruct, Q4_1).
+pub const DEFAULT_MODEL_FILE: &str = "SmolLM2-135M-Instruct.Q4_1.gguf";
+
+/// The model cache: `$NSEA_MODEL_DIR`, else `$XDG_CACHE_HOME/nsea/models`, else
+/// `~/.cache/nsea/models`.
+pub fn model_dir() -> PathBuf {
+    if let Some(dir) = std::env::var_os("NSEA_MODEL_DIR") {
+        return PathBuf::from(dir);
+    }
+    let cache = std::env::var_os("XDG_CACHE_HOME")
+        .map(PathBuf::from)
+        .unwrap_or_else(|| PathBuf::from(std::env::var_os("HOME").unwrap_or_default()).join(".cache"));
+    cache.join("nsea/models")
+}
+
+/// Where the default model is (or will be, once fetched).
+pub fn default_model_path() -> PathBuf {
+    model_dir().join(DEFAULT_MODEL_FILE)
+}
