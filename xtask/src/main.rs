@@ -3,6 +3,7 @@
 //! Exit codes: 0 success; 1 a negative verdict (an invalid plan); 2 bad input (unreadable
 //! or malformed files, named with file, line and column) or usage errors.
 
+mod agent;
 mod bench;
 mod chat;
 mod env;
@@ -67,6 +68,9 @@ enum Command {
     Heuristic(planning::HeuristicArgs),
     /// Evaluate an agent on the benchmarks in fixtures/ (the project's main job).
     Eval(eval::EvalArgs),
+    /// The agent on one ALFWorld game: Phase I (systematic explorer), the grounded problem,
+    /// Phase II (A* with LM-cut), the plan executed open-loop; exit 0 won, 1 not won.
+    Agent(agent::AgentArgs),
     /// Play a household environment: ALFWorld (`--game G`: JSON lines of what it shows at every
     /// step, as the real engine's recorder prints them) or VirtualHome (`--benchmark
     /// virtualhome-eai --task ID`: JSON lines per step, the goal verdict last). Exit 0 won, 1
@@ -177,6 +181,7 @@ fn run(command: Command) -> anyhow::Result<ExitCode> {
         Command::Phase2(args) => phase2::run(args),
         Command::Heuristic(args) => planning::heuristic(args),
         Command::Eval(args) => eval::run(args),
+        Command::Agent(args) => agent::run(args),
         Command::Env(args) => env::run(args),
         Command::Soundness(args) => soundness::run(args),
         Command::Rearrange(args) => rearrange::run(args),

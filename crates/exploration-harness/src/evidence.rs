@@ -106,7 +106,10 @@ impl Belief {
 /// - `You turn on the O.`: `isToggled(O)`; `You heat/cool/clean the O using the R.`:
 ///   `isHot(O)` / `isCool(O)` / `isClean(O)`.
 ///
-/// Anything else (`Nothing happens.`, `You arrive at R.` alone) states no fact.
+/// - `You arrive at R.`, `On the R, you see ...`, `The R is closed/open.`: `visited(R)` (the
+///   agent has looked at R from where it stands).
+///
+/// Anything else (`Nothing happens.`) states no fact.
 pub fn perceive_alfworld(observation: &str, step: usize) -> (Vec<String>, Vec<Percept>) {
     let mut places = Vec::new();
     let mut percepts = Vec::new();
@@ -117,9 +120,11 @@ pub fn perceive_alfworld(observation: &str, step: usize) -> (Vec<String>, Vec<Pe
         if let Some(rest) = s.strip_prefix("Looking quickly around you, you see ") {
             places.extend(list(rest));
         } else if let Some(r) = s.strip_prefix("You arrive at ") {
+            fact("visited", &[r], true);
             current = Some(r.to_string());
         } else if let Some(rest) = s.strip_prefix("On the ").and_then(|r| r.split_once(", you see ")) {
             let (r, items) = rest;
+            fact("visited", &[r], true);
             for item in list(items) {
                 fact("inReceptacle", &[&item, r], true);
             }
@@ -130,9 +135,11 @@ pub fn perceive_alfworld(observation: &str, step: usize) -> (Vec<String>, Vec<Pe
                 }
             }
         } else if let Some(r) = s.strip_prefix("The ").and_then(|r| r.strip_suffix(" is closed")) {
+            fact("visited", &[r], true);
             fact("opened", &[r], false);
             current = Some(r.to_string());
         } else if let Some(r) = s.strip_prefix("The ").and_then(|r| r.strip_suffix(" is open")) {
+            fact("visited", &[r], true);
             fact("opened", &[r], true);
             current = Some(r.to_string());
         } else if let Some(r) = s.strip_prefix("You open the ") {

@@ -7,6 +7,7 @@
 //! [`evidence`], the evidence update U with ALFWorld's perceiver. The controller H, the policy f_φ,
 //! the evidence update U, Ready and the binding β are the next parts of this crate.
 
+pub mod alfworld;
 pub mod evidence;
 pub mod goal;
 pub mod ontology;
