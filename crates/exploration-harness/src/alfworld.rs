@@ -57,10 +57,10 @@ pub fn ready(goal: &ClassGoal, belief: &Belief) -> bool {
     for s in &goal.symbols {
         match (s.kind.as_str(), &s.class) {
             ("object", Some(class)) => *needed.entry(class.as_str()).or_default() += 1,
-            ("receptacle", Some(class)) => {
-                if !belief.places.iter().any(|p| class_of(p) == class && belief.holds("visited", &[p]) == Some(true)) {
-                    return false;
-                }
+            ("receptacle", Some(class))
+                if !belief.places.iter().any(|p| class_of(p) == class && belief.holds("visited", &[p]) == Some(true)) =>
+            {
+                return false;
             }
             _ => {}
         }
@@ -155,10 +155,10 @@ fn worth_inspecting(goal: &ClassGoal, ontology: &Ontology, belief: &Belief, plac
     for s in &goal.symbols {
         match (s.kind.as_str(), s.class.as_deref()) {
             ("object", Some(c)) => *needed.entry(c).or_default() += 1,
-            ("receptacle", Some(c)) if c == class => {
-                if !belief.places.iter().any(|p| class_of(p) == c && belief.holds("visited", &[p]) == Some(true)) {
-                    return true;
-                }
+            ("receptacle", Some(c))
+                if c == class && !belief.places.iter().any(|p| class_of(p) == c && belief.holds("visited", &[p]) == Some(true)) =>
+            {
+                return true;
             }
             _ => {}
         }
