@@ -89,7 +89,19 @@ fn the_perceiver_reads_each_sentence_kind() {
     );
     assert_eq!(places, ["cabinet 1", "fridge 1", "countertop 1"]);
     assert!(p.is_empty());
-    let facts = |text: &str| perceive_alfworld(text, 1).1.into_iter().map(|p| p.fact).collect::<Vec<_>>();
+    let facts =
+        |text: &str| perceive_alfworld(text, 1).1.into_iter().map(|p| p.fact).filter(|f| f.predicate != "visited").collect::<Vec<_>>();
+    let visited = |text: &str| {
+        perceive_alfworld(text, 1)
+            .1
+            .into_iter()
+            .filter(|p| p.fact.predicate == "visited")
+            .map(|p| p.fact.args[0].clone())
+            .collect::<Vec<_>>()
+    };
+    assert_eq!(visited("You arrive at desk 1. On the desk 1, you see nothing."), ["desk 1", "desk 1"]);
+    assert_eq!(visited("On the drawer 3, you see a cd 1."), ["drawer 3"]);
+    assert!(visited("You pick up the cd 1 from the drawer 3.").is_empty());
     assert_eq!(
         facts("You arrive at countertop 1. On the countertop 1, you see a mug 2, and a apple 1."),
         [Fact::new("inReceptacle", &["mug 2", "countertop 1"], true), Fact::new("inReceptacle", &["apple 1", "countertop 1"], true)]
