@@ -11,7 +11,6 @@ use std::time::{Duration, Instant};
 use anyhow::Context;
 use exploration_harness::alfworld::run_episode;
 use exploration_harness::{Ontology, parse_goal};
-use heuristics::search::{Algorithm, SearchConfig, SearchStatus, search};
 use household_sim::{AlfworldEnv, Environment};
 use serde_json::json;
 use transition_model::TransitionModel;
@@ -61,15 +60,9 @@ pub fn run(args: AgentArgs) -> anyhow::Result<ExitCode> {
         let parsed = pddl_syntax::parse_problem(problem).map_err(|e| format!("the grounded problem does not parse: {e:?}"))?;
         let task = grounding::ground(&domain, &parsed).map_err(|e| e.to_string())?;
         let model = TransitionModel::new(task);
-        let mut h = heuristics::by_name("lmcut", &model).ok_or("lmcut")?;
-        let mut config = SearchConfig::new(Algorithm::AStar);
-        config.time_limit = Some(limit);
-        let result = search(&model, h.as_mut(), &config, None);
+        let result = heuristics::search::optimal_plan(&model, limit);
         planning_ms = start.elapsed().as_secs_f64() * 1e3;
-        match result.status {
-            SearchStatus::Solved => Ok(result.plan.iter().map(|&a| model.task().action_name(a)).collect()),
-            other => Err(format!("{other:?}")),
-        }
+        result.map_err(|status| format!("{status:?}"))
     };
     let start = Instant::now();
     let episode = run_episode(&mut env, &goal, &ontology, args.budget, &mut plan);

@@ -28,7 +28,6 @@ use std::process::ExitCode;
 use std::time::Duration;
 
 use anyhow::Context;
-use heuristics::search::{Algorithm, SearchConfig, SearchStatus, search};
 use household_sim::vh_pddl::{self, SOUND_DOMAIN};
 use household_sim::{Environment, Event, Judge, PythonRandom, VirtualhomeEnv, VirtualhomeTask};
 use serde_json::{Value, json};
@@ -260,19 +259,12 @@ fn reference(domain: &pddl_syntax::Domain, task: &VirtualhomeTask, limit: Durati
     };
     let parsed = pddl_syntax::parse_problem(&problem.text).map_err(|e| anyhow::anyhow!("{}: {e:?}", task.task_id))?;
     let model = TransitionModel::new(grounding::ground(domain, &parsed).with_context(|| format!("{}: grounding", task.task_id))?);
-    let mut h = heuristics::by_name("lmcut", &model).context("lmcut")?;
-    let mut config = SearchConfig::new(Algorithm::AStar);
-    config.time_limit = Some(limit);
-    let result = search(&model, h.as_mut(), &config, None);
-    if result.status != SearchStatus::Solved || result.plan.is_empty() {
+    let Ok(plan) = heuristics::search::optimal_plan(&model, limit) else { return Ok(None) };
+    if plan.is_empty() {
         return Ok(None);
     }
-    let script: Vec<String> = result
-        .plan
-        .iter()
-        .map(|&a| problem.script_line(&task.init, &model.task().action_name(a)))
-        .collect::<Result<_, _>>()
-        .map_err(|e| anyhow::anyhow!(e))?;
+    let script: Vec<String> =
+        plan.iter().map(|a| problem.script_line(&task.init, a)).collect::<Result<_, _>>().map_err(|e| anyhow::anyhow!(e))?;
     let mut env = VirtualhomeEnv::new(task.clone(), "virtualhome-rearrange");
     env.reset();
     let executed = script.iter().all(|line| !matches!(env.step(line).event, Event::NotExecuted { .. }));

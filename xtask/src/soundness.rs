@@ -12,7 +12,7 @@ use std::process::ExitCode;
 use std::time::{Duration, Instant};
 
 use anyhow::Context;
-use heuristics::search::{Algorithm, SearchConfig, SearchStatus, search};
+use heuristics::search::SearchStatus;
 use household_sim::vh_pddl::{self, SOUND_DOMAIN, VhProblem};
 use household_sim::{Environment, Event, Judge, VhGoal, VirtualhomeEnv, VirtualhomeTask};
 use serde_json::json;
@@ -86,20 +86,16 @@ pub fn run(args: SoundnessArgs) -> anyhow::Result<ExitCode> {
         row["actions"] = json!(model.task().actions.len());
 
         // (a) A* with LM-cut.
-        let mut h = heuristics::by_name("lmcut", &model).context("lmcut")?;
-        let mut config = SearchConfig::new(Algorithm::AStar);
-        config.time_limit = Some(Duration::from_secs_f64(args.time_limit));
         let start = Instant::now();
-        let result = search(&model, h.as_mut(), &config, None);
+        let result = heuristics::search::optimal_plan(&model, Duration::from_secs_f64(args.time_limit));
         row["millis"] = json!(start.elapsed().as_secs_f64() * 1e3);
-        row["status"] = json!(match result.status {
-            SearchStatus::Solved => "solved",
-            SearchStatus::Unsolvable => "unsolvable",
-            SearchStatus::OutOfBudget => "out-of-budget",
+        row["status"] = json!(match &result {
+            Ok(_) => "solved",
+            Err(SearchStatus::Unsolvable) => "unsolvable",
+            Err(_) => "out-of-budget",
         });
-        if result.status == SearchStatus::Solved {
+        if let Ok(plan) = result {
             solved += 1;
-            let plan: Vec<String> = result.plan.iter().map(|&a| model.task().action_name(a)).collect();
             let script = spell(&problem, &task, &plan)?;
             let (executed, goal) = run_in_env(&task, &script);
             ours_ok += usize::from(executed && goal);

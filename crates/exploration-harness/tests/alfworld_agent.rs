@@ -7,7 +7,6 @@ use std::time::Duration;
 
 use exploration_harness::alfworld::run_episode;
 use exploration_harness::{Ontology, parse_goal};
-use heuristics::search::{Algorithm, SearchConfig, SearchStatus, search};
 use household_sim::{AlfworldEnv, Environment};
 use transition_model::TransitionModel;
 
@@ -24,14 +23,7 @@ fn a_star(domain: &str, problem: &str) -> Result<Vec<String>, String> {
     }
     let task = grounding::ground(&domain, &parsed).map_err(|e| e.to_string())?;
     let model = TransitionModel::new(task);
-    let mut h = heuristics::by_name("lmcut", &model).unwrap();
-    let mut config = SearchConfig::new(Algorithm::AStar);
-    config.time_limit = Some(Duration::from_secs(20));
-    let result = search(&model, h.as_mut(), &config, None);
-    if result.status != SearchStatus::Solved {
-        return Err(format!("{:?}", result.status));
-    }
-    Ok(result.plan.iter().map(|&a| model.task().action_name(a)).collect())
+    heuristics::search::optimal_plan(&model, Duration::from_secs(20)).map_err(|status| format!("{status:?}"))
 }
 
 /// Plays every game of a split; returns (won, total, failures).

@@ -6,7 +6,6 @@
 use std::path::{Path, PathBuf};
 use std::time::Duration;
 
-use heuristics::search::{Algorithm, SearchConfig, SearchStatus, search};
 use household_sim::vh_pddl::{self as pddl, SOUND_DOMAIN};
 use household_sim::{Environment, Event, Judge, VirtualhomeEnv, VirtualhomeTask};
 use transition_model::TransitionModel;
@@ -39,15 +38,9 @@ fn plan_task(task: &VirtualhomeTask) -> Result<Vec<String>, String> {
     assert!(!report.has_errors(), "{}: {report:?}", task.task_id);
     let grounded = grounding::ground(&domain, &parsed).map_err(|e| e.to_string())?;
     let model = TransitionModel::new(grounded);
-    let mut h = heuristics::by_name("lmcut", &model).unwrap();
-    let mut config = SearchConfig::new(Algorithm::AStar);
-    config.time_limit = Some(Duration::from_secs(60));
-    let result = search(&model, h.as_mut(), &config, None);
-    if result.status != SearchStatus::Solved {
-        return Err(format!("{:?}", result.status));
-    }
+    let plan = heuristics::search::optimal_plan(&model, Duration::from_secs(60)).map_err(|status| format!("{status:?}"))?;
     let world = &task.init;
-    result.plan.iter().map(|&a| problem.script_line(world, &model.task().action_name(a))).collect()
+    plan.iter().map(|a| problem.script_line(world, a)).collect()
 }
 
 #[test]

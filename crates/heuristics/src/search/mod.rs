@@ -129,6 +129,19 @@ impl Budget {
     }
 }
 
+/// An optimal plan from the initial state: A* with LM-cut within `time_limit`, the plan as
+/// action names (`(pickupobject agent1 ...)`), or the status that stopped it.
+pub fn optimal_plan(model: &TransitionModel, time_limit: Duration) -> Result<Vec<String>, SearchStatus> {
+    let mut heuristic = crate::LmCut::new(model);
+    let mut config = SearchConfig::new(Algorithm::AStar);
+    config.time_limit = Some(time_limit);
+    let result = search(model, &mut heuristic, &config, None);
+    match result.status {
+        SearchStatus::Solved => Ok(result.plan.iter().map(|&a| model.task().action_name(a)).collect()),
+        other => Err(other),
+    }
+}
+
 /// Runs a search from `start` (the task's initial state when `None`).
 pub fn search(model: &TransitionModel, heuristic: &mut dyn Heuristic, config: &SearchConfig, start: Option<&State>) -> SearchResult {
     let budget = Budget { start: Instant::now(), config: config.clone() };
