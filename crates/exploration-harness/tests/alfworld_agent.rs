@@ -66,3 +66,34 @@ fn systematic_exploration_then_a_star_wins_alfworld_games() {
         assert!(won >= at_least, "{split}: won {won}/{total}:\n{}", failures.join("\n"));
     }
 }
+
+/// The same game gives the same episode (the systematic explorer has no randomness), and the
+/// plan is valid under the transition model of the grounded problem it came from.
+#[test]
+fn episodes_are_reproducible_and_plans_valid_for_their_grounded_problem() {
+    let ontology =
+        Ontology::from_text(&std::fs::read_to_string(fixtures().join("ontology/alfworld.txt")).unwrap(), "alfworld.txt").unwrap();
+    let domain_text = std::fs::read_to_string(fixtures().join("alfworld/alfred.pddl")).unwrap();
+    let domain = pddl_syntax::parse_domain(&domain_text).unwrap();
+    let root = fixtures().join("alfworld/valid_seen");
+    let mut games: Vec<PathBuf> = std::fs::read_dir(&root).unwrap().map(|f| f.unwrap().path()).collect();
+    games.sort();
+    for family in games.iter().step_by(10) {
+        let trial = std::fs::read_dir(family).unwrap().next().unwrap().unwrap().path().join("game.tw-pddl");
+        let run = || {
+            let mut env = AlfworldEnv::from_game_file(&trial).unwrap();
+            let goal = parse_goal(env.goal()).unwrap();
+            let mut plan = |problem: &str| a_star(&domain_text, problem);
+            run_episode(&mut env, &goal, &ontology, 55, &mut plan)
+        };
+        let (a, b) = (run(), run());
+        assert_eq!(a.steps, b.steps, "{}", trial.display());
+        assert_eq!(a.handover, b.handover);
+        let Some(handover) = &a.handover else { continue };
+        let problem = pddl_syntax::parse_problem(&handover.problem).unwrap();
+        let model = TransitionModel::new(grounding::ground(&domain, &problem).unwrap());
+        let plan = a_star(&domain_text, &handover.problem).unwrap();
+        let spelling = transition_model::Spelling::pddl(model.task());
+        assert!(model.validate_text(&spelling, &plan).is_ok(), "{}: {plan:?}", trial.display());
+    }
+}
