@@ -49,7 +49,7 @@ enum Which {
         #[arg(long, default_value = "lazy-ff,astar-lmcut")]
         configs: String,
         /// Seconds per search, for both planners.
-        #[arg(long, default_value_t = 60.0)]
+        #[arg(long, default_value_t = 60.0, value_parser = crate::input::positive_seconds)]
         time_limit: f64,
         /// Only instances whose id contains this.
         #[arg(long)]

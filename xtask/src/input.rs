@@ -94,3 +94,12 @@ pub fn alfworld_game(files: &TaskFiles) -> Option<&AlfworldGame> {
         _ => None,
     }
 }
+
+/// A clap parser for durations in seconds: finite, positive and below a billion, so that
+/// `Duration::from_secs_f64` can never panic on what a user typed (`-1`, `inf`, `nan`).
+pub fn positive_seconds(text: &str) -> Result<f64, String> {
+    match text.parse::<f64>() {
+        Ok(s) if s.is_finite() && s > 0.0 && s < 1e9 => Ok(s),
+        _ => Err(format!("`{text}` is not a positive number of seconds")),
+    }
+}

@@ -411,7 +411,7 @@ pub struct Phase2Args {
     #[command(flatten)]
     decode: DecodeArgs,
     /// Seconds per task at most (the paper: 250).
-    #[arg(long, default_value_t = DEFAULT_TIME_LIMIT)]
+    #[arg(long, default_value_t = DEFAULT_TIME_LIMIT, value_parser = crate::input::positive_seconds)]
     time_limit: f64,
     /// Folder for `<benchmark>-<mode>-<lm>.jsonl` records and the summary.
     #[arg(long, default_value = "target/phase2")]

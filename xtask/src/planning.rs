@@ -29,7 +29,7 @@ pub struct PlanArgs {
     #[arg(long)]
     max_expansions: Option<u64>,
     /// Stop after this many seconds of search.
-    #[arg(long)]
+    #[arg(long, value_parser = crate::input::positive_seconds)]
     time_limit: Option<f64>,
     /// Write the plan here, in Fast Downward's format.
     #[arg(long)]

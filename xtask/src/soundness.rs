@@ -30,7 +30,7 @@ pub struct SoundnessArgs {
     #[arg(long, default_value = "fixtures/virtualhome-eai")]
     eai: PathBuf,
     /// Search time limit per task, seconds.
-    #[arg(long, default_value_t = 60.0, value_parser = positive_seconds)]
+    #[arg(long, default_value_t = 60.0, value_parser = crate::input::positive_seconds)]
     time_limit: f64,
     /// Only the first N tasks (sorted ids).
     #[arg(long)]
@@ -168,13 +168,6 @@ fn run_in_env(task: &VirtualhomeTask, script: &[String]) -> (bool, bool) {
 /// `Ok` when the plan is applicable at every step and reaches the goal, else why not.
 fn validate(model: &TransitionModel, plan: &[String]) -> Result<(), String> {
     model.validate_text(&Spelling::pddl(model.task()), plan).map(|_| ()).map_err(|e| e.describe(model.task()))
-}
-
-fn positive_seconds(text: &str) -> Result<f64, String> {
-    match text.parse::<f64>() {
-        Ok(s) if s.is_finite() && s > 0.0 && s < 1e9 => Ok(s),
-        _ => Err(format!("`{text}` is not a positive number of seconds")),
-    }
 }
 
 /// EAI's gold plan (`walk_towards character plate`) with each class bound to an instance: the

@@ -353,3 +353,16 @@ fn soundness_plans_fixture_tasks_and_they_reach_their_goals() {
         assert_eq!(row["ours_goal"], true, "{row}");
     }
 }
+
+/// Durations a user can type wrong are bad input (exit 2), never a panic.
+#[test]
+fn time_limits_that_are_not_positive_seconds_are_bad_input() {
+    let (domain, problem) = household();
+    for limit in ["-1", "inf", "nan", "0", "soon"] {
+        let output = xtask(&["plan", "--domain", &domain, "--problem", &problem, "--time-limit", limit]);
+        assert_eq!(output.status.code(), Some(2), "--time-limit {limit}: {}", String::from_utf8_lossy(&output.stderr));
+        assert!(!String::from_utf8_lossy(&output.stderr).contains("panicked"), "--time-limit {limit}");
+        let output = xtask(&["phase2", "--benchmark", "ipc", "--limit", "1", "--time-limit", limit]);
+        assert_eq!(output.status.code(), Some(2), "phase2 --time-limit {limit}");
+    }
+}
