@@ -53,19 +53,18 @@ pub fn run(args: AgentArgs) -> anyhow::Result<ExitCode> {
     .map_err(|e| InputError(e.to_string()))?;
     let domain_text = std::fs::read_to_string(fixtures.join("alfworld/alfred.pddl")).context("ALFWorld's domain")?;
     let domain = pddl_syntax::parse_domain(&domain_text).map_err(|e| anyhow::anyhow!("alfred.pddl: {e:?}"))?;
+    // The game's command grammar (the same file for every game): how plans are spelled.
+    let grammar = std::fs::read_to_string(fixtures.join("alfworld/alfred.twl2")).context("ALFWorld's grammar")?;
     let limit = Duration::from_secs(args.time_limit);
     let mut planning_ms = 0.0;
-    let mut plan = |problem: &str| -> Result<Vec<String>, String> {
+    let mut plan = |model: &TransitionModel| {
         let start = Instant::now();
-        let parsed = pddl_syntax::parse_problem(problem).map_err(|e| format!("the grounded problem does not parse: {e:?}"))?;
-        let task = grounding::ground(&domain, &parsed).map_err(|e| e.to_string())?;
-        let model = TransitionModel::new(task);
-        let result = heuristics::search::optimal_plan(&model, limit);
+        let result = heuristics::search::optimal_plan(model, limit);
         planning_ms = start.elapsed().as_secs_f64() * 1e3;
         result.map_err(|status| format!("{status:?}"))
     };
     let start = Instant::now();
-    let episode = run_episode(&mut env, &goal, &ontology, args.budget, &mut plan);
+    let episode = run_episode(&mut env, &goal, &ontology, &domain, &grammar, args.budget, &mut plan);
     let millis = start.elapsed().as_secs_f64() * 1e3;
     if let Some(path) = &args.commands_out {
         let text: String = episode.steps.iter().map(|s| format!("{}\n", s.command)).collect();

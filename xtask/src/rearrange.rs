@@ -263,8 +263,11 @@ fn reference(domain: &pddl_syntax::Domain, task: &VirtualhomeTask, limit: Durati
     if plan.is_empty() {
         return Ok(None);
     }
-    let script: Vec<String> =
-        plan.iter().map(|a| problem.script_line(&task.init, a)).collect::<Result<_, _>>().map_err(|e| anyhow::anyhow!(e))?;
+    let script: Vec<String> = plan
+        .iter()
+        .map(|&a| problem.script_line(&task.init, &model.task().action_name(a)))
+        .collect::<Result<_, _>>()
+        .map_err(|e| anyhow::anyhow!(e))?;
     let mut env = VirtualhomeEnv::new(task.clone(), "virtualhome-rearrange");
     env.reset();
     let executed = script.iter().all(|line| !matches!(env.step(line).event, Event::NotExecuted { .. }));

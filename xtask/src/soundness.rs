@@ -95,6 +95,7 @@ pub fn run(args: SoundnessArgs) -> anyhow::Result<ExitCode> {
             Err(_) => "out-of-budget",
         });
         if let Ok(plan) = result {
+            let plan: Vec<String> = plan.iter().map(|&a| model.task().action_name(a)).collect();
             solved += 1;
             let script = spell(&problem, &task, &plan)?;
             let (executed, goal) = run_in_env(&task, &script);

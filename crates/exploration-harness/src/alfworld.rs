@@ -19,15 +19,18 @@
 //!   goal formula as written (class-level: it names types, never instances). A visited place
 //!   is openable when an observation said it is open or closed; an unvisited one is used only
 //!   when F_str decides its class (never openable, or openable and then taken as closed);
-//! - β ([`Handover::binding`]): PDDL name → perceived name; plan steps are spelled with
-//!   ALFWorld's command templates (`take mug 2 from countertop 1`); a `go to` the game does not
+//! - β ([`Handover::binding`]): PDDL name → perceived name; plan steps are spelled by the
+//!   game's grammar (`transition_model::Spelling::alfworld_with_names`) with those names
+//!   (`take mug 2 from countertop 1`); a `go to` the game does not
 //!   list among its admissible commands (the agent already stands at that place's location) is
 //!   skipped.
 
 use std::collections::{BTreeMap, BTreeSet};
 use std::fmt::Write as _;
 
+use grounding::ActionId;
 use household_sim::{Environment, Event};
+use transition_model::{Spelling, TransitionModel};
 
 use crate::evidence::{Belief, perceive_alfworld};
 use crate::goal::ClassGoal;
@@ -274,41 +277,22 @@ pub fn write_problem(belief: &Belief, ontology: &Ontology, goal_formula: &str, a
     Handover { problem: text, binding }
 }
 
-/// A plan step of ALFWorld's domain (`(PickupObject agent1 loc_x mug_2 countertop_1)`) as the
-/// game's command (`take mug 2 from countertop 1`), names bound through β; `None` for actions
-/// that change nothing in the game (look, inventory, examine, help).
-pub fn spell(step: &str, binding: &BTreeMap<String, String>) -> Result<Option<String>, String> {
-    let words: Vec<&str> = step.trim().trim_start_matches('(').trim_end_matches(')').split_whitespace().collect();
-    let (action, args) = words.split_first().ok_or("empty plan step")?;
-    let name = |i: usize| -> Result<&str, String> {
-        let pddl = args.get(i).ok_or_else(|| format!("`{step}`: too few arguments"))?;
-        binding.get(*pddl).map(String::as_str).ok_or_else(|| format!("`{pddl}` is not bound to a perceived name"))
-    };
-    Ok(Some(match action.to_ascii_lowercase().as_str() {
-        "gotolocation" => format!("go to {}", name(3)?),
-        "openobject" => format!("open {}", name(2)?),
-        "closeobject" => format!("close {}", name(2)?),
-        "pickupobject" => format!("take {} from {}", name(2)?, name(3)?),
-        "putobject" => format!("move {} to {}", name(2)?, name(3)?),
-        "cleanobject" => format!("clean {} with {}", name(3)?, name(2)?),
-        "heatobject" => format!("heat {} with {}", name(3)?, name(2)?),
-        "coolobject" => format!("cool {} with {}", name(3)?, name(2)?),
-        "toggleobject" => format!("use {}", name(2)?),
-        "sliceobject" => format!("slice {} with {}", name(2)?, name(3)?),
-        "look" | "inventory" | "examinereceptacle" | "examineobject" | "help" => return Ok(None),
-        other => return Err(format!("`{other}` has no ALFWorld command")),
-    }))
-}
+/// Schemas of ALFWorld's domain that change nothing in the game (they only look): a plan step
+/// of one is not sent.
+const LOOKING: &[&str] = &["look", "inventory", "examinereceptacle", "examineobject", "help"];
 
-/// One episode: systematic Phase I, the hand-over, `plan` (Phase II: the problem text in,
-/// PDDL action names out), the plan executed open-loop. `budget`: environment steps for the
-/// whole episode (ALFWorld: 55).
+/// One episode: systematic Phase I, the hand-over, ŝ0 grounded in ALFWorld's `domain`,
+/// `plan` (Phase II on that transition model), the plan spelled by the game's `grammar` with
+/// the names β gives back, and executed open-loop. `budget`: environment steps for the whole
+/// episode (ALFWorld: 55).
 pub fn run_episode(
     env: &mut dyn Environment,
     goal: &ClassGoal,
     ontology: &Ontology,
+    domain: &pddl_syntax::Domain,
+    grammar: &str,
     budget: usize,
-    plan: &mut dyn FnMut(&str) -> Result<Vec<String>, String>,
+    plan: &mut dyn FnMut(&TransitionModel) -> Result<Vec<ActionId>, String>,
 ) -> Episode {
     let formula = env.goal().formula.clone();
     let first = env.reset().text;
@@ -322,29 +306,30 @@ pub fn run_episode(
     }
     let at = steps.iter().rev().find(|s| s.executed && s.command.starts_with("go to ")).map(|s| s.command["go to ".len()..].to_string());
     let handover = write_problem(&belief, ontology, &formula, at.as_deref());
-    let actions = match plan(&handover.problem) {
-        Ok(a) => a,
+    let planned = ground(domain, &handover.problem).and_then(|model| {
+        let actions = plan(&model).map_err(|e| format!("no plan: {e}"))?;
+        let names = model.task().objects.iter().map(|o| handover.binding.get(&o.name).cloned()).collect();
+        let spelling = Spelling::alfworld_with_names(model.task(), grammar, names).map_err(|e| format!("grammar: {e}"))?;
+        let task = model.task();
+        actions
+            .iter()
+            .filter(|&&a| !LOOKING.contains(&task.schemas[task.action(a).schema.index()].name.as_str()))
+            .map(|&a| {
+                spelling.spell(a).map(str::to_string).ok_or_else(|| format!("cannot bind {} to perceived names", task.action_name(a)))
+            })
+            .collect::<Result<Vec<String>, String>>()
+    });
+    episode.handover = Some(handover);
+    let commands = match planned {
+        Ok(commands) => commands,
         Err(e) => {
-            episode.failure = Some(format!("no plan: {e}"));
+            episode.failure = Some(e);
             episode.steps = steps;
-            episode.handover = Some(handover);
             return episode;
         }
     };
-    for action in &actions {
-        let command = match spell(action, &handover.binding) {
-            Ok(Some(c)) => c,
-            Ok(None) => continue,
-            Err(e) => {
-                episode.failure = Some(format!("cannot bind the plan: {e}"));
-                break;
-            }
-        };
+    for command in commands {
         episode.plan.push(command.clone());
-        if steps.len() >= budget {
-            episode.failure = Some("step budget spent".into());
-            break;
-        }
         // Places can share a location in ALFWorld (a drawer under a desk): `go to` the place
         // the agent already stands at is not among the game's admissible commands (it would
         // answer "Nothing happens."), and is skipped without spending a step.
@@ -352,6 +337,10 @@ pub fn run_episode(
             && env.admissible_commands().is_some_and(|a| a.iter().any(|c| c.starts_with("go to ")) && !a.contains(&command))
         {
             continue;
+        }
+        if steps.len() >= budget {
+            episode.failure = Some("step budget spent".into());
+            break;
         }
         let result = env.step(&command);
         let executed = matches!(result.event, Event::Executed);
@@ -366,6 +355,12 @@ pub fn run_episode(
         episode.failure = Some("goal not reached".into());
     }
     episode.steps = steps;
-    episode.handover = Some(handover);
     episode
+}
+
+/// ŝ0 as a transition model of ALFWorld's domain.
+fn ground(domain: &pddl_syntax::Domain, problem: &str) -> Result<TransitionModel, String> {
+    let parsed = pddl_syntax::parse_problem(problem).map_err(|e| format!("the grounded problem does not parse: {e:?}"))?;
+    let task = grounding::ground(domain, &parsed).map_err(|e| format!("the grounded problem does not ground: {e}"))?;
+    Ok(TransitionModel::new(task))
 }

@@ -14,23 +14,29 @@ fn fixtures() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../../fixtures")
 }
 
-fn a_star(domain: &str, problem: &str) -> Result<Vec<String>, String> {
-    let domain = pddl_syntax::parse_domain(domain).map_err(|e| format!("domain: {e:?}"))?;
-    let parsed = pddl_syntax::parse_problem(problem).map_err(|e| format!("problem: {e:?}"))?;
-    let report = pddl_syntax::check(&domain, Some(&parsed));
-    if report.has_errors() {
-        return Err(format!("problem does not check: {:?}", report.problem.iter().filter(|d| d.is_error()).collect::<Vec<_>>()));
-    }
-    let task = grounding::ground(&domain, &parsed).map_err(|e| e.to_string())?;
-    let model = TransitionModel::new(task);
-    heuristics::search::optimal_plan(&model, Duration::from_secs(20)).map_err(|status| format!("{status:?}"))
+/// ALFWorld's domain and the game grammar the agent spells its plans with.
+fn domain_and_grammar() -> (pddl_syntax::Domain, String) {
+    let domain = pddl_syntax::parse_domain(&std::fs::read_to_string(fixtures().join("alfworld/alfred.pddl")).unwrap()).unwrap();
+    (domain, std::fs::read_to_string(fixtures().join("alfworld/alfred.twl2")).unwrap())
+}
+
+/// Phase II: A* with LM-cut on the grounded problem.
+fn a_star(model: &TransitionModel) -> Result<Vec<grounding::ActionId>, String> {
+    heuristics::search::optimal_plan(model, Duration::from_secs(20)).map_err(|status| format!("{status:?}"))
+}
+
+/// The grounded problem checks against ALFWorld's domain.
+fn assert_checks(domain: &pddl_syntax::Domain, problem: &str) {
+    let parsed = pddl_syntax::parse_problem(problem).unwrap();
+    let report = pddl_syntax::check(domain, Some(&parsed));
+    assert!(!report.has_errors(), "problem does not check: {:?}", report.problem.iter().filter(|d| d.is_error()).collect::<Vec<_>>());
 }
 
 /// Plays every game of a split; returns (won, total, failures).
 fn play_split(split: &str) -> (usize, usize, Vec<String>) {
     let ontology =
         Ontology::from_text(&std::fs::read_to_string(fixtures().join("ontology/alfworld.txt")).unwrap(), "alfworld.txt").unwrap();
-    let domain = std::fs::read_to_string(fixtures().join("alfworld/alfred.pddl")).unwrap();
+    let (domain, grammar) = domain_and_grammar();
     let root = fixtures().join("alfworld").join(split);
     let mut games = Vec::new();
     for family in std::fs::read_dir(&root).unwrap() {
@@ -43,8 +49,10 @@ fn play_split(split: &str) -> (usize, usize, Vec<String>) {
     for path in &games {
         let mut env = AlfworldEnv::from_game_file(path).unwrap();
         let goal = parse_goal(env.goal()).unwrap();
-        let mut plan = |problem: &str| a_star(&domain, problem);
-        let episode = run_episode(&mut env, &goal, &ontology, 55, &mut plan);
+        let episode = run_episode(&mut env, &goal, &ontology, &domain, &grammar, 55, &mut a_star);
+        if let Some(handover) = &episode.handover {
+            assert_checks(&domain, &handover.problem);
+        }
         if episode.success {
             won += 1;
             assert!(episode.steps.len() <= 55);
@@ -73,8 +81,7 @@ fn systematic_exploration_then_a_star_wins_alfworld_games() {
 fn episodes_are_reproducible_and_plans_valid_for_their_grounded_problem() {
     let ontology =
         Ontology::from_text(&std::fs::read_to_string(fixtures().join("ontology/alfworld.txt")).unwrap(), "alfworld.txt").unwrap();
-    let domain_text = std::fs::read_to_string(fixtures().join("alfworld/alfred.pddl")).unwrap();
-    let domain = pddl_syntax::parse_domain(&domain_text).unwrap();
+    let (domain, grammar) = domain_and_grammar();
     let root = fixtures().join("alfworld/valid_seen");
     let mut games: Vec<PathBuf> = std::fs::read_dir(&root).unwrap().map(|f| f.unwrap().path()).collect();
     games.sort();
@@ -83,8 +90,7 @@ fn episodes_are_reproducible_and_plans_valid_for_their_grounded_problem() {
         let run = || {
             let mut env = AlfworldEnv::from_game_file(&trial).unwrap();
             let goal = parse_goal(env.goal()).unwrap();
-            let mut plan = |problem: &str| a_star(&domain_text, problem);
-            run_episode(&mut env, &goal, &ontology, 55, &mut plan)
+            run_episode(&mut env, &goal, &ontology, &domain, &grammar, 55, &mut a_star)
         };
         let (a, b) = (run(), run());
         assert_eq!(a.steps, b.steps, "{}", trial.display());
@@ -92,8 +98,8 @@ fn episodes_are_reproducible_and_plans_valid_for_their_grounded_problem() {
         let Some(handover) = &a.handover else { continue };
         let problem = pddl_syntax::parse_problem(&handover.problem).unwrap();
         let model = TransitionModel::new(grounding::ground(&domain, &problem).unwrap());
-        let plan = a_star(&domain_text, &handover.problem).unwrap();
-        let spelling = transition_model::Spelling::pddl(model.task());
-        assert!(model.validate_text(&spelling, &plan).is_ok(), "{}: {plan:?}", trial.display());
+        assert_checks(&domain, &handover.problem);
+        let plan = a_star(&model).unwrap();
+        assert!(model.validate(&plan).is_ok(), "{}: {plan:?}", trial.display());
     }
 }

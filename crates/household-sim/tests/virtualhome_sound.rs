@@ -40,7 +40,7 @@ fn plan_task(task: &VirtualhomeTask) -> Result<Vec<String>, String> {
     let model = TransitionModel::new(grounded);
     let plan = heuristics::search::optimal_plan(&model, Duration::from_secs(60)).map_err(|status| format!("{status:?}"))?;
     let world = &task.init;
-    plan.iter().map(|a| problem.script_line(world, a)).collect()
+    plan.iter().map(|&a| problem.script_line(world, &model.task().action_name(a))).collect()
 }
 
 #[test]

@@ -129,15 +129,15 @@ impl Budget {
     }
 }
 
-/// An optimal plan from the initial state: A* with LM-cut within `time_limit`, the plan as
-/// action names (`(pickupobject agent1 ...)`), or the status that stopped it.
-pub fn optimal_plan(model: &TransitionModel, time_limit: Duration) -> Result<Vec<String>, SearchStatus> {
+/// An optimal plan from the initial state: A* with LM-cut within `time_limit`, or the status
+/// that stopped it.
+pub fn optimal_plan(model: &TransitionModel, time_limit: Duration) -> Result<Vec<ActionId>, SearchStatus> {
     let mut heuristic = crate::LmCut::new(model);
     let mut config = SearchConfig::new(Algorithm::AStar);
     config.time_limit = Some(time_limit);
     let result = search(model, &mut heuristic, &config, None);
     match result.status {
-        SearchStatus::Solved => Ok(result.plan.iter().map(|&a| model.task().action_name(a)).collect()),
+        SearchStatus::Solved => Ok(result.plan),
         other => Err(other),
     }
 }

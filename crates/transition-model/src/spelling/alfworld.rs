@@ -146,15 +146,22 @@ pub fn display_names(task: &Task) -> Vec<Option<String>> {
 }
 
 impl Spelling {
-    /// TextWorld commands from the game's grammar (`game.tw-pddl`'s `grammar` field).
+    /// TextWorld commands from the game's grammar (`game.tw-pddl`'s `grammar` field), objects
+    /// written by ALFWorld's display names ([`display_names`]).
     pub fn alfworld(task: &Task, grammar: &str) -> Result<Spelling, SpellingError> {
+        Spelling::alfworld_with_names(task, grammar, display_names(task))
+    }
+
+    /// TextWorld commands from the game's grammar, objects written by `names` (indexed by
+    /// object; an action with an unnamed object has no spelling). An agent whose problem names
+    /// objects as it perceived them passes those names.
+    pub fn alfworld_with_names(task: &Task, grammar: &str, names: Vec<Option<String>>) -> Result<Spelling, SpellingError> {
         let templates = templates(grammar)?;
         let mut compiled = Vec::with_capacity(task.schemas.len());
         for schema in &task.schemas {
             let template = templates.get(&schema.name).ok_or_else(|| SpellingError::MissingTemplate(schema.name.clone()))?;
             compiled.push(compile(&schema.name, template, &schema.params)?);
         }
-        let names = display_names(task);
         Ok(Spelling::from_fn(task, SurfaceLanguage::Alfworld, |id| {
             let action = task.action(id);
             let mut out = String::new();
