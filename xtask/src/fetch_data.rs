@@ -16,7 +16,7 @@ use std::process::{Command, ExitCode};
 use anyhow::{Context, bail};
 use serde_json::{Value, json};
 
-use crate::pypi::{download_wheel, python_with_pip, sha256_of};
+use crate::pypi::{download_wheel, sha256_of, with_pip};
 
 const PACKAGE: &str = "eai-eval==1.0.5";
 const WHEEL_SHA256: &str = "fe09f2a84cfb2451e111d02a2fa57e18797e747b73de23cb036d0d4e6502099f";
@@ -51,27 +51,15 @@ pub fn run(args: FetchDataArgs) -> anyhow::Result<ExitCode> {
         println!("{}", tasks.display());
         return Ok(ExitCode::SUCCESS);
     }
-    let Some(python) = python_with_pip() else {
-        eprintln!("error: pip is not available (`python3 -m pip` failed); install Python 3 with pip to fetch {PACKAGE} from PyPI");
-        return Ok(ExitCode::from(2));
+    let hint = format!("install Python 3 with pip to fetch {PACKAGE} from PyPI");
+    let count = match with_pip(&root, &hint, |python, scratch| fetch(python, scratch, &root))? {
+        Ok(count) => count,
+        Err(code) => return Ok(code),
     };
-    std::fs::create_dir_all(&root).with_context(|| format!("cannot create {}", root.display()))?;
-    let scratch = root.join(format!(".download-{}", std::process::id()));
-    std::fs::create_dir_all(&scratch)?;
-    let result = fetch(python, &scratch, &root);
-    std::fs::remove_dir_all(&scratch).ok();
-    match result {
-        Ok(count) => {
-            std::fs::write(&done, format!("{PACKAGE} sha256 {WHEEL_SHA256}: {count} tasks\n"))?;
-            eprintln!("{count} tasks in {}", tasks.display());
-            println!("{}", tasks.display());
-            Ok(ExitCode::SUCCESS)
-        }
-        Err(error) => {
-            eprintln!("error: {error:#}");
-            Ok(ExitCode::from(2))
-        }
-    }
+    std::fs::write(&done, format!("{PACKAGE} sha256 {WHEEL_SHA256}: {count} tasks\n"))?;
+    eprintln!("{count} tasks in {}", tasks.display());
+    println!("{}", tasks.display());
+    Ok(ExitCode::SUCCESS)
 }
 
 fn fetch(python: &str, scratch: &Path, root: &Path) -> anyhow::Result<usize> {

