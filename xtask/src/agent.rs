@@ -1,93 +1,260 @@
-//! `cargo xtask agent --game G`: the paper's agent on one ALFWorld game. Phase I with the
-//! systematic explorer (`exploration_harness::alfworld`), ŝ0 written as a problem of ALFWorld's
-//! domain, Phase II by A* with LM-cut on it (the symbolic planner; the model-driven Phase II
-//! modes come with the rest of the exploration-harness issue), the plan executed open-loop; the
-//! game's own goal check is the verdict. Exit 0 won, 1 not won, 2 bad input.
+//! `cargo xtask agent (--game G | --benchmark B --task ID)`: the paper's agent on one task.
+//! Phase I with the chosen explorer (`systematic`, or a chat model: `smollm2`, a GGUF path,
+//! `openai:URL`), ŝ0 handed over as a PDDL problem, Phase II with the chosen planner
+//! (constrained MCTS by default, every mode and option of `plan --planner mcts`; or `astar`),
+//! the plan executed open-loop (or `--closed-loop`); the environment's own goal check is the
+//! verdict. Exit 0 won, 1 not won, 2 bad input.
 
 use std::path::PathBuf;
 use std::process::ExitCode;
-use std::time::{Duration, Instant};
+use std::sync::Arc;
+use std::time::Duration;
 
 use anyhow::Context;
-use exploration_harness::alfworld::run_episode;
-use exploration_harness::{Ontology, parse_goal};
-use household_sim::{AlfworldEnv, Environment};
+use exploration_harness::alfworld::AlfworldAdapter;
+use exploration_harness::chat_policy::ChatPolicy;
+use exploration_harness::virtualhome::VirtualhomeAdapter;
+use exploration_harness::{
+    ClassGoal, Episode, EpisodeConfig, Grounded, Handing, Ontology, PhaseTwo, Policy, Systematic, parse_goal, run_episode,
+};
+use household_sim::{AlfworldEnv, Environment, Judge, VirtualhomeEnv, VirtualhomeTask};
+use lm::{LanguageModel, LocalChat, LocalModel};
+use mcts::Decoder;
+use mcts::prompt::planning_prompt;
 use serde_json::json;
-use transition_model::TransitionModel;
+use vlm_client::{ChatClient, ChatModel, ClientConfig};
 
 use crate::input::InputError;
+use crate::phase2::{DecodeArgs, LmArgs, load_lm};
 
 #[derive(Debug, clap::Args)]
 pub struct AgentArgs {
     /// An ALFWorld game: `game.tw-pddl` or the folder holding it.
-    #[arg(long)]
-    game: PathBuf,
-    /// Phase I's explorer (only `systematic` so far: the fixed sweep, no model).
-    #[arg(long, default_value = "systematic", value_parser = ["systematic"])]
+    #[arg(long, required_unless_present = "benchmark", conflicts_with = "benchmark")]
+    game: Option<PathBuf>,
+    /// A VirtualHome benchmark, with `--task`.
+    #[arg(long, value_parser = ["virtualhome-eai", "virtualhome-rearrange"], requires = "task")]
+    benchmark: Option<String>,
+    /// Task id (`201_1`, `dishwasher-000`), with `--benchmark`.
+    #[arg(long, requires = "benchmark")]
+    task: Option<String>,
+    /// Folder of VirtualHome task files [default: fixtures/virtualhome-eai/graphs, or
+    /// fixtures/virtualhome-rearrange; every EAI task: the folder `cargo xtask fetch-data` prints].
+    #[arg(long, requires = "benchmark")]
+    task_dir: Option<PathBuf>,
+    /// Phase I's policy: `systematic` (the fixed sweep, no model), `smollm2` (the local default
+    /// model, decoding under the reply's schema), a GGUF path, or `openai:URL` (a served chat
+    /// model; `--served-model` names it).
+    #[arg(long, default_value = "systematic")]
     explorer: String,
-    /// Environment steps for the whole episode (the paper: 55 for ALFWorld).
-    #[arg(long, default_value_t = 55)]
-    budget: usize,
+    /// Phase II's planner: `mcts` (the `--mode` of `--lm`, constrained MCTS by default) or
+    /// `astar` (A* with LM-cut, the symbolic control).
+    #[arg(long, default_value = "mcts", value_parser = ["mcts", "astar"])]
+    planner: String,
+    #[command(flatten)]
+    lm: LmArgs,
+    #[command(flatten)]
+    decode: DecodeArgs,
+    /// Environment steps for the whole episode [default: the paper's, 55 ALFWorld, 20 VirtualHome].
+    #[arg(long)]
+    budget: Option<usize>,
     /// Seconds of search for Phase II.
-    #[arg(long, default_value_t = 60)]
-    time_limit: u64,
-    /// Write every command sent to the game, one a line (replayable in the real engine with
-    /// `../shared/anchors/alfworld_replay.py GAME PLAN`).
+    #[arg(long, default_value = "60", value_parser = crate::input::positive_seconds)]
+    time_limit: f64,
+    /// Beyond the paper: when a plan step is not executed, hand over again and replan.
+    #[arg(long)]
+    closed_loop: bool,
+    /// Write every command sent to the environment, one a line (an ALFWorld episode replays in
+    /// the real engine with `../shared/anchors/alfworld_replay.py GAME FILE`).
     #[arg(long)]
     commands_out: Option<PathBuf>,
-    /// Print one JSON object (steps, the grounded problem, the plan, the verdict).
+    /// Write the whole episode record as JSON (Phase I decisions, ŝ0, β, the plan, each step).
+    #[arg(long)]
+    trace: Option<PathBuf>,
+    /// Print the episode record as one JSON object instead of text.
     #[arg(long)]
     json: bool,
 }
 
-pub fn run(args: AgentArgs) -> anyhow::Result<ExitCode> {
-    let game = if args.game.is_dir() { args.game.join("game.tw-pddl") } else { args.game.clone() };
-    let mut env = AlfworldEnv::from_game_file(&game).map_err(|e| InputError(e.to_string()))?;
+/// Phase I's chat model, named as `--explorer` names it.
+pub fn explorer(name: &str, served_model: &str) -> anyhow::Result<Box<dyn Policy>> {
+    if name == "systematic" {
+        return Ok(Box::new(Systematic));
+    }
+    let model: Box<dyn ChatModel> = if let Some(url) = name.strip_prefix("openai:") {
+        Box::new(ChatClient::new(ClientConfig::new(url, served_model)).map_err(|e| InputError(format!("{url}: {e}")))?)
+    } else {
+        let path = crate::lm::resolve_model(name)?;
+        let model = LocalModel::load(&path).map_err(|e| InputError(format!("{}: {e}", path.display())))?;
+        Box::new(LocalChat::new(model, name).map_err(|e| InputError(format!("{}: {e}", path.display())))?)
+    };
+    Ok(Box::new(ChatPolicy::new(model, name)))
+}
+
+/// Phase II as `--planner`, `--lm` and the decoding options say.
+pub struct PhaseTwoRunner {
+    planner: String,
+    lm: Option<Box<dyn LanguageModel>>,
+    vocab: Option<Arc<token_constraint::Vocabulary>>,
+    decode: DecodeArgs,
+    time_limit: f64,
+}
+
+impl PhaseTwoRunner {
+    pub fn new(planner: &str, lm: &LmArgs, decode: &DecodeArgs, time_limit: f64) -> anyhow::Result<PhaseTwoRunner> {
+        let (model, vocab) = if planner == "mcts" {
+            decode.config(time_limit)?;
+            let model = load_lm(lm)?;
+            let vocab = Arc::new(mcts::constraint_vocabulary(model.vocabulary()).context("the model's vocabulary")?);
+            (Some(model), Some(vocab))
+        } else {
+            (None, None)
+        };
+        Ok(PhaseTwoRunner { planner: planner.to_string(), lm: model, vocab, decode: decode.clone(), time_limit })
+    }
+
+    pub fn plan(&mut self, grounded: &Grounded) -> Result<PhaseTwo, String> {
+        let model = &grounded.model;
+        if self.planner == "astar" {
+            let actions =
+                heuristics::search::optimal_plan(model, Duration::from_secs_f64(self.time_limit)).map_err(|s| format!("{s:?}"))?;
+            return Ok(PhaseTwo { actions, detail: json!({"planner": "astar"}), ..PhaseTwo::default() });
+        }
+        let (Some(lm), Some(vocab)) = (self.lm.as_mut(), self.vocab.as_ref()) else { return Err("no language model".into()) };
+        let initial = model.initial_state();
+        let prompt = planning_prompt(model, &grounded.spelling, &initial, &self.decode.prompt_options());
+        let text = prompt.render(lm.as_ref()).map_err(|e| format!("rendering the prompt: {e}"))?;
+        let tokens = lm.tokenizer().encode_prompt(&text).map_err(|e| format!("tokenizing the prompt: {e}"))?;
+        let config = self.decode.config(self.time_limit).map_err(|e| e.to_string())?;
+        let mut decoder =
+            Decoder::with_end_policy(model, &grounded.spelling, Arc::clone(vocab), self.decode.value(), self.decode.end_policy());
+        let outcome = decoder.decode(lm.as_mut(), &tokens, &initial, &config).map_err(|e| format!("decoding: {e}"))?;
+        let detail = json!({
+            "planner": "mcts", "mode": outcome.mode, "stop": outcome.stop, "valid": outcome.valid, "solved": outcome.solved,
+            "invalid": outcome.invalid.as_ref().map(|i| format!("step {}: {:?}", i.step + 1, i.text)),
+            "lines": outcome.lines, "simulations": outcome.stats.simulations, "nodes": outcome.stats.nodes,
+            "prompt_tokens": tokens.len(), "millis": outcome.stats.millis,
+        });
+        if outcome.plan.is_empty() && !outcome.solved {
+            return Err(format!("{:?}: no plan", outcome.stop));
+        }
+        Ok(PhaseTwo {
+            actions: outcome.plan,
+            model_calls: outcome.stats.usage.forward_calls,
+            generated_tokens: outcome.stats.usage.tokens_generated,
+            detail,
+        })
+    }
+}
+
+/// The benchmark's F_str.
+pub fn ontology(benchmark: &str) -> anyhow::Result<Ontology> {
+    let path = benchmark_data::fixtures_dir().join(format!("ontology/{benchmark}.txt"));
+    let text = std::fs::read_to_string(&path).with_context(|| format!("cannot read {}", path.display()))?;
+    Ok(Ontology::from_text(&text, &path.display().to_string()).map_err(|e| InputError(e.to_string()))?)
+}
+
+/// An ALFWorld game and its adapter.
+pub fn alfworld(game: &std::path::Path) -> anyhow::Result<(AlfworldEnv, AlfworldAdapter, ClassGoal)> {
+    let game = if game.is_dir() { game.join("game.tw-pddl") } else { game.to_path_buf() };
+    let env = AlfworldEnv::from_game_file(&game).map_err(|e| InputError(e.to_string()))?;
     let goal = parse_goal(env.goal()).map_err(|e| InputError(e.to_string()))?;
     let fixtures = benchmark_data::fixtures_dir();
-    let ontology_path = fixtures.join("ontology/alfworld.txt");
-    let ontology = Ontology::from_text(
-        &std::fs::read_to_string(&ontology_path).with_context(|| format!("cannot read {}", ontology_path.display()))?,
-        &ontology_path.display().to_string(),
-    )
-    .map_err(|e| InputError(e.to_string()))?;
     let domain_text = std::fs::read_to_string(fixtures.join("alfworld/alfred.pddl")).context("ALFWorld's domain")?;
     let domain = pddl_syntax::parse_domain(&domain_text).map_err(|e| anyhow::anyhow!("alfred.pddl: {e:?}"))?;
-    // The game's command grammar (the same file for every game): how plans are spelled.
     let grammar = std::fs::read_to_string(fixtures.join("alfworld/alfred.twl2")).context("ALFWorld's grammar")?;
-    let limit = Duration::from_secs(args.time_limit);
-    let mut planning_ms = 0.0;
-    let mut plan = |model: &TransitionModel| {
-        let start = Instant::now();
-        let result = heuristics::search::optimal_plan(model, limit);
-        planning_ms = start.elapsed().as_secs_f64() * 1e3;
-        result.map_err(|status| format!("{status:?}"))
+    let adapter = AlfworldAdapter::new(ontology("alfworld")?, domain, grammar, env.goal());
+    Ok((env, adapter, goal))
+}
+
+/// A VirtualHome task and its adapter.
+pub fn virtualhome(
+    benchmark: &str,
+    task: &str,
+    task_dir: Option<&std::path::Path>,
+) -> anyhow::Result<(VirtualhomeEnv, VirtualhomeAdapter, ClassGoal)> {
+    let default = if benchmark == "virtualhome-rearrange" { "virtualhome-rearrange" } else { "virtualhome-eai/graphs" };
+    let dir = task_dir.map_or_else(|| benchmark_data::fixtures_dir().join(default), std::path::Path::to_path_buf);
+    let path = dir.join(format!("{task}.json.gz"));
+    if !path.is_file() {
+        anyhow::bail!(InputError(format!("no task {task} in {} (task files there are `<id>.json.gz`)", dir.display())));
+    }
+    let loaded = VirtualhomeTask::load(&path).map_err(|e| InputError(e.to_string()))?;
+    let env = VirtualhomeEnv::new(loaded, benchmark);
+    let goal = parse_goal(env.goal()).map_err(|e| InputError(e.to_string()))?;
+    let adapter = VirtualhomeAdapter::new(ontology("virtualhome")?).map_err(anyhow::Error::msg)?;
+    Ok((env, adapter, goal))
+}
+
+/// One episode on any environment.
+pub fn episode<E: Environment + Judge>(
+    env: &mut E,
+    adapter: &mut dyn Handing,
+    policy: &mut dyn Policy,
+    goal: &ClassGoal,
+    config: EpisodeConfig,
+    phase2: &mut PhaseTwoRunner,
+) -> Episode {
+    let mut planner = |g: &Grounded| phase2.plan(g);
+    run_episode(env, adapter, policy, goal, config, &mut planner)
+}
+
+pub fn run(args: AgentArgs) -> anyhow::Result<ExitCode> {
+    let mut policy = explorer(&args.explorer, &args.lm.served_model)?;
+    let mut phase2 = PhaseTwoRunner::new(&args.planner, &args.lm, &args.decode, args.time_limit)?;
+    let (ep, name) = if let Some(game) = &args.game {
+        let (mut env, mut adapter, goal) = alfworld(game)?;
+        let config = EpisodeConfig { budget: args.budget.unwrap_or(55), closed_loop: args.closed_loop };
+        (episode(&mut env, &mut adapter, policy.as_mut(), &goal, config, &mut phase2), game.display().to_string())
+    } else {
+        let (benchmark, task) = (args.benchmark.as_deref().unwrap_or_default(), args.task.as_deref().unwrap_or_default());
+        let (mut env, mut adapter, goal) = virtualhome(benchmark, task, args.task_dir.as_deref())?;
+        let config = EpisodeConfig { budget: args.budget.unwrap_or(20), closed_loop: args.closed_loop };
+        (episode(&mut env, &mut adapter, policy.as_mut(), &goal, config, &mut phase2), format!("{benchmark}/{task}"))
     };
-    let start = Instant::now();
-    let episode = run_episode(&mut env, &goal, &ontology, &domain, &grammar, args.budget, &mut plan);
-    let millis = start.elapsed().as_secs_f64() * 1e3;
     if let Some(path) = &args.commands_out {
-        let text: String = episode.steps.iter().map(|s| format!("{}\n", s.command)).collect();
+        let text: String = ep.steps.iter().map(|s| format!("{}\n", s.command)).collect();
         std::fs::write(path, text).with_context(|| format!("cannot write {}", path.display()))?;
     }
-    if args.json {
-        println!(
-            "{}",
-            json!({
-                "game": game.display().to_string(), "explorer": args.explorer, "goal": goal.to_string(),
-                "success": episode.success, "failure": episode.failure, "phase1_steps": episode.phase1_steps,
-                "env_steps": episode.steps.len(), "plan": episode.plan,
-                "steps": episode.steps.iter().map(|s| json!({"phase": s.phase, "command": s.command, "executed": s.executed, "observation": s.observation})).collect::<Vec<_>>(),
-                "problem": episode.handover.as_ref().map(|h| h.problem.clone()),
-                "binding": episode.handover.as_ref().map(|h| h.binding.clone()),
-                "planning_ms": planning_ms, "millis": millis,
-            })
-        );
-    } else {
-        for s in &episode.steps {
-            println!("[{}] {} -> {}", s.phase, s.command, s.observation.lines().next().unwrap_or(""));
-        }
-        println!("{}", if episode.success { "won".to_string() } else { format!("not won: {}", episode.failure.as_deref().unwrap_or("?")) });
+    let record = json!({"task": name, "explorer": args.explorer, "planner": args.planner, "lm": args.lm.lm, "episode": ep});
+    if let Some(path) = &args.trace {
+        std::fs::write(path, serde_json::to_string_pretty(&record)?).with_context(|| format!("cannot write {}", path.display()))?;
     }
-    Ok(if episode.success { ExitCode::SUCCESS } else { ExitCode::from(1) })
+    if args.json {
+        println!("{record}");
+    } else {
+        print_episode(&ep);
+    }
+    Ok(if ep.success { ExitCode::SUCCESS } else { ExitCode::from(1) })
+}
+
+/// The episode as a person reads it.
+fn print_episode(ep: &Episode) {
+    println!("Phase I ({} steps, stopped: {}):", ep.phase1_steps, ep.phase1_stop);
+    for d in &ep.decisions {
+        println!("  {} -> {}", d.skill, d.outcome);
+        for &i in &d.steps {
+            println!("    > {}: {}", ep.steps[i].command, ep.steps[i].observation.lines().next().unwrap_or(""));
+        }
+        for f in &d.admitted {
+            println!("    + {f}");
+        }
+        for f in &d.refused {
+            println!("    - {f} (proposed, no evidence)");
+        }
+    }
+    if let Some(h) = &ep.handover {
+        println!("Grounded problem:\n{}", h.problem);
+    }
+    println!("Plan ({} steps):", ep.plan.len());
+    for s in ep.steps.iter().filter(|s| s.phase == "plan") {
+        println!("  {} -> {}", s.command, if s.executed { "executed" } else { "not executed" });
+    }
+    println!(
+        "{} (precision {:?}, recall {:?}, attribution {:?})",
+        if ep.success { "won".to_string() } else { format!("not won: {}", ep.failure.as_deref().unwrap_or("?")) },
+        ep.precision,
+        ep.recall,
+        ep.attribution
+    );
 }

@@ -68,8 +68,9 @@ enum Command {
     Heuristic(planning::HeuristicArgs),
     /// Evaluate an agent on the benchmarks in fixtures/ (the project's main job).
     Eval(eval::EvalArgs),
-    /// The agent on one ALFWorld game: Phase I (systematic explorer), the grounded problem,
-    /// Phase II (A* with LM-cut), the plan executed open-loop; exit 0 won, 1 not won.
+    /// The agent on one task (an ALFWorld game or a VirtualHome task): Phase I (systematic or a
+    /// chat model), the grounded problem, Phase II (constrained MCTS by default, or A*), the plan
+    /// executed open-loop; exit 0 won, 1 not won.
     Agent(agent::AgentArgs),
     /// Play a household environment: ALFWorld (`--game G`: JSON lines of what it shows at every
     /// step, as the real engine's recorder prints them) or VirtualHome (`--benchmark

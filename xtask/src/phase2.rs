@@ -190,7 +190,7 @@ impl DecodeArgs {
         parts.iter().map(|p| format!("-{p}")).collect()
     }
 
-    fn prompt_options(&self) -> PromptOptions {
+    pub fn prompt_options(&self) -> PromptOptions {
         let mut options = PromptOptions::default();
         if self.all_facts {
             options.relevance = Relevance::All;

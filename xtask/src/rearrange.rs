@@ -7,14 +7,17 @@
 //! 1. a base scene: one of the fixture kitchen tasks' init graphs that has the family's
 //!    appliance (`dishwasher`; `microwave`; `freezer`, EAI's fridge; `microwave` for food);
 //! 2. 1-3 novel objects (1-2 for the microwave, 1 for food): new nodes, with ids above every id
-//!    of the scene, of classes drawn from the family's list, copying the class's category and
+//!    of the scene, of classes drawn from the family's list among those the scene has no
+//!    instance of (the agent is told classes only, so the goal's objects must be the only
+//!    instances of their classes), copying the class's category and
 //!    properties from an instance in some fixture scene (states `CLEAN`);
 //! 3. a start placement for each: drawn among the kitchen's (`dining_room`) and living room's (`home_office`) furniture that
 //!    has SURFACES (the object is ON it) or can open and contains (INSIDE it, often closed),
 //!    never the target appliance; edges ON/INSIDE the place, INSIDE its room, CLOSE both ways;
 //! 4. the goal, in EAI's `vh_goal` notation: each object INSIDE the appliance and the appliance
 //!    CLOSED (preparing food: also ON);
-//! 5. kept only if A* with LM-cut finds a plan under the sound domain within the time limit and
+//! 5. kept only if A* with LM-cut finds a plan of at most `MAX_REFERENCE_STEPS` (10) steps under
+//!    the sound domain within the time limit and
 //!    that plan executes and reaches the goal in `VirtualhomeEnv`; its script lines are stored as
 //!    `reference_program`. `tools/virtualhome_record.py check` runs them in the real evolving
 //!    graph (the closing figures).
@@ -34,6 +37,11 @@ use serde_json::{Value, json};
 use transition_model::TransitionModel;
 
 use crate::input::InputError;
+
+/// Longest reference program kept: the paper's VirtualHome plans are at most 8 high-level
+/// actions (mean 6.4, §4.3), within a 20-step episode that exploration shares; 10 keeps
+/// two-object tasks (two trips' worth of walking) and leaves exploration 10 steps.
+const MAX_REFERENCE_STEPS: usize = 10;
 
 /// One family of the set.
 struct Family {
@@ -136,6 +144,9 @@ pub fn run(args: RearrangeArgs) -> anyhow::Result<ExitCode> {
             };
             let loaded = VirtualhomeTask::from_json(&task.to_string(), &id).map_err(|e| anyhow::anyhow!("{id}: {e}"))?;
             let Some(script) = reference(&domain, &loaded, Duration::from_secs(args.time_limit))? else { continue };
+            if script.len() > MAX_REFERENCE_STEPS {
+                continue;
+            }
             let mut task = task;
             task["reference_program"] = json!(script);
             let path = args.out.join(format!("{id}.json.gz"));
@@ -213,8 +224,15 @@ fn candidate(
     let mut new_edges = edges.clone();
     let mut goal = Vec::new();
     let (mut objects, mut placements) = (Vec::new(), Vec::new());
+    // Classes the scene has no instance of: the goal names classes, so an object of a class the
+    // scene already holds would be ambiguous to an agent told only the class.
+    let present: std::collections::BTreeSet<&str> = nodes.iter().filter_map(|n| n["class_name"].as_str()).collect();
+    let fresh: Vec<&str> = classes.iter().copied().filter(|c| !present.contains(c)).collect();
+    if fresh.is_empty() {
+        return None;
+    }
     for oid in (first_id..).take(count) {
-        let class = classes[rng.choice_index(classes.len())];
+        let class = fresh[rng.choice_index(fresh.len())];
         let (category, properties) = &templates[class];
         let (place, room, relation) = places[rng.choice_index(places.len())];
         new_nodes.push(json!({"id": oid, "class_name": class, "category": category, "properties": properties, "states": ["CLEAN"], "prefab_name": null, "bounding_box": null}));

@@ -29,12 +29,14 @@ use std::collections::{BTreeMap, BTreeSet};
 use std::fmt::Write as _;
 
 use grounding::ActionId;
-use household_sim::{Environment, Event};
-use transition_model::{Spelling, TransitionModel};
+use household_sim::{Environment, GoalAnnotation, JudgeAtom, Observation};
+use transition_model::Spelling;
 
-use crate::evidence::{Belief, perceive_alfworld};
+use crate::episode::{Grounded, Handover, ground};
+use crate::evidence::{Belief, Fact, perceive_alfworld};
 use crate::goal::ClassGoal;
 use crate::ontology::Ontology;
+use crate::phase1::{Adapter, Record, Skill, Skills};
 
 /// The perceived class of a name: `mug 2` → `mug`.
 pub fn class_of(name: &str) -> &str {
@@ -69,81 +71,6 @@ pub fn ready(goal: &ClassGoal, belief: &Belief) -> bool {
         }
     }
     needed.into_iter().all(|(class, n)| objects.iter().filter(|o| class_of(o) == class).count() >= n)
-}
-
-/// One environment step of an episode.
-#[derive(Debug, Clone, PartialEq, Eq)]
-pub struct StepRecord {
-    pub phase: &'static str,
-    pub command: String,
-    pub executed: bool,
-    pub observation: String,
-}
-
-/// ŝ0 and β.
-#[derive(Debug, Clone, PartialEq, Eq)]
-pub struct Handover {
-    pub problem: String,
-    /// PDDL object name → the name the agent perceived.
-    pub binding: BTreeMap<String, String>,
-}
-
-/// An episode's outcome.
-#[derive(Debug, Clone)]
-pub struct Episode {
-    pub success: bool,
-    pub phase1_steps: usize,
-    pub plan: Vec<String>,
-    pub steps: Vec<StepRecord>,
-    pub handover: Option<Handover>,
-    /// Why it failed, when it did: `not ready`, `no plan: ...`, `step K not executed: ...`,
-    /// `goal not reached`.
-    pub failure: Option<String>,
-}
-
-/// Phase I with the systematic explorer, within `budget` environment steps; returns the
-/// belief and the steps taken. `first` is the reset's observation.
-pub fn explore_systematic(
-    env: &mut dyn Environment,
-    goal: &ClassGoal,
-    ontology: &Ontology,
-    first: &str,
-    budget: usize,
-) -> (Belief, Vec<StepRecord>) {
-    let mut belief = Belief::default();
-    let (places, percepts) = perceive_alfworld(first, 0);
-    belief.add_places(&places);
-    belief.admit(&percepts);
-    let mut steps = Vec::new();
-    let mut inspected: BTreeSet<String> = BTreeSet::new();
-    let act = |env: &mut dyn Environment, belief: &mut Belief, steps: &mut Vec<StepRecord>, command: String| {
-        let result = env.step(&command);
-        let (places, percepts) = perceive_alfworld(&result.observation.text, steps.len() + 1);
-        belief.add_places(&places);
-        belief.admit(&percepts);
-        steps.push(StepRecord {
-            phase: "explore",
-            command,
-            executed: matches!(result.event, Event::Executed),
-            observation: result.observation.text,
-        });
-    };
-    while steps.len() < budget && !ready(goal, &belief) {
-        let Some(place) = belief.places.iter().find(|p| !inspected.contains(*p) && worth_inspecting(goal, ontology, &belief, p)).cloned()
-        else {
-            break;
-        };
-        inspected.insert(place.clone());
-        // Look: where the agent already stands at the place's location, `go to` is not
-        // admissible (it would answer "Nothing happens."); `examine` shows the place instead.
-        let go = format!("go to {place}");
-        let here = env.admissible_commands().is_some_and(|a| a.iter().any(|c| c.starts_with("go to ")) && !a.contains(&go));
-        act(env, &mut belief, &mut steps, if here { format!("examine {place}") } else { go });
-        if belief.holds("opened", &[&place]) == Some(false) && steps.len() < budget {
-            act(env, &mut belief, &mut steps, format!("open {place}"));
-        }
-    }
-    (belief, steps)
 }
 
 /// Whether the sweep should inspect `place`: its class can hold (F_str's `canContain`) an
@@ -281,86 +208,170 @@ pub fn write_problem(belief: &Belief, ontology: &Ontology, goal_formula: &str, a
 /// of one is not sent.
 const LOOKING: &[&str] = &["look", "inventory", "examinereceptacle", "examineobject", "help"];
 
-/// One episode: systematic Phase I, the hand-over, ŝ0 grounded in ALFWorld's `domain`,
-/// `plan` (Phase II on that transition model), the plan spelled by the game's `grammar` with
-/// the names β gives back, and executed open-loop. `budget`: environment steps for the whole
-/// episode (ALFWorld: 55).
-pub fn run_episode(
-    env: &mut dyn Environment,
-    goal: &ClassGoal,
-    ontology: &Ontology,
-    domain: &pddl_syntax::Domain,
-    grammar: &str,
-    budget: usize,
-    plan: &mut dyn FnMut(&TransitionModel) -> Result<Vec<ActionId>, String>,
-) -> Episode {
-    let formula = env.goal().formula.clone();
-    let first = env.reset().text;
-    let (belief, mut steps) = explore_systematic(env, goal, ontology, &first, budget);
-    let phase1_steps = steps.len();
-    let mut episode = Episode { success: false, phase1_steps, plan: Vec::new(), steps: Vec::new(), handover: None, failure: None };
-    if !ready(goal, &belief) {
-        episode.failure = Some("not ready: Phase I did not find every object the goal needs".into());
-        episode.steps = steps;
-        return episode;
-    }
-    let at = steps.iter().rev().find(|s| s.executed && s.command.starts_with("go to ")).map(|s| s.command["go to ".len()..].to_string());
-    let handover = write_problem(&belief, ontology, &formula, at.as_deref());
-    let planned = ground(domain, &handover.problem).and_then(|model| {
-        let actions = plan(&model).map_err(|e| format!("no plan: {e}"))?;
-        let names = model.task().objects.iter().map(|o| handover.binding.get(&o.name).cloned()).collect();
-        let spelling = Spelling::alfworld_with_names(model.task(), grammar, names).map_err(|e| format!("grammar: {e}"))?;
-        let task = model.task();
-        actions
-            .iter()
-            .filter(|&&a| !LOOKING.contains(&task.schemas[task.action(a).schema.index()].name.as_str()))
-            .map(|&a| {
-                spelling.spell(a).map(str::to_string).ok_or_else(|| format!("cannot bind {} to perceived names", task.action_name(a)))
-            })
-            .collect::<Result<Vec<String>, String>>()
-    });
-    episode.handover = Some(handover);
-    let commands = match planned {
-        Ok(commands) => commands,
-        Err(e) => {
-            episode.failure = Some(e);
-            episode.steps = steps;
-            return episode;
-        }
-    };
-    for command in commands {
-        episode.plan.push(command.clone());
-        // Places can share a location in ALFWorld (a drawer under a desk): `go to` the place
-        // the agent already stands at is not among the game's admissible commands (it would
-        // answer "Nothing happens."), and is skipped without spending a step.
-        if command.starts_with("go to ")
-            && env.admissible_commands().is_some_and(|a| a.iter().any(|c| c.starts_with("go to ")) && !a.contains(&command))
-        {
-            continue;
-        }
-        if steps.len() >= budget {
-            episode.failure = Some("step budget spent".into());
-            break;
-        }
-        let result = env.step(&command);
-        let executed = matches!(result.event, Event::Executed);
-        steps.push(StepRecord { phase: "plan", command: command.clone(), executed, observation: result.observation.text });
-        if !executed {
-            episode.failure = Some(format!("step {} not executed: {command}", steps.len()));
-            break;
-        }
-    }
-    episode.success = env.goal_reached();
-    if !episode.success && episode.failure.is_none() {
-        episode.failure = Some("goal not reached".into());
-    }
-    episode.steps = steps;
-    episode
+/// ALFWorld's side of Phase I and of the hand-over.
+///
+/// - K_t: `open X` when the agent stands at X and an observation said X is closed; `close X`
+///   when it stands at X and X is open; `goto X` for every listed place not yet visited, those
+///   worth inspecting first (F_str says their class can hold an object class the goal still
+///   lacks, or the goal names their class and none was visited), then places the model's
+///   hypotheses name, then the rest in the room listing's order; `look` where the agent stands at
+///   a place; `done`.
+/// - The sweep: `open` the place it stands at if closed, else the first place worth inspecting.
+/// - Commands: `goto X` is `go to X`, or `examine X` where the agent already stands at X's
+///   location (the game does not list `go to X` there); `look` is `examine X` of the place it
+///   stands at (another view: ALFWorld's text states a place's contents in full, so the
+///   temporary pickup that tests a hypothesis elsewhere is never needed here).
+pub struct AlfworldAdapter {
+    pub ontology: Ontology,
+    pub domain: pddl_syntax::Domain,
+    /// The game's command grammar (`alfred.twl2`).
+    pub grammar: String,
+    /// The game's goal formula (class level: it names types, never instances).
+    pub formula: String,
 }
 
-/// ŝ0 as a transition model of ALFWorld's domain.
-fn ground(domain: &pddl_syntax::Domain, problem: &str) -> Result<TransitionModel, String> {
-    let parsed = pddl_syntax::parse_problem(problem).map_err(|e| format!("the grounded problem does not parse: {e:?}"))?;
-    let task = grounding::ground(domain, &parsed).map_err(|e| format!("the grounded problem does not ground: {e}"))?;
-    Ok(TransitionModel::new(task))
+impl std::fmt::Debug for AlfworldAdapter {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("AlfworldAdapter").field("formula", &self.formula).finish_non_exhaustive()
+    }
+}
+
+impl AlfworldAdapter {
+    pub fn new(ontology: Ontology, domain: pddl_syntax::Domain, grammar: String, annotation: &GoalAnnotation) -> AlfworldAdapter {
+        AlfworldAdapter { ontology, domain, grammar, formula: annotation.formula.clone() }
+    }
+
+    /// The place the agent stands at: the target of the last executed `go to`, or `examine` (the
+    /// agent sends `examine` only for places).
+    fn at(steps: &[crate::phase1::StepRecord]) -> Option<String> {
+        steps
+            .iter()
+            .rev()
+            .filter(|s| s.executed)
+            .find_map(|s| s.command.strip_prefix("go to ").or_else(|| s.command.strip_prefix("examine ")).map(str::to_string))
+    }
+}
+
+/// Whether the game would answer `go to place` with "Nothing happens." (the agent stands at its
+/// location already): the admissible list has other `go to`s but not this one.
+fn here(env: &dyn Environment, place: &str) -> bool {
+    let go = format!("go to {place}");
+    env.admissible_commands().is_some_and(|a| a.iter().any(|c| c.starts_with("go to ")) && !a.contains(&go))
+}
+
+impl Adapter for AlfworldAdapter {
+    fn observe(&mut self, observation: &Observation, step: usize, belief: &mut Belief) {
+        let (places, percepts) = perceive_alfworld(&observation.text, step);
+        belief.add_places(&places);
+        belief.admit(&percepts);
+    }
+
+    fn skills(&self, goal: &ClassGoal, belief: &Belief, record: &Record, _env: &dyn Environment) -> Skills {
+        let mut list = Vec::new();
+        let mut sweep = None;
+        let at = Self::at(&record.steps);
+        if let Some(p) = &at {
+            match belief.holds("opened", &[p]) {
+                Some(false) => {
+                    sweep = Some(list.len());
+                    list.push(Skill::Open(p.clone()));
+                }
+                Some(true) => list.push(Skill::Close(p.clone())),
+                None => {}
+            }
+        }
+        let unvisited: Vec<&String> = belief.places.iter().filter(|p| belief.holds("visited", &[p]) != Some(true)).collect();
+        let hinted: BTreeSet<&str> =
+            belief.hypotheses().filter(|f| f.predicate == "inReceptacle" && f.args.len() == 2).map(|f| f.args[1].as_str()).collect();
+        let (worth, rest): (Vec<&String>, Vec<&String>) =
+            unvisited.into_iter().partition(|p| worth_inspecting(goal, &self.ontology, belief, p));
+        let (hint, rest): (Vec<&String>, Vec<&String>) = rest.into_iter().partition(|p| hinted.contains(p.as_str()));
+        if sweep.is_none() && !worth.is_empty() {
+            sweep = Some(list.len());
+        }
+        list.extend(worth.into_iter().chain(hint).chain(rest).map(|p| Skill::Goto(p.clone())));
+        if at.is_some() {
+            list.push(Skill::Look);
+        }
+        list.push(Skill::Done);
+        Skills { list, sweep }
+    }
+
+    fn commands(&self, skill: &Skill, _goal: &ClassGoal, _belief: &Belief, record: &Record, env: &dyn Environment) -> Vec<String> {
+        match skill {
+            Skill::Goto(p) if here(env, p) => vec![format!("examine {p}")],
+            Skill::Goto(p) => vec![format!("go to {p}")],
+            Skill::Open(p) => vec![format!("open {p}")],
+            Skill::Close(p) => vec![format!("close {p}")],
+            Skill::Look => Self::at(&record.steps).map(|p| vec![format!("examine {p}")]).unwrap_or_default(),
+            Skill::Done => Vec::new(),
+        }
+    }
+
+    fn ready(&self, goal: &ClassGoal, belief: &Belief) -> bool {
+        ready(goal, belief)
+    }
+
+    fn objects_to_find(&self, goal: &ClassGoal) -> Vec<String> {
+        let mut out: Vec<String> = Vec::new();
+        for s in &goal.symbols {
+            if let Some(c) = &s.class {
+                out.push(c.clone());
+            }
+        }
+        out
+    }
+}
+
+impl crate::episode::Handing for AlfworldAdapter {
+    fn handover(
+        &mut self,
+        _goal: &ClassGoal,
+        exploration: &crate::phase1::Exploration,
+        steps: &[crate::phase1::StepRecord],
+    ) -> Result<Grounded, String> {
+        let at = Self::at(steps);
+        let handover = write_problem(&exploration.belief, &self.ontology, &self.formula, at.as_deref());
+        let model = ground(&self.domain, &handover.problem)?;
+        let names = model.task().objects.iter().map(|o| handover.binding.get(&o.name).cloned()).collect();
+        let spelling = Spelling::alfworld_with_names(model.task(), &self.grammar, names).map_err(|e| format!("grammar: {e}"))?;
+        Ok(Grounded { handover, model, spelling })
+    }
+
+    fn command(&self, grounded: &Grounded, action: ActionId, env: &dyn Environment) -> Result<Option<String>, String> {
+        let task = grounded.model.task();
+        if LOOKING.contains(&task.schemas[task.action(action).schema.index()].name.as_str()) {
+            return Ok(None);
+        }
+        let command = grounded
+            .spelling
+            .spell(action)
+            .map(str::to_string)
+            .ok_or_else(|| format!("cannot bind {} to perceived names", task.action_name(action)))?;
+        // Places can share a location (a drawer under a desk): a `go to` the place the agent
+        // already stands at is skipped without spending a step.
+        if let Some(place) = command.strip_prefix("go to ")
+            && here(env, place)
+        {
+            return Ok(None);
+        }
+        Ok(Some(command))
+    }
+
+    fn judge_view(&self, fact: &Fact) -> Option<JudgeAtom> {
+        match fact.predicate.as_str() {
+            "inReceptacle" | "opened" | "isToggled" | "isHot" | "isCool" | "isClean" => {
+                Some(JudgeAtom { predicate: fact.predicate.clone(), args: fact.args.clone() })
+            }
+            _ => None,
+        }
+    }
+
+    fn class_of<'a>(&self, name: &'a str) -> &'a str {
+        class_of(name)
+    }
+
+    fn locates(&self, atom: &JudgeAtom) -> bool {
+        atom.predicate == "inreceptacle"
+    }
 }

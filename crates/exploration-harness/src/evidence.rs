@@ -195,3 +195,31 @@ fn list(text: &str) -> Vec<String> {
         .filter(|item| !item.is_empty())
         .collect()
 }
+
+impl std::fmt::Display for Fact {
+    /// `inReceptacle(mug 2, countertop 1)`, `not opened(fridge 1)`.
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        if !self.holds {
+            write!(f, "not ")?;
+        }
+        write!(f, "{}({})", self.predicate, self.args.join(", "))
+    }
+}
+
+impl Fact {
+    /// Reads [`Fact`]'s `Display` form back; `None` for anything else.
+    pub fn parse(text: &str) -> Option<Fact> {
+        let text = text.trim();
+        let (holds, rest) = match text.strip_prefix("not ") {
+            Some(rest) => (false, rest.trim()),
+            None => (true, text),
+        };
+        let (predicate, args) = rest.strip_suffix(')')?.split_once('(')?;
+        let predicate = predicate.trim();
+        if predicate.is_empty() || predicate.contains(char::is_whitespace) {
+            return None;
+        }
+        let args: Vec<String> = args.split(',').map(|a| a.trim().to_string()).filter(|a| !a.is_empty()).collect();
+        Some(Fact { predicate: predicate.to_string(), args, holds })
+    }
+}

@@ -1,17 +1,31 @@
-//! Phase I of the paper's agent (§3.1): from the benchmark's own goal annotation and what the
-//! environment shows, a grounded initial state for Phase II.
+//! Phase I of the paper's agent (§3.1) and the whole episode: from the benchmark's own goal
+//! annotation and what the environment shows, a grounded initial state for Phase II, the plan
+//! bound back and executed, judged by the environment.
 //!
-//! Built so far: [`goal`], the fixed, rule-based parse of each benchmark's goal annotation
-//! into G at class level (never an instance identifier), and [`ontology`], F_str, the fixed
-//! class-level ontology of each benchmark (committed in `fixtures/ontology/`), and
-//! [`evidence`], the evidence update U with ALFWorld's perceiver. The controller H, the policy f_φ,
-//! the evidence update U, Ready and the binding β are the next parts of this crate.
+//! - [`goal`]: the fixed, rule-based parse of each benchmark's goal annotation into G at class
+//!   level (never an instance identifier);
+//! - [`ontology`]: F_str, the fixed class-level ontology of each benchmark (committed in
+//!   `fixtures/ontology/`);
+//! - [`evidence`]: F_t and the evidence update U, with ALFWorld's perceiver;
+//! - [`phase1`]: the skills, the controller H (through a benchmark [`phase1::Adapter`]), the
+//!   policy f_φ ([`phase1::Policy`]: [`phase1::Systematic`], [`chat_policy::ChatPolicy`]) and
+//!   the exploration loop with Ready and the stop;
+//! - [`episode`]: the hand-over (Eq. 4), Phase II through the caller's planner, open-loop (or
+//!   closed-loop) execution, and the per-episode record with precision, recall and failure
+//!   attribution from the judge;
+//! - [`alfworld`], [`virtualhome`]: the two benchmarks' adapters.
 
 pub mod alfworld;
+pub mod chat_policy;
+pub mod episode;
 pub mod evidence;
 pub mod goal;
 pub mod ontology;
+pub mod phase1;
+pub mod virtualhome;
 
+pub use episode::{Attribution, Episode, EpisodeConfig, Grounded, Handing, Handover, PhaseTwo, run_episode};
 pub use evidence::{Belief, Fact, Percept, perceive_alfworld};
 pub use goal::{ClassGoal, ClassLiteral, GoalError, Symbol, parse_goal};
 pub use ontology::{Ontology, OntologyError};
+pub use phase1::{Adapter, Policy, PolicyUsage, Skill, Skills, Systematic};

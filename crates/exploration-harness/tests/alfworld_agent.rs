@@ -5,8 +5,8 @@
 use std::path::{Path, PathBuf};
 use std::time::Duration;
 
-use exploration_harness::alfworld::run_episode;
-use exploration_harness::{Ontology, parse_goal};
+use exploration_harness::alfworld::AlfworldAdapter;
+use exploration_harness::{Episode, EpisodeConfig, Grounded, Ontology, PhaseTwo, Systematic, parse_goal, run_episode};
 use household_sim::{AlfworldEnv, Environment};
 use transition_model::TransitionModel;
 
@@ -23,6 +23,15 @@ fn domain_and_grammar() -> (pddl_syntax::Domain, String) {
 /// Phase II: A* with LM-cut on the grounded problem.
 fn a_star(model: &TransitionModel) -> Result<Vec<grounding::ActionId>, String> {
     heuristics::search::optimal_plan(model, Duration::from_secs(20)).map_err(|status| format!("{status:?}"))
+}
+
+/// One episode of the systematic explorer and A*.
+fn play(path: &Path, ontology: &Ontology, domain: &pddl_syntax::Domain, grammar: &str) -> Episode {
+    let mut env = AlfworldEnv::from_game_file(path).unwrap();
+    let goal = parse_goal(env.goal()).unwrap();
+    let mut adapter = AlfworldAdapter::new(ontology.clone(), domain.clone(), grammar.to_string(), env.goal());
+    let mut planner = |g: &Grounded| a_star(&g.model).map(|actions| PhaseTwo { actions, ..PhaseTwo::default() });
+    run_episode(&mut env, &mut adapter, &mut Systematic, &goal, EpisodeConfig { budget: 55, closed_loop: false }, &mut planner)
 }
 
 /// The grounded problem checks against ALFWorld's domain.
@@ -47,9 +56,7 @@ fn play_split(split: &str) -> (usize, usize, Vec<String>) {
     games.sort();
     let (mut won, mut failures) = (0, Vec::new());
     for path in &games {
-        let mut env = AlfworldEnv::from_game_file(path).unwrap();
-        let goal = parse_goal(env.goal()).unwrap();
-        let episode = run_episode(&mut env, &goal, &ontology, &domain, &grammar, 55, &mut a_star);
+        let episode = play(path, &ontology, &domain, &grammar);
         if let Some(handover) = &episode.handover {
             assert_checks(&domain, &handover.problem);
         }
@@ -57,7 +64,15 @@ fn play_split(split: &str) -> (usize, usize, Vec<String>) {
             won += 1;
             assert!(episode.steps.len() <= 55);
         } else {
-            failures.push(format!("{}: {:?} after {} steps", path.parent().unwrap().display(), episode.failure, episode.steps.len()));
+            failures.push(format!(
+                "{}: {:?} ({:?}, precision {:?}, recall {:?}) after {} steps",
+                path.parent().unwrap().display(),
+                episode.failure,
+                episode.attribution,
+                episode.precision,
+                episode.recall,
+                episode.steps.len()
+            ));
         }
     }
     (won, games.len(), failures)
@@ -87,11 +102,7 @@ fn episodes_are_reproducible_and_plans_valid_for_their_grounded_problem() {
     games.sort();
     for family in games.iter().step_by(10) {
         let trial = std::fs::read_dir(family).unwrap().next().unwrap().unwrap().path().join("game.tw-pddl");
-        let run = || {
-            let mut env = AlfworldEnv::from_game_file(&trial).unwrap();
-            let goal = parse_goal(env.goal()).unwrap();
-            run_episode(&mut env, &goal, &ontology, &domain, &grammar, 55, &mut a_star)
-        };
+        let run = || play(&trial, &ontology, &domain, &grammar);
         let (a, b) = (run(), run());
         assert_eq!(a.steps, b.steps, "{}", trial.display());
         assert_eq!(a.handover, b.handover);

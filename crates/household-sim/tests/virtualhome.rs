@@ -82,7 +82,7 @@ fn a_closed_container_hides_and_blocks_its_contents() {
     check(&mut e, &[("[WALK] <fridge> (10)", true), ("[GRAB] <apple> (11)", false), ("[OPEN] <fridge> (10)", true)]);
     let obs = e.step("[GRAB] <apple> (11)");
     assert_eq!(obs.event, Event::Executed);
-    assert!(obs.observation.text.contains("You hold: apple (11)."), "{}", obs.observation.text);
+    assert!(obs.observation.text.contains("You hold: apple (11) in the right hand."), "{}", obs.observation.text);
 }
 
 #[test]

@@ -313,7 +313,7 @@ impl VirtualhomeEnv {
     ///
     /// ```text
     /// You are in the kitchen (11).
-    /// You hold: plate (1001).
+    /// You hold: plate (1001) in the right hand.
     /// Rooms: bathroom (1), kitchen (11).
     /// You see:
     /// - dishwasher (1000): CLOSED, OFF; close to you
@@ -326,7 +326,8 @@ impl VirtualhomeEnv {
         let mut out = String::new();
         let rooms: Vec<String> = g.targets(w.character, Relation::Inside).into_iter().filter(|&r| g.node(r).is_room()).map(name).collect();
         let _ = writeln!(out, "You are in the {}.", if rooms.is_empty() { "nowhere".to_string() } else { rooms.join(", ") });
-        let held: Vec<String> = w.held().into_iter().map(name).collect();
+        let hand = |ix: NodeIx| if g.has_edge(w.character, Relation::HoldsLh, ix) { "left" } else { "right" };
+        let held: Vec<String> = w.held().into_iter().map(|ix| format!("{} in the {} hand", name(ix), hand(ix))).collect();
         let _ = writeln!(out, "You hold: {}.", if held.is_empty() { "nothing".to_string() } else { held.join(", ") });
         let inside = g.targets_of_all(Relation::Inside);
         let on = g.targets_of_all(Relation::On);

@@ -1,0 +1,132 @@
+//! f_φ over a chat model (paper Eq. 2 and its Phase I prompt figure): any
+//! [`vlm_client::ChatModel`], a served (vision-)language model or a local one.
+//!
+//! The request: one system message (the role, and the reply's contract), one user message in
+//! the prompt figure's sections (Task, Objects to find and locate, Current belief, Previous
+//! actions, Valid skills right now, Feedback, Observation) with the observation's picture
+//! where the environment renders one. Greedy decoding, at most 512 output tokens (Appendix
+//! Table 6). The reply is JSON under [`reply_schema`]: `facts` (proposed, `pred(a, b)`),
+//! `action` (one of the valid skills, an enum) and `done`.
+
+use serde_json::{Value, json};
+use vlm_client::{ChatModel, ChatRequest, Image, Message, Sampling, chat_json};
+
+use crate::evidence::Fact;
+use crate::phase1::{Policy, PolicyInput, PolicyReply, PolicyUsage, Skill};
+
+/// Output tokens per reply (Appendix Table 6).
+pub const MAX_REPLY_TOKENS: u32 = 512;
+
+/// A chat model as the Phase I policy.
+pub struct ChatPolicy {
+    model: Box<dyn ChatModel>,
+    name: String,
+    usage: PolicyUsage,
+    /// The last request's prompt text, for traces.
+    pub last_prompt: String,
+}
+
+impl std::fmt::Debug for ChatPolicy {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("ChatPolicy").field("name", &self.name).field("usage", &self.usage).finish_non_exhaustive()
+    }
+}
+
+impl ChatPolicy {
+    pub fn new(model: Box<dyn ChatModel>, name: &str) -> ChatPolicy {
+        ChatPolicy { model, name: name.to_string(), usage: PolicyUsage::default(), last_prompt: String::new() }
+    }
+}
+
+/// The reply's JSON schema: `action` is one of `skills`.
+pub fn reply_schema(skills: &[Skill]) -> Value {
+    let names: Vec<String> = skills.iter().map(Skill::to_string).collect();
+    json!({
+        "type": "object",
+        "properties": {
+            "facts": { "type": "array", "items": { "type": "string" }, "maxItems": 8 },
+            "action": { "enum": names },
+            "done": { "type": "boolean" }
+        },
+        "required": ["facts", "action", "done"],
+        "additionalProperties": false
+    })
+}
+
+/// The system message: the paper's Phase I preamble, in the benchmark's words.
+pub fn system_prompt(benchmark: &str) -> String {
+    let world = if benchmark.starts_with("virtualhome") { "VirtualHome, a household simulator" } else { "ALFWorld, a household simulator" };
+    format!(
+        "You are a vision-language agent in {world}.\n\
+         You see what the agent perceives now. Your only job in this phase is to find the listed objects and determine where each one is.\n\
+         Do not plan or execute the household chore. Reply with JSON only."
+    )
+}
+
+/// The user message's text (the prompt figure's sections).
+pub fn user_prompt(input: &PolicyInput<'_>) -> String {
+    let list = |items: &[String], empty: &str| if items.is_empty() { empty.to_string() } else { items.join("\n") };
+    let skills: Vec<String> = input.skills.list.iter().map(|s| format!("- {s}")).collect();
+    format!(
+        "Task:\n{task}\nFind each listed object and determine where it is.\n\n\
+         Objects to find and locate:\n{objects}\n\n\
+         Current belief:\n{belief}\n\n\
+         Previous actions:\n{history}\n\n\
+         Valid skills right now:\n{skills}\n\n\
+         Feedback:\n{feedback}\n\n\
+         Observation:\n{observation}\n\n\
+         Return visible predicates in \"facts\" (each as predicate(argument, argument), e.g. inReceptacle(mug 2, countertop 1)), \
+         exactly one valid skill in \"action\", and \"done\": true only after every listed object has a grounded placement.",
+        task = input.task,
+        objects = input.objects.join(", "),
+        belief = list(&input.belief, "nothing yet"),
+        history = list(&input.history, "none"),
+        skills = skills.join("\n"),
+        feedback = input.feedback,
+        observation = input.observation.text.trim(),
+    )
+}
+
+impl Policy for ChatPolicy {
+    fn name(&self) -> String {
+        self.name.clone()
+    }
+
+    fn choose(&mut self, input: &PolicyInput<'_>) -> Result<PolicyReply, String> {
+        let text = user_prompt(input);
+        let mut user = Message::user(text.clone());
+        self.usage.observations += 1;
+        if let Some(image) = &input.observation.image {
+            let image = Image::from_bytes(image.bytes.clone()).map_err(|e| format!("the observation's picture: {e}"))?;
+            user = user.with_image(image);
+            self.usage.images += 1;
+        }
+        let request = ChatRequest::new(vec![Message::system(system_prompt(input.benchmark)), user])
+            .with_sampling(Sampling::greedy(MAX_REPLY_TOKENS))
+            .with_json_schema(reply_schema(&input.skills.list));
+        self.last_prompt = text;
+        let reply = chat_json(self.model.as_mut(), &request).map_err(|e| e.to_string())?;
+        self.usage.calls += 1;
+        self.usage.prompt_tokens += reply.usage.prompt_tokens;
+        self.usage.generated_tokens += reply.usage.completion_tokens;
+        read_reply(&reply.value)
+    }
+
+    fn usage(&self) -> PolicyUsage {
+        self.usage
+    }
+}
+
+/// The policy's reply out of the JSON value (already checked against [`reply_schema`]);
+/// unreadable facts are dropped (they could never be admitted anyway).
+pub fn read_reply(value: &Value) -> Result<PolicyReply, String> {
+    let action = value.get("action").and_then(Value::as_str).ok_or("the reply has no \"action\"")?;
+    let skill = Skill::parse(action).ok_or_else(|| format!("\"{action}\" is not a skill"))?;
+    let proposed = value
+        .get("facts")
+        .and_then(Value::as_array)
+        .map(|facts| facts.iter().filter_map(Value::as_str).filter_map(Fact::parse).collect())
+        .unwrap_or_default();
+    let done = value.get("done").and_then(Value::as_bool).unwrap_or(false);
+    Ok(PolicyReply { proposed, skill, done })
+}

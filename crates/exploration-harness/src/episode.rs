@@ -1,0 +1,293 @@
+//! One episode of the paper's agent (Fig. 1): Phase I ([`crate::phase1::explore`]), the
+//! hand-over (Eq. 4: ŝ0 as a PDDL problem and β), Phase II (the caller's planner on ŝ0's
+//! transition model: constrained MCTS, any other mode, or A*), the plan bound back through β and
+//! run open-loop in the environment, whose own goal check is the verdict.
+//!
+//! The driver is the evaluation side: it takes an environment that is also a [`Judge`], hands
+//! the agent's parts only `&mut dyn Environment`, and after Phase I asks the judge for the
+//! hidden state to score F_τ (precision and recall) and attribute a failure (paper §5.3):
+//! - `representation`: Phase I's state is wrong or short: a positive fact of F_τ about a goal
+//!   class is false in the hidden state (precision < 1), or some goal object has no correctly
+//!   located instance in F_τ (recall < 1);
+//! - `search`: the state is right but Phase II returned no plan within its budget;
+//! - `grounding`: the state is right, yet a plan step was not executed by the environment
+//!   (binding or domain semantics);
+//! - `goal`: every step executed and the goal check still fails.
+//!
+//! Precision is over F_τ's positive facts (in the judge's vocabulary) whose first argument is an
+//! instance of a goal class; recall is the fraction of the goal's object symbols (a class,
+//! counted as often as the goal names it) for which F_τ locates that many distinct instances of
+//! the class correctly.
+//!
+//! `closed_loop` (beyond the paper): when a plan step is not executed, the observations of
+//! the plan's steps have been read into F all along; the agent hands over again from there
+//! and replans, within the same step budget.
+
+use std::collections::{BTreeMap, BTreeSet};
+use std::time::Instant;
+
+use grounding::ActionId;
+use household_sim::{Environment, Judge, JudgeAtom};
+use serde::Serialize;
+use transition_model::{Spelling, TransitionModel};
+
+use crate::evidence::Fact;
+use crate::goal::ClassGoal;
+use crate::phase1::{Adapter, Decision, Exploration, Policy, PolicyUsage, StepRecord, explore};
+
+/// ŝ0 and β.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize)]
+pub struct Handover {
+    pub problem: String,
+    /// PDDL object name → the name the agent perceived.
+    pub binding: BTreeMap<String, String>,
+}
+
+/// ŝ0 grounded: the problem, its transition model, and how its actions are spelled for Phase
+/// II's prompt (perceived names, never a hidden identifier).
+pub struct Grounded {
+    pub handover: Handover,
+    pub model: TransitionModel,
+    pub spelling: Spelling,
+}
+
+impl std::fmt::Debug for Grounded {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Grounded").field("handover", &self.handover).finish_non_exhaustive()
+    }
+}
+
+/// A benchmark's hand-over and plan binding (the Phase I side is [`Adapter`]).
+pub trait Handing: Adapter {
+    /// Writes ŝ0 = F_τ ∪ F_str and grounds it in the benchmark's domain.
+    fn handover(&mut self, goal: &ClassGoal, exploration: &Exploration, steps: &[StepRecord]) -> Result<Grounded, String>;
+    /// The environment command of a plan action, through β; `None`: nothing to send (a step
+    /// that only looks, or a move to where the agent already stands).
+    fn command(&self, grounded: &Grounded, action: ActionId, env: &dyn Environment) -> Result<Option<String>, String>;
+    /// A fact of F_t in the judge's vocabulary, where it has one.
+    fn judge_view(&self, fact: &Fact) -> Option<JudgeAtom>;
+    /// The class of a perceived instance name (`mug 2` → `mug`, `plate (1001)` → `plate`).
+    fn class_of<'a>(&self, name: &'a str) -> &'a str;
+    /// Whether a judge atom (predicate in lower case) places its first argument, for recall.
+    fn locates(&self, atom: &JudgeAtom) -> bool;
+}
+
+/// What Phase II returned.
+#[derive(Debug, Clone, Default)]
+pub struct PhaseTwo {
+    pub actions: Vec<ActionId>,
+    pub model_calls: u64,
+    pub generated_tokens: u64,
+    /// Anything the planner wants kept in the record (its stop reason, search figures).
+    pub detail: serde_json::Value,
+}
+
+/// Phase II: a planner on the grounded problem.
+pub type Planner<'a> = dyn FnMut(&Grounded) -> Result<PhaseTwo, String> + 'a;
+
+/// The terminal failure class (module documentation).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Attribution {
+    Representation,
+    Search,
+    Grounding,
+    Goal,
+}
+
+/// Everything recorded about one episode.
+#[derive(Debug, Clone, Serialize)]
+pub struct Episode {
+    pub success: bool,
+    /// Why Phase I stopped (`ready`, `done`, `budget`, `refusals`, `policy error: ...`).
+    pub phase1_stop: String,
+    pub phase1_steps: usize,
+    pub decisions: Vec<Decision>,
+    /// Every environment step, Phase I's and the plan's.
+    pub steps: Vec<StepRecord>,
+    pub handover: Option<Handover>,
+    /// The plan as sent (perceived names), of the last hand-over.
+    pub plan: Vec<String>,
+    /// Hand-overs made (1 open-loop; more when `closed_loop` replanned).
+    pub handovers: usize,
+    pub failure: Option<String>,
+    pub attribution: Option<Attribution>,
+    pub precision: Option<f64>,
+    pub recall: Option<f64>,
+    pub phase1_usage: PolicyUsage,
+    pub phase2_calls: u64,
+    pub phase2_tokens: u64,
+    pub phase2_detail: serde_json::Value,
+    pub phase1_ms: f64,
+    pub phase2_ms: f64,
+    pub execute_ms: f64,
+}
+
+/// Settings of one episode.
+#[derive(Debug, Clone, Copy)]
+pub struct EpisodeConfig {
+    /// Environment steps for the whole episode (ALFWorld 55, VirtualHome 20).
+    pub budget: usize,
+    pub closed_loop: bool,
+}
+
+/// Runs one episode (module documentation).
+pub fn run_episode<E: Environment + Judge>(
+    env: &mut E,
+    adapter: &mut dyn Handing,
+    policy: &mut dyn Policy,
+    goal: &ClassGoal,
+    config: EpisodeConfig,
+    plan: &mut Planner<'_>,
+) -> Episode {
+    let start = Instant::now();
+    let first = env.reset();
+    let exploration = explore(env, adapter, policy, goal, &first, config.budget);
+    let phase1_ms = start.elapsed().as_secs_f64() * 1e3;
+    let (precision, recall) = score(adapter, goal, &exploration, &env.hidden_atoms());
+    let mut episode = Episode {
+        success: false,
+        phase1_stop: exploration.stop.clone(),
+        phase1_steps: exploration.record.steps.len(),
+        decisions: exploration.record.decisions.clone(),
+        steps: exploration.record.steps.clone(),
+        handover: None,
+        plan: Vec::new(),
+        handovers: 0,
+        failure: None,
+        attribution: None,
+        precision,
+        recall,
+        phase1_usage: policy.usage(),
+        phase2_calls: 0,
+        phase2_tokens: 0,
+        phase2_detail: serde_json::Value::Null,
+        phase1_ms,
+        phase2_ms: 0.0,
+        execute_ms: 0.0,
+    };
+    let mut exploration = exploration;
+    let mut no_plan = false;
+    let mut not_executed = false;
+    loop {
+        episode.handovers += 1;
+        let t = Instant::now();
+        let grounded = match adapter.handover(goal, &exploration, &episode.steps) {
+            Ok(g) => g,
+            Err(e) => {
+                episode.failure = Some(e);
+                no_plan = true;
+                break;
+            }
+        };
+        episode.handover = Some(grounded.handover.clone());
+        let planned = plan(&grounded);
+        episode.phase2_ms += t.elapsed().as_secs_f64() * 1e3;
+        let phase2 = match planned {
+            Ok(p) => p,
+            Err(e) => {
+                episode.failure = Some(format!("no plan: {e}"));
+                no_plan = true;
+                break;
+            }
+        };
+        episode.phase2_calls += phase2.model_calls;
+        episode.phase2_tokens += phase2.generated_tokens;
+        episode.phase2_detail = phase2.detail.clone();
+        let t = Instant::now();
+        episode.plan.clear();
+        not_executed = false;
+        for &action in &phase2.actions {
+            let command = match adapter.command(&grounded, action, env) {
+                Ok(Some(c)) => c,
+                Ok(None) => continue,
+                Err(e) => {
+                    episode.failure = Some(e);
+                    not_executed = true;
+                    break;
+                }
+            };
+            episode.plan.push(command.clone());
+            if episode.steps.len() >= config.budget {
+                episode.failure = Some("step budget spent".into());
+                break;
+            }
+            let result = env.step(&command);
+            let step = episode.steps.len() + 1;
+            adapter.observe(&result.observation, step, &mut exploration.belief);
+            let executed = result.event.executed();
+            episode.steps.push(StepRecord { phase: "plan", command: command.clone(), executed, observation: result.observation.text });
+            if !executed {
+                episode.failure = Some(format!("step {} not executed: {command}", episode.steps.len()));
+                not_executed = true;
+                break;
+            }
+        }
+        episode.execute_ms += t.elapsed().as_secs_f64() * 1e3;
+        if !(not_executed && config.closed_loop && episode.steps.len() < config.budget) || env.goal_reached() {
+            break;
+        }
+    }
+    episode.success = env.goal_reached();
+    if episode.success {
+        episode.failure = None;
+    } else {
+        if episode.failure.is_none() {
+            episode.failure = Some("goal not reached".into());
+        }
+        let accurate = precision.is_none_or(|p| p >= 1.0) && recall.is_none_or(|r| r >= 1.0);
+        episode.attribution = Some(if !accurate {
+            Attribution::Representation
+        } else if no_plan {
+            Attribution::Search
+        } else if not_executed {
+            Attribution::Grounding
+        } else {
+            Attribution::Goal
+        });
+    }
+    episode
+}
+
+/// Precision and recall of F_τ against the hidden state (module documentation); `None` where
+/// the denominator is zero.
+pub fn score(adapter: &dyn Handing, goal: &ClassGoal, exploration: &Exploration, truth: &[JudgeAtom]) -> (Option<f64>, Option<f64>) {
+    // Predicates compare without case (ALFWorld's judge writes the domain's lower-case names).
+    let norm = |a: &JudgeAtom| JudgeAtom { predicate: a.predicate.to_ascii_lowercase(), args: a.args.clone() };
+    let truth: BTreeSet<JudgeAtom> = truth.iter().map(norm).collect();
+    let mut wanted: BTreeMap<&str, usize> = BTreeMap::new();
+    for s in goal.symbols.iter().filter(|s| s.kind == "object") {
+        if let Some(c) = &s.class {
+            *wanted.entry(c.as_str()).or_default() += 1;
+        }
+    }
+    let believed: Vec<JudgeAtom> = exploration
+        .belief
+        .facts()
+        .iter()
+        .filter(|f| f.holds)
+        .filter_map(|f| adapter.judge_view(f))
+        .map(|a| norm(&a))
+        .filter(|a| a.args.first().is_some_and(|x| wanted.contains_key(adapter.class_of(x))))
+        .collect();
+    let right: Vec<&JudgeAtom> = believed.iter().filter(|a| truth.contains(a)).collect();
+    let precision = (!believed.is_empty()).then(|| right.len() as f64 / believed.len() as f64);
+    let total: usize = wanted.values().sum();
+    let found: usize = wanted
+        .iter()
+        .map(|(class, &n)| {
+            let located: BTreeSet<&str> =
+                right.iter().filter(|a| adapter.locates(a) && adapter.class_of(&a.args[0]) == *class).map(|a| a.args[0].as_str()).collect();
+            located.len().min(n)
+        })
+        .sum();
+    let recall = (total > 0).then(|| found as f64 / total as f64);
+    (precision, recall)
+}
+
+/// ŝ0's text as a transition model of `domain`.
+pub fn ground(domain: &pddl_syntax::Domain, problem: &str) -> Result<TransitionModel, String> {
+    let parsed = pddl_syntax::parse_problem(problem).map_err(|e| format!("the grounded problem does not parse: {e:?}"))?;
+    let task = grounding::ground(domain, &parsed).map_err(|e| format!("the grounded problem does not ground: {e}"))?;
+    Ok(TransitionModel::new(task))
+}

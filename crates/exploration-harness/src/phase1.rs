@@ -1,0 +1,325 @@
+//! Phase I (paper §3.1, Eqs. 1-3) as one loop over a benchmark [`Adapter`]:
+//!
+//! ```text
+//! K_t = H(G, F_t, R_t)                      the controller (Adapter::skills)
+//! (P_t, k_t, done_t) = f_φ(o_t, G, F_t, K_t) the policy (Policy::choose)
+//! F_{t+1} = U(F_t, P_t, o_{t+1}, e_{t+1})   the evidence update (Adapter::observe, Belief)
+//! ```
+//!
+//! until Ready(F, G) holds, the policy says Done, or the step budget is spent.
+//!
+//! Rules, each where it is implemented:
+//! - the policy may choose only a skill of K_t; a reply naming another skill is refused (the
+//!   step is recorded with the feedback "not a valid skill", no command is sent) and after
+//!   [`MAX_REFUSALS`] refusals in a row exploration stops;
+//! - a skill's commands are the adapter's ([`Adapter::commands`]; `Look` may be several);
+//!   each is one environment step, counted against the budget, whatever the outcome;
+//! - the model's proposed facts are kept as hypotheses ([`Belief::propose`]): they may steer
+//!   the next inspection (the adapter puts places they name first), never enter F_t; a fact
+//!   enters F_t only as a percept of an observation (U, [`crate::evidence`]);
+//! - [`Systematic`] is the control: no model; it takes the sweep's skill (the controller's own
+//!   next inspection, [`Skills::sweep`]) and says Done when there is none.
+
+use std::fmt;
+
+use household_sim::{Environment, Event, Observation};
+use serde::Serialize;
+
+use crate::evidence::{Belief, Fact};
+use crate::goal::ClassGoal;
+
+/// Refusals in a row (replies naming a skill outside K_t) after which exploration stops.
+pub const MAX_REFUSALS: usize = 3;
+
+/// One skill of the fixed family {Goto(x), Open(x), Close(x), Look, Done} (paper Eq. 1);
+/// `x` is a name as the agent perceived it (`fridge 1`, `dishwasher (1000)`).
+#[derive(Debug, Clone, PartialEq, Eq, PartialOrd, Ord, Hash)]
+pub enum Skill {
+    Goto(String),
+    Open(String),
+    Close(String),
+    /// The active-inspection macro (the adapter says what it does in its benchmark).
+    Look,
+    Done,
+}
+
+impl fmt::Display for Skill {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Skill::Goto(x) => write!(f, "goto {x}"),
+            Skill::Open(x) => write!(f, "open {x}"),
+            Skill::Close(x) => write!(f, "close {x}"),
+            Skill::Look => write!(f, "look"),
+            Skill::Done => write!(f, "done"),
+        }
+    }
+}
+
+impl Skill {
+    /// Reads [`Skill`]'s `Display` form back (`goto fridge 1`, `look`).
+    pub fn parse(text: &str) -> Option<Skill> {
+        let text = text.trim();
+        let lower = text.to_ascii_lowercase();
+        let arg = |prefix: &str| text.get(prefix.len()..).map(str::trim).filter(|x| !x.is_empty()).map(str::to_string);
+        if lower == "look" {
+            Some(Skill::Look)
+        } else if lower == "done" {
+            Some(Skill::Done)
+        } else if lower.starts_with("goto ") {
+            arg("goto ").map(Skill::Goto)
+        } else if lower.starts_with("open ") {
+            arg("open ").map(Skill::Open)
+        } else if lower.starts_with("close ") {
+            arg("close ").map(Skill::Close)
+        } else {
+            None
+        }
+    }
+}
+
+/// K_t: the skills the controller offers now, and the one its own sweep would take.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Skills {
+    /// Ordered: the sweep's preference first. Always ends with `Done`.
+    pub list: Vec<Skill>,
+    /// Index into `list` of the sweep's next inspection; `None` when the sweep has none left.
+    pub sweep: Option<usize>,
+}
+
+/// One environment step.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize)]
+pub struct StepRecord {
+    /// `explore` or `plan`.
+    pub phase: &'static str,
+    pub command: String,
+    pub executed: bool,
+    pub observation: String,
+}
+
+/// One Phase I decision: the skill chosen, what it sent, and what U did with it.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize)]
+pub struct Decision {
+    pub skill: String,
+    /// Skills offered (K_t).
+    pub offered: Vec<String>,
+    /// Indices into the episode's steps of the commands this skill sent.
+    pub steps: Vec<usize>,
+    /// Facts the environment's observations established (F_{t+1} \ F_t, and changed facts).
+    pub admitted: Vec<String>,
+    /// The model's proposals that no observation backed: kept as hypotheses, not facts.
+    pub refused: Vec<String>,
+    /// `success`, `failed` (a command was not executed) or `refused` (not a skill of K_t).
+    pub outcome: &'static str,
+    /// The outcome the policy is told next turn.
+    pub feedback: String,
+}
+
+/// What the policy sees at step t (paper's Phase I prompt).
+#[derive(Debug, Clone)]
+pub struct PolicyInput<'a> {
+    pub benchmark: &'a str,
+    /// The task sentence.
+    pub task: &'a str,
+    /// Goal object classes to find and locate.
+    pub objects: &'a [String],
+    /// F_t, one fact a line, as the adapter writes it for models.
+    pub belief: Vec<String>,
+    /// Previous skills with their outcomes (`goto fridge 1 -> success`).
+    pub history: Vec<String>,
+    pub skills: &'a Skills,
+    pub feedback: &'a str,
+    /// The current observation (its text, and its picture where the environment renders one).
+    pub observation: &'a Observation,
+}
+
+/// f_φ's reply.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct PolicyReply {
+    /// P_t: facts the model claims (never admitted without evidence).
+    pub proposed: Vec<Fact>,
+    pub skill: Skill,
+    pub done: bool,
+}
+
+/// What a policy spent.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize)]
+pub struct PolicyUsage {
+    pub calls: u64,
+    pub prompt_tokens: u64,
+    pub generated_tokens: u64,
+    /// Observations shown to the model, and of them those with a picture.
+    pub observations: u64,
+    pub images: u64,
+}
+
+/// The policy f_φ (paper Eq. 2).
+pub trait Policy {
+    /// `systematic`, `openai:URL`, `local:NAME`, ...
+    fn name(&self) -> String;
+    fn choose(&mut self, input: &PolicyInput<'_>) -> Result<PolicyReply, String>;
+    fn usage(&self) -> PolicyUsage;
+}
+
+/// The model-free control: the controller's own sweep.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct Systematic;
+
+impl Policy for Systematic {
+    fn name(&self) -> String {
+        "systematic".into()
+    }
+
+    fn choose(&mut self, input: &PolicyInput<'_>) -> Result<PolicyReply, String> {
+        let skill = input.skills.sweep.map_or(Skill::Done, |i| input.skills.list[i].clone());
+        Ok(PolicyReply { proposed: Vec::new(), done: skill == Skill::Done, skill })
+    }
+
+    fn usage(&self) -> PolicyUsage {
+        PolicyUsage::default()
+    }
+}
+
+/// R_t: what Phase I did so far.
+#[derive(Debug, Clone, Default)]
+pub struct Record {
+    pub decisions: Vec<Decision>,
+    pub steps: Vec<StepRecord>,
+}
+
+impl Record {
+    /// The last command the environment executed, if any.
+    pub fn last_executed(&self) -> Option<&str> {
+        self.steps.iter().rev().find(|s| s.executed).map(|s| s.command.as_str())
+    }
+}
+
+/// A benchmark's side of Phase I: how its observations are read, which skills exist now, what
+/// commands a skill sends, when the goal's objects are grounded, and the hand-over.
+pub trait Adapter {
+    /// Reads an observation (step 0: the reset's) into F_t: U's percepts.
+    fn observe(&mut self, observation: &Observation, step: usize, belief: &mut Belief);
+    /// K_t = H(G, F_t, R_t).
+    fn skills(&self, goal: &ClassGoal, belief: &Belief, record: &Record, env: &dyn Environment) -> Skills;
+    /// The environment commands of a skill of K_t.
+    fn commands(&self, skill: &Skill, goal: &ClassGoal, belief: &Belief, record: &Record, env: &dyn Environment) -> Vec<String>;
+    /// Ready(F, G).
+    fn ready(&self, goal: &ClassGoal, belief: &Belief) -> bool;
+    /// The goal's object classes, as the prompt lists them.
+    fn objects_to_find(&self, goal: &ClassGoal) -> Vec<String>;
+}
+
+/// The result of Phase I.
+#[derive(Debug, Clone)]
+pub struct Exploration {
+    pub belief: Belief,
+    pub record: Record,
+    /// Why exploration stopped: `ready`, `done` (the policy), `budget`, `refusals`, or
+    /// `policy error: ...`.
+    pub stop: String,
+}
+
+/// Phase I within `budget` environment steps. `first` is the reset's observation.
+pub fn explore(
+    env: &mut dyn Environment,
+    adapter: &mut dyn Adapter,
+    policy: &mut dyn Policy,
+    goal: &ClassGoal,
+    first: &Observation,
+    budget: usize,
+) -> Exploration {
+    let mut belief = Belief::default();
+    adapter.observe(first, 0, &mut belief);
+    let mut record = Record::default();
+    let objects = adapter.objects_to_find(goal);
+    let sentence = env.goal().sentence.clone();
+    let benchmark = env.goal().benchmark.clone();
+    let mut observation = first.clone();
+    let mut feedback = String::from("This is the first step.");
+    let mut refusals = 0;
+    let stop = loop {
+        if adapter.ready(goal, &belief) {
+            break "ready".to_string();
+        }
+        if record.steps.len() >= budget {
+            break "budget".to_string();
+        }
+        let skills = adapter.skills(goal, &belief, &record, env);
+        let history = record.decisions.iter().enumerate().map(|(i, d)| format!("{}. {} -> {}", i + 1, d.skill, d.outcome)).collect();
+        let input = PolicyInput {
+            benchmark: &benchmark,
+            task: &sentence,
+            objects: &objects,
+            belief: belief.facts().iter().filter(|f| f.holds).map(Fact::to_string).collect(),
+            history,
+            skills: &skills,
+            feedback: &feedback,
+            observation: &observation,
+        };
+        let reply = match policy.choose(&input) {
+            Ok(reply) => reply,
+            Err(e) => break format!("policy error: {e}"),
+        };
+        let before = belief.facts();
+        belief.propose(&reply.proposed);
+        let offered: Vec<String> = skills.list.iter().map(Skill::to_string).collect();
+        if reply.done || reply.skill == Skill::Done {
+            break "done".to_string();
+        }
+        if !skills.list.contains(&reply.skill) {
+            refusals += 1;
+            feedback = format!("\"{}\" is not a valid skill right now; choose one of the valid skills.", reply.skill);
+            record.decisions.push(Decision {
+                skill: reply.skill.to_string(),
+                offered,
+                steps: Vec::new(),
+                admitted: Vec::new(),
+                refused: reply.proposed.iter().map(Fact::to_string).collect(),
+                outcome: "refused",
+                feedback: feedback.clone(),
+            });
+            if refusals >= MAX_REFUSALS {
+                break "refusals".to_string();
+            }
+            continue;
+        }
+        refusals = 0;
+        let mut steps = Vec::new();
+        let mut executed_all = true;
+        let mut reason = String::new();
+        for command in adapter.commands(&reply.skill, goal, &belief, &record, env) {
+            if record.steps.len() >= budget {
+                break;
+            }
+            let result = env.step(&command);
+            let step = record.steps.len() + 1;
+            adapter.observe(&result.observation, step, &mut belief);
+            let executed = result.event.executed();
+            if let Event::NotExecuted { reason: r } = &result.event {
+                executed_all = false;
+                reason = r.clone();
+            }
+            steps.push(record.steps.len());
+            record.steps.push(StepRecord { phase: "explore", command, executed, observation: result.observation.text.clone() });
+            observation = result.observation;
+        }
+        let after = belief.facts();
+        let admitted: Vec<String> = after.iter().filter(|f| !before.contains(f)).map(Fact::to_string).collect();
+        let refused: Vec<String> = reply.proposed.iter().filter(|f| !after.contains(f)).map(Fact::to_string).collect();
+        feedback = if executed_all {
+            "The previous action executed successfully.".to_string()
+        } else {
+            format!("The previous action could not be executed: {reason}.")
+        };
+        let outcome = if executed_all { "success" } else { "failed" };
+        record.decisions.push(Decision {
+            skill: reply.skill.to_string(),
+            offered,
+            steps,
+            admitted,
+            refused,
+            outcome,
+            feedback: feedback.clone(),
+        });
+    };
+    Exploration { belief, record, stop }
+}

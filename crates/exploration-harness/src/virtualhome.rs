@@ -1,0 +1,446 @@
+//! The agent on VirtualHome: Phase I reads `VirtualhomeEnv`'s observations (the room, what is
+//! held and in which hand, the rooms, and every visible node with its states, its ON/INSIDE
+//! relations to visible nodes and whether it is close), and hands over a problem of the sound
+//! domain (`household_sim::vh_pddl`) written from what was perceived.
+//!
+//! Rules, each where it is implemented:
+//! - U's percepts ([`perceive_virtualhome`]), in the judge's vocabulary (`CLOSED(dishwasher
+//!   (1000))`, `INSIDE(plate (1001), cabinet (5))`): a visible node's listed states hold and
+//!   every other state does not (the observation lists all of them); its listed ON/INSIDE
+//!   relations to visible nodes hold, and a relation F_t had to a node visible now but not listed
+//!   no longer does; a visible node not held is INSIDE the room the agent stands in; CLOSE to the
+//!   character as the observation says, for every visible node; what is held, and in which hand.
+//!   Names are as perceived: class and the id the observation shows.
+//! - K_t ([`VirtualhomeAdapter`]'s `skills`): `goto R` for rooms not yet entered; `open X` for a
+//!   container (F_str: `can_open` and `containers`) the agent is close to and saw closed, not yet
+//!   opened; `close X` for one it opened; `goto X` for closed containers not yet opened, those of
+//!   the current room first; `look` (walk up to the first object a model's hypothesis names, for a
+//!   close view) when there is such a hypothesis; `done`. The sweep: open the closed container
+//!   the agent is close to, else enter the next room, else walk to the next closed container.
+//! - Ready: every object symbol of G has distinct perceived instances of its class (as many as
+//!   the goal names it).
+//! - ŝ0: the perceived scene as a scene graph (perceived nodes; class properties from F_str, the
+//!   affordances of EAI's `properties_data.json`; perceived states and relations; a character
+//!   node of its own, since the agent never sees its id), with G's symbols bound (β) to distinct
+//!   perceived instances of their classes (lowest id first), written by `vh_pddl::problem`,
+//!   which adds what the bound objects are inside. For action goals, every perceived object
+//!   whose class has an affordance the action's verb needs joins the problem.
+//! - Plan steps are the executor's script lines with the perceived ids
+//!   (`VhProblem::script_line`).
+
+use std::collections::{BTreeMap, BTreeSet};
+
+use grounding::ActionId;
+use household_sim::vh_pddl::{self, SOUND_DOMAIN, VhProblem};
+use household_sim::{Environment, JudgeAtom, Observation, VhNodeState as NodeState, VirtualhomeTask};
+use serde_json::{Value, json};
+use transition_model::Spelling;
+
+use crate::episode::{Grounded, Handing, Handover, ground};
+use crate::evidence::{Belief, Fact, Percept};
+use crate::goal::ClassGoal;
+use crate::ontology::Ontology;
+use crate::phase1::{Adapter, Exploration, Record, Skill, Skills, StepRecord};
+
+/// The character's name in F_t (its id is never shown).
+pub const ME: &str = "character";
+
+/// `plate (1001)` → (`plate`, 1001).
+pub fn split_name(name: &str) -> Option<(&str, u32)> {
+    let (class, rest) = name.rsplit_once(" (")?;
+    Some((class, rest.strip_suffix(')')?.parse().ok()?))
+}
+
+/// The class of a perceived name (`plate (1001)` → `plate`; anything else as it is).
+pub fn class_of(name: &str) -> &str {
+    split_name(name).map_or(name, |(c, _)| c)
+}
+
+/// One `- name: parts` line of the observation: name, states, (relation, target), close.
+type SeenNode = (String, Vec<String>, Vec<(String, String)>, bool);
+
+/// What one observation states: (rooms listed, percepts). See the module documentation.
+pub fn perceive_virtualhome(text: &str, step: usize, belief: &Belief) -> (Vec<String>, Vec<Percept>) {
+    let mut rooms = Vec::new();
+    let mut out = Vec::new();
+    let mut fact = |predicate: &str, args: &[&str], holds: bool| out.push(Percept { fact: Fact::new(predicate, args, holds), step });
+    let mut here: Option<String> = None;
+    let mut held: Vec<String> = Vec::new();
+    let mut seen: Vec<SeenNode> = Vec::new();
+    let mut listing = false;
+    for line in text.lines() {
+        let line = line.trim();
+        if let Some(room) = line.strip_prefix("You are in the ").and_then(|r| r.strip_suffix('.')) {
+            here = Some(room.to_string());
+        } else if let Some(rest) = line.strip_prefix("You hold: ").and_then(|r| r.strip_suffix('.')) {
+            for item in rest.split(", ").filter(|i| *i != "nothing") {
+                let (name, hand) = match item.rsplit_once(" in the ") {
+                    Some((name, "right hand")) => (name, "HOLDS_RH"),
+                    Some((name, "left hand")) => (name, "HOLDS_LH"),
+                    _ => (item, "HOLDS_RH"),
+                };
+                fact(hand, &[ME, name], true);
+                held.push(name.to_string());
+            }
+        } else if let Some(rest) = line.strip_prefix("Rooms: ").and_then(|r| r.strip_suffix('.')) {
+            rooms.extend(rest.split(", ").map(str::to_string));
+        } else if line == "You see:" {
+            listing = true;
+        } else if let Some(item) = line.strip_prefix("- ").filter(|_| listing) {
+            let (name, parts) = item.split_once(": ").unwrap_or((item, ""));
+            let mut states = Vec::new();
+            let mut relations = Vec::new();
+            let mut close = false;
+            for part in parts.split("; ").filter(|p| !p.is_empty()) {
+                if part == "close to you" {
+                    close = true;
+                } else if let Some(t) = part.strip_prefix("on ") {
+                    relations.push(("ON".to_string(), t.to_string()));
+                } else if let Some(t) = part.strip_prefix("inside ") {
+                    relations.push(("INSIDE".to_string(), t.to_string()));
+                } else {
+                    states.extend(part.split(", ").map(str::to_string));
+                }
+            }
+            seen.push((name.to_string(), states, relations, close));
+        }
+    }
+    let visible: BTreeSet<&str> = seen.iter().map(|(n, ..)| n.as_str()).collect();
+    if let Some(room) = &here {
+        fact("INSIDE", &[ME, room], true);
+        for r in rooms.iter().filter(|r| *r != room) {
+            fact("INSIDE", &[ME, r], false);
+        }
+    }
+    for (name, states, relations, close) in &seen {
+        for state in NodeState::ALL {
+            fact(state.as_str(), &[name], states.iter().any(|s| s == state.as_str()));
+        }
+        for (relation, target) in relations {
+            fact(relation, &[name, target], true);
+        }
+        // A relation F_t had to a node visible now that the observation no longer lists.
+        for f in belief.facts().iter().filter(|f| f.holds && f.args.len() == 2 && f.args[0] == *name) {
+            if matches!(f.predicate.as_str(), "ON" | "INSIDE")
+                && visible.contains(f.args[1].as_str())
+                && !relations.iter().any(|(r, t)| *r == f.predicate && *t == f.args[1])
+            {
+                fact(&f.predicate, &[name, &f.args[1]], false);
+            }
+        }
+        if let Some(room) = &here
+            && !held.contains(name)
+        {
+            fact("INSIDE", &[name, room], true);
+        }
+        fact("CLOSE", &[ME, name], *close);
+    }
+    // Something F_t said was held and no longer is.
+    for f in belief.facts().iter().filter(|f| f.holds && (f.predicate == "HOLDS_RH" || f.predicate == "HOLDS_LH")) {
+        if !held.contains(&f.args[1]) {
+            fact(&f.predicate, &[ME, &f.args[1]], false);
+        }
+    }
+    (rooms, out)
+}
+
+/// Affordances (F_str, lower case) an action verb of EAI's action goals needs of its object.
+const VERB_AFFORDANCES: &[(&str, &[&str])] = &[
+    ("WATCH", &["lookable"]),
+    ("LOOKAT", &["lookable"]),
+    ("READ", &["readable"]),
+    ("DRINK", &["drinkable", "recipient"]),
+    ("TYPE", &["has_switch"]),
+    ("SWITCHON", &["has_switch"]),
+    ("SWITCHOFF", &["has_switch"]),
+    ("GRAB", &["grabbable"]),
+    ("TOUCH", &["grabbable"]),
+    ("PUSH", &["movable"]),
+    ("WASH", &["grabbable"]),
+    ("WIPE", &["grabbable"]),
+    ("POUR", &["pourable", "recipient"]),
+    ("SLEEP", &["lieable"]),
+];
+
+/// VirtualHome's side of Phase I and of the hand-over (module documentation).
+pub struct VirtualhomeAdapter {
+    pub ontology: Ontology,
+    pub domain: pddl_syntax::Domain,
+    /// The last hand-over's problem and perceived task (for binding plan steps back).
+    last: Option<(VhProblem, VirtualhomeTask)>,
+    /// Rooms the agent has stood in.
+    entered: BTreeSet<String>,
+}
+
+impl std::fmt::Debug for VirtualhomeAdapter {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("VirtualhomeAdapter").field("entered", &self.entered).finish_non_exhaustive()
+    }
+}
+
+impl VirtualhomeAdapter {
+    pub fn new(ontology: Ontology) -> Result<VirtualhomeAdapter, String> {
+        let domain = pddl_syntax::parse_domain(SOUND_DOMAIN).map_err(|e| format!("the sound VirtualHome domain: {e:?}"))?;
+        Ok(VirtualhomeAdapter { ontology, domain, last: None, entered: BTreeSet::new() })
+    }
+
+    fn has(&self, name: &str, affordance: &str) -> bool {
+        self.ontology.affordances.get(class_of(name)).is_some_and(|a| a.contains(affordance))
+    }
+
+    /// Perceived instances (not rooms, not the character), by name.
+    fn instances(belief: &Belief) -> BTreeSet<String> {
+        let rooms: BTreeSet<&String> = belief.places.iter().collect();
+        belief
+            .facts()
+            .into_iter()
+            .filter(|f| f.predicate == "CLOSE" || f.predicate.starts_with("HOLDS"))
+            .filter_map(|f| f.args.get(1).cloned())
+            .filter(|n| !rooms.contains(n))
+            .collect()
+    }
+
+    fn room_now(belief: &Belief) -> Option<String> {
+        belief.places.iter().find(|r| belief.holds("INSIDE", &[ME, r]) == Some(true)).cloned()
+    }
+
+    /// Containers seen closed that Phase I has not opened, with whether they are in the room now.
+    fn closed_containers(&self, belief: &Belief, record: &Record) -> Vec<(String, bool)> {
+        let opened: BTreeSet<String> =
+            record.steps.iter().filter(|s| s.executed).filter_map(|s| s.command.strip_prefix("[OPEN] ").map(script_name)).collect();
+        let room = Self::room_now(belief);
+        let mut out: Vec<(String, bool)> = Self::instances(belief)
+            .into_iter()
+            .filter(|x| self.has(x, "can_open") && self.has(x, "containers"))
+            .filter(|x| belief.holds("CLOSED", &[x]) == Some(true) && !opened.contains(x))
+            .map(|x| {
+                let in_room = room.as_ref().is_some_and(|r| belief.holds("INSIDE", &[&x, r]) == Some(true));
+                (x, in_room)
+            })
+            .collect();
+        out.sort_by_key(|(x, in_room)| (!in_room, split_name(x).map_or(u32::MAX, |(_, id)| id)));
+        out
+    }
+
+    /// Symbol → the perceived instance β binds it to.
+    fn bind(goal: &ClassGoal, belief: &Belief) -> BTreeMap<String, String> {
+        let mut instances: Vec<String> = Self::instances(belief).into_iter().collect();
+        instances.extend(belief.places.iter().cloned());
+        instances.sort_by_key(|x| split_name(x).map_or(u32::MAX, |(_, id)| id));
+        let mut taken = BTreeSet::new();
+        let mut out = BTreeMap::new();
+        for s in &goal.symbols {
+            if s.kind == "character" {
+                out.insert(s.name.clone(), ME.to_string());
+                continue;
+            }
+            let Some(class) = &s.class else { continue };
+            if let Some(x) = instances.iter().find(|x| class_of(x) == class && !taken.contains(*x)) {
+                taken.insert(x.clone());
+                out.insert(s.name.clone(), x.clone());
+            }
+        }
+        out
+    }
+}
+
+/// `<plate> (1001)` (a script line's argument) → `plate (1001)`.
+fn script_name(arg: &str) -> String {
+    arg.trim().replacen('<', "", 1).replacen('>', "", 1)
+}
+
+impl Adapter for VirtualhomeAdapter {
+    fn observe(&mut self, observation: &Observation, step: usize, belief: &mut Belief) {
+        let (rooms, percepts) = perceive_virtualhome(&observation.text, step, belief);
+        belief.add_places(&rooms);
+        belief.admit(&percepts);
+        self.entered.extend(Self::room_now(belief));
+    }
+
+    fn skills(&self, goal: &ClassGoal, belief: &Belief, record: &Record, _env: &dyn Environment) -> Skills {
+        let mut list = Vec::new();
+        let mut sweep = None;
+        let closed = self.closed_containers(belief, record);
+        for (x, _) in closed.iter().filter(|(x, _)| belief.holds("CLOSE", &[ME, x]) == Some(true)) {
+            sweep.get_or_insert(list.len());
+            list.push(Skill::Open(x.clone()));
+        }
+        let opened: Vec<String> =
+            record.steps.iter().filter(|s| s.executed).filter_map(|s| s.command.strip_prefix("[OPEN] ").map(script_name)).collect();
+        for x in opened.iter().filter(|x| belief.holds("OPEN", &[x]) == Some(true) && belief.holds("CLOSE", &[ME, x]) == Some(true)) {
+            list.push(Skill::Close(x.clone()));
+        }
+        for r in belief.places.iter().filter(|r| !self.entered.contains(*r)) {
+            sweep.get_or_insert(list.len());
+            list.push(Skill::Goto(r.clone()));
+        }
+        for (x, _) in closed.iter().filter(|(x, _)| belief.holds("CLOSE", &[ME, x]) != Some(true)) {
+            sweep.get_or_insert(list.len());
+            list.push(Skill::Goto(x.clone()));
+        }
+        let instances = Self::instances(belief);
+        if belief.hypotheses().any(|h| h.args.iter().any(|a| instances.contains(a))) {
+            list.push(Skill::Look);
+        }
+        let _ = goal;
+        list.push(Skill::Done);
+        Skills { list, sweep }
+    }
+
+    fn commands(&self, skill: &Skill, _goal: &ClassGoal, belief: &Belief, _record: &Record, _env: &dyn Environment) -> Vec<String> {
+        let line = |verb: &str, x: &str| match split_name(x) {
+            Some((class, id)) => format!("[{verb}] <{class}> ({id})"),
+            None => format!("{} {x}", verb.to_lowercase()),
+        };
+        match skill {
+            Skill::Goto(x) => vec![line("WALK", x)],
+            Skill::Open(x) => vec![line("OPEN", x)],
+            Skill::Close(x) => vec![line("CLOSE", x)],
+            Skill::Look => {
+                let instances = Self::instances(belief);
+                belief
+                    .hypotheses()
+                    .flat_map(|h| h.args.iter())
+                    .find(|a| instances.contains(*a))
+                    .map(|x| vec![line("WALK", x)])
+                    .unwrap_or_default()
+            }
+            Skill::Done => Vec::new(),
+        }
+    }
+
+    fn ready(&self, goal: &ClassGoal, belief: &Belief) -> bool {
+        let instances = Self::instances(belief);
+        let mut needed: BTreeMap<&str, usize> = BTreeMap::new();
+        for s in goal.symbols.iter().filter(|s| s.kind != "character") {
+            if let Some(c) = &s.class {
+                *needed.entry(c.as_str()).or_default() += 1;
+            }
+        }
+        needed.into_iter().all(|(class, n)| {
+            let have =
+                instances.iter().filter(|x| class_of(x) == class).count() + belief.places.iter().filter(|r| class_of(r) == class).count();
+            have >= n
+        })
+    }
+
+    fn objects_to_find(&self, goal: &ClassGoal) -> Vec<String> {
+        let mut out: Vec<String> = Vec::new();
+        for s in goal.symbols.iter().filter(|s| s.kind != "character") {
+            if let Some(c) = &s.class
+                && !out.contains(c)
+            {
+                out.push(c.clone());
+            }
+        }
+        out
+    }
+}
+
+impl Handing for VirtualhomeAdapter {
+    fn handover(&mut self, goal: &ClassGoal, exploration: &Exploration, _steps: &[StepRecord]) -> Result<Grounded, String> {
+        let belief = &exploration.belief;
+        let beta = Self::bind(goal, belief);
+        let instances = Self::instances(belief);
+        let mut names: BTreeSet<String> = instances.clone();
+        names.extend(belief.places.iter().cloned());
+        let used: BTreeSet<u32> = names.iter().filter_map(|n| split_name(n).map(|(_, id)| id)).collect();
+        let me = (1..).find(|id| !used.contains(id)).unwrap_or(u32::MAX);
+        let id_of = |name: &str| if name == ME { Some(me) } else { split_name(name).map(|(_, id)| id) };
+        let mut nodes = vec![json!({"id": me, "class_name": "character", "category": "Characters", "properties": [], "states": []})];
+        for n in &names {
+            let Some((class, id)) = split_name(n) else { continue };
+            let room = belief.places.contains(n);
+            let properties: Vec<String> =
+                self.ontology.affordances.get(class).map(|a| a.iter().map(|p| p.to_ascii_uppercase()).collect()).unwrap_or_default();
+            let states: Vec<&str> = NodeState::ALL.iter().map(|s| s.as_str()).filter(|s| belief.holds(s, &[n]) == Some(true)).collect();
+            nodes.push(json!({"id": id, "class_name": class, "category": if room { "Rooms" } else { "" },
+                "properties": if room { Vec::new() } else { properties }, "states": states}));
+        }
+        let mut edges = Vec::new();
+        for f in belief.facts().iter().filter(|f| f.holds && f.args.len() == 2) {
+            let (Some(a), Some(b)) = (id_of(&f.args[0]), id_of(&f.args[1])) else { continue };
+            match f.predicate.as_str() {
+                "ON" | "INSIDE" | "HOLDS_RH" | "HOLDS_LH" => edges.push(json!({"from_id": a, "relation_type": f.predicate, "to_id": b})),
+                "CLOSE" => {
+                    edges.push(json!({"from_id": a, "relation_type": "CLOSE", "to_id": b}));
+                    edges.push(json!({"from_id": b, "relation_type": "CLOSE", "to_id": a}));
+                }
+                _ => {}
+            }
+        }
+        // G with β: node goals, edge goals, and the action groups in order.
+        let bound = |symbol: &str| -> Result<(u32, String), String> {
+            let name = beta.get(symbol).ok_or_else(|| format!("β: no perceived instance for the goal's `{symbol}`"))?;
+            Ok((id_of(name).unwrap_or(me), if name == ME { "character".into() } else { class_of(name).to_string() }))
+        };
+        let mut goals = Vec::new();
+        for l in &goal.literals {
+            match l.args.as_slice() {
+                [x] => {
+                    let (id, class) = bound(x)?;
+                    goals.push(json!({"id": id, "class_name": class, "state": l.predicate.to_ascii_uppercase()}));
+                }
+                [x, y] => {
+                    let ((a, _), (b, _)) = (bound(x)?, bound(y)?);
+                    goals.push(json!({"from_id": a, "relation_type": l.predicate.to_ascii_uppercase(), "to_id": b}));
+                }
+                _ => return Err(format!("goal literal {}({}) has no VirtualHome counterpart", l.predicate, l.args.join(", "))),
+            }
+        }
+        let task_json = json!({
+            "task_id": "perceived", "task_name": goal.family, "description": "",
+            "vh_goal": {"goal": goals, "actions": goal.actions},
+            "init_graph": {"nodes": nodes, "edges": edges},
+        });
+        let task = VirtualhomeTask::from_json(&task_json.to_string(), "the perceived scene").map_err(|e| e.to_string())?;
+        // Action goals: the perceived objects whose class affords a verb of them.
+        let verbs: Vec<String> = goal.actions.iter().flat_map(|a| a.split('|')).map(|v| v.to_uppercase().replace(' ', "")).collect();
+        let mut classes: BTreeSet<String> = BTreeSet::new();
+        for x in &instances {
+            let wanted = verbs
+                .iter()
+                .any(|v| VERB_AFFORDANCES.iter().find(|(verb, _)| verb == v).is_none_or(|(_, needs)| needs.iter().any(|n| self.has(x, n))));
+            if wanted || (verbs.iter().any(|v| v == "TYPE") && class_of(x) == "keyboard") {
+                classes.insert(class_of(x).to_string());
+            }
+        }
+        let classes: Vec<&str> = classes.iter().map(String::as_str).collect();
+        let problem = vh_pddl::problem(&task, &classes).map_err(|e| e.to_string())?;
+        let model = ground(&self.domain, &problem.text)?;
+        let spelling = Spelling::virtualhome(model.task());
+        let by_id: BTreeMap<u32, &String> = names.iter().filter_map(|n| split_name(n).map(|(_, id)| (id, n))).collect();
+        let binding = problem
+            .objects
+            .iter()
+            .map(|(pddl, id)| {
+                (pddl.clone(), if *id == me { ME.to_string() } else { by_id.get(id).map_or_else(|| id.to_string(), |n| (*n).clone()) })
+            })
+            .collect();
+        let handover = Handover { problem: problem.text.clone(), binding };
+        self.last = Some((problem, task));
+        Ok(Grounded { handover, model, spelling })
+    }
+
+    fn command(&self, grounded: &Grounded, action: ActionId, _env: &dyn Environment) -> Result<Option<String>, String> {
+        let (problem, task) = self.last.as_ref().ok_or("no hand-over yet")?;
+        problem.script_line(&task.init, &grounded.model.task().action_name(action)).map(Some)
+    }
+
+    fn judge_view(&self, fact: &Fact) -> Option<JudgeAtom> {
+        (fact.args.first().is_some_and(|a| a != ME)).then(|| JudgeAtom { predicate: fact.predicate.clone(), args: fact.args.clone() })
+    }
+
+    fn class_of<'a>(&self, name: &'a str) -> &'a str {
+        class_of(name)
+    }
+
+    fn locates(&self, atom: &JudgeAtom) -> bool {
+        (atom.predicate == "inside" || atom.predicate == "on") && atom.args.get(1).is_some_and(|t| !t.is_empty())
+    }
+}
+
+/// The class-level goal's JSON value, for records.
+pub fn goal_value(goal: &ClassGoal) -> Value {
+    json!({"family": goal.family, "literals": goal.literals.iter().map(|l| format!("{}({})", l.predicate, l.args.join(", "))).collect::<Vec<_>>(), "actions": goal.actions})
+}

@@ -1,0 +1,102 @@
+//! The agent on VirtualHome with the systematic explorer and A* (LM-cut) as Phase II on the
+//! problem written from what it perceived: every task of the rearrangement set and every EAI
+//! fixture task, each episode judged by `VirtualhomeEnv`'s goal check within the paper's 20 steps.
+
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+use std::time::Duration;
+
+use exploration_harness::virtualhome::VirtualhomeAdapter;
+use exploration_harness::{Attribution, Episode, EpisodeConfig, Grounded, Ontology, PhaseTwo, Systematic, parse_goal, run_episode};
+use household_sim::{Environment, VirtualhomeEnv, VirtualhomeTask};
+
+fn fixtures() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../fixtures")
+}
+
+fn ontology() -> Ontology {
+    Ontology::from_text(&std::fs::read_to_string(fixtures().join("ontology/virtualhome.txt")).unwrap(), "virtualhome.txt").unwrap()
+}
+
+/// One episode; with it, every plan Phase II returned checked against the transition model of
+/// the grounded problem it came from (valid by construction: a failure here is a bug).
+fn play(path: &Path, benchmark: &str, ontology: &Ontology) -> Episode {
+    let mut env = VirtualhomeEnv::new(VirtualhomeTask::load(path).unwrap(), benchmark);
+    let goal = parse_goal(env.goal()).unwrap();
+    let mut adapter = VirtualhomeAdapter::new(ontology.clone()).unwrap();
+    let mut planner = |g: &Grounded| {
+        let plan = heuristics::search::optimal_plan(&g.model, Duration::from_secs(20)).map_err(|status| format!("{status:?}"))?;
+        assert!(g.model.validate(&plan).is_ok(), "{}: plan invalid for its grounded problem", path.display());
+        Ok(PhaseTwo { actions: plan, ..PhaseTwo::default() })
+    };
+    run_episode(&mut env, &mut adapter, &mut Systematic, &goal, EpisodeConfig { budget: 20, closed_loop: false }, &mut planner)
+}
+
+fn tasks(dir: &Path) -> Vec<PathBuf> {
+    let mut out: Vec<PathBuf> =
+        std::fs::read_dir(dir).unwrap().map(|e| e.unwrap().path()).filter(|p| p.to_string_lossy().ends_with(".json.gz")).collect();
+    out.sort();
+    out
+}
+
+/// (won, total, failures by attribution, failure lines)
+fn play_set(dir: &Path, benchmark: &str) -> (usize, usize, BTreeMap<String, usize>, Vec<String>) {
+    let ontology = ontology();
+    let paths = tasks(dir);
+    let (mut won, mut by, mut lines) = (0, BTreeMap::new(), Vec::new());
+    for path in &paths {
+        let episode = play(path, benchmark, &ontology);
+        assert!(episode.steps.len() <= 20, "{}: {} steps", path.display(), episode.steps.len());
+        // Plans are executable by construction: a step the environment refuses from a state
+        // Phase I got right would be a soundness bug of the hand-over.
+        assert_ne!(episode.attribution, Some(Attribution::Grounding), "{}: {:?}", path.display(), episode.failure);
+        if episode.success {
+            won += 1;
+        } else {
+            *by.entry(format!("{:?}", episode.attribution)).or_insert(0) += 1;
+            lines.push(format!(
+                "{}: {:?} {:?} stop {} p {:?} r {:?} steps {}",
+                path.file_name().unwrap().to_string_lossy(),
+                episode.attribution,
+                episode.failure,
+                episode.phase1_stop,
+                episode.precision,
+                episode.recall,
+                episode.steps.len()
+            ));
+        }
+    }
+    (won, paths.len(), by, lines)
+}
+
+#[test]
+fn systematic_exploration_then_a_star_on_the_rearrangement_set() {
+    let (won, total, by, lines) = play_set(&fixtures().join("virtualhome-rearrange"), "virtualhome-rearrange");
+    eprintln!("rearrange: won {won}/{total} {by:?}\n{}", lines.join("\n"));
+    assert_eq!(total, 200);
+    // Measured 2026-12-01: 145/200; the 55 lost: 45 spend the 20 steps before finding an object
+    // hidden in a closed container, 10 find everything but the plan runs past the 20 steps.
+    assert!(won >= 145, "won {won}/{total}");
+}
+
+#[test]
+fn systematic_exploration_then_a_star_on_eai_fixture_tasks() {
+    let (won, total, by, lines) = play_set(&fixtures().join("virtualhome-eai/graphs"), "virtualhome-eai");
+    eprintln!("eai: won {won}/{total} {by:?}\n{}", lines.join("\n"));
+    // Measured 2026-12-01: 11/33. EAI's goals name node ids while the agent is told classes: where
+    // a goal class has several instances the judge wants one the agent cannot know (7 `goal`
+    // failures), and 15 tasks spend the 20 steps searching closed containers.
+    assert_eq!(total, 33);
+    assert!(won >= 11, "won {won}/{total}");
+}
+
+/// The same task gives the same episode.
+#[test]
+fn virtualhome_episodes_are_reproducible() {
+    let ontology = ontology();
+    for path in tasks(&fixtures().join("virtualhome-rearrange")).iter().step_by(25) {
+        let (a, b) = (play(path, "virtualhome-rearrange", &ontology), play(path, "virtualhome-rearrange", &ontology));
+        assert_eq!(a.steps, b.steps, "{}", path.display());
+        assert_eq!(a.handover, b.handover, "{}", path.display());
+    }
+}
