@@ -327,18 +327,43 @@ fn env_virtualhome_prints_json_lines_and_the_verdict() {
 fn agent_wins_a_game_and_writes_commands_the_engine_can_replay() {
     let game = "fixtures/alfworld/valid_seen/pick_clean_then_place_in_recep-Mug-None-CoffeeMachine-26/trial_T20190907_233056_022802";
     let commands = scratch("agent-commands.txt", "");
+    // The defaults: systematic explorer, constrained MCTS with the uniform prior.
     let output = xtask(&["agent", "--game", game, "--commands-out", commands.to_str().unwrap(), "--json"]);
     assert_eq!(output.status.code(), Some(0), "{}", String::from_utf8_lossy(&output.stderr));
     let value: serde_json::Value = serde_json::from_str(&stdout(&output)).expect("one JSON object");
-    assert_eq!(value["success"], true);
+    let episode = &value["episode"];
+    assert_eq!(episode["success"], true);
+    assert_eq!(episode["phase2_detail"]["mode"], "constrained-mcts");
+    assert_eq!(episode["precision"], 1.0);
+    assert_eq!(episode["recall"], 1.0);
     let sent = std::fs::read_to_string(&commands).unwrap();
-    assert_eq!(sent.lines().count(), value["env_steps"].as_u64().unwrap() as usize);
-    assert!(value["problem"].as_str().unwrap().contains("(:domain alfred)"));
+    assert_eq!(sent.lines().count(), episode["steps"].as_array().unwrap().len());
+    let problem = episode["handover"]["problem"].as_str().unwrap();
+    assert!(problem.contains("(:domain alfred)"));
     // No hidden identifier reaches the grounded problem: the game's PDDL names look like
     // `Mug_bar__minus_00_dot_47...`.
-    assert!(!value["problem"].as_str().unwrap().contains("_bar_"));
+    assert!(!problem.contains("_bar_"));
+    // A* as Phase II, text output.
+    let output = xtask(&["agent", "--game", game, "--planner", "astar"]);
+    assert_eq!(output.status.code(), Some(0));
+    assert!(stdout(&output).contains("Phase I ("), "{}", stdout(&output));
     let bad = xtask(&["agent", "--game", "fixtures/no-such-game"]);
     assert_eq!(bad.status.code(), Some(2));
+    let bad = xtask(&["agent", "--game", game, "--explorer", "no-such-model.gguf"]);
+    assert_eq!(bad.status.code(), Some(2));
+}
+
+#[test]
+fn agent_solves_a_virtualhome_rearrangement_task_with_a_trace() {
+    let trace = scratch("agent-trace.json", "");
+    let output = xtask(&["agent", "--benchmark", "virtualhome-rearrange", "--task", "fridge-003", "--trace", trace.to_str().unwrap()]);
+    assert_eq!(output.status.code(), Some(0), "{}{}", stdout(&output), String::from_utf8_lossy(&output.stderr));
+    let value: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&trace).unwrap()).expect("JSON trace");
+    let episode = &value["episode"];
+    assert!(episode["steps"].as_array().unwrap().len() <= 20);
+    assert!(episode["handover"]["problem"].as_str().unwrap().contains("(:domain virtualhome-sound)"));
+    let output = xtask(&["agent", "--benchmark", "virtualhome-rearrange", "--task", "no-such-task"]);
+    assert_eq!(output.status.code(), Some(2));
 }
 
 #[test]

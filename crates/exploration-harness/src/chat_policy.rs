@@ -38,13 +38,15 @@ impl ChatPolicy {
     }
 }
 
-/// The reply's JSON schema: `action` is one of `skills`.
+/// The reply's JSON schema: `action` is one of `skills`; at most 6 facts of at most 80
+/// characters each (a small model under the schema otherwise spells one fact until the token
+/// limit cuts the JSON off).
 pub fn reply_schema(skills: &[Skill]) -> Value {
     let names: Vec<String> = skills.iter().map(Skill::to_string).collect();
     json!({
         "type": "object",
         "properties": {
-            "facts": { "type": "array", "items": { "type": "string" }, "maxItems": 8 },
+            "facts": { "type": "array", "items": { "type": "string", "maxLength": 80 }, "maxItems": 6 },
             "action": { "enum": names },
             "done": { "type": "boolean" }
         },

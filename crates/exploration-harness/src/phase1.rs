@@ -9,9 +9,13 @@
 //! until Ready(F, G) holds, the policy says Done, or the step budget is spent.
 //!
 //! Rules, each where it is implemented:
+//! - Done before Ready (the `done` flag without a valid skill, or the skill `done`) is overruled
+//!   while the sweep has an inspection left: the harness takes that skill instead and tells the
+//!   policy so (paper §3.1: the harness may require another inspection when evidence is
+//!   insufficient); with none left, exploration stops;
 //! - the policy may choose only a skill of K_t; a reply naming another skill is refused (the
-//!   step is recorded with the feedback "not a valid skill", no command is sent) and after
-//!   [`MAX_REFUSALS`] refusals in a row exploration stops;
+//!   step is recorded with the feedback "not a valid skill", no command is sent), and so is a
+//!   reply that cannot be read; after [`MAX_REFUSALS`] of them in a row exploration stops;
 //! - a skill's commands are the adapter's ([`Adapter::commands`]; `Look` may be several);
 //!   each is one environment step, counted against the budget, whatever the outcome;
 //! - the model's proposed facts are kept as hypotheses ([`Belief::propose`]): they may steer
@@ -108,7 +112,10 @@ pub struct Decision {
     pub admitted: Vec<String>,
     /// The model's proposals that no observation backed: kept as hypotheses, not facts.
     pub refused: Vec<String>,
-    /// `success`, `failed` (a command was not executed) or `refused` (not a skill of K_t).
+    /// The policy said Done before Ready and the harness took the sweep's skill instead.
+    pub required: bool,
+    /// `success`, `failed` (a command was not executed), `refused` (not a skill of K_t) or
+    /// `error` (the policy's reply could not be read; `feedback` holds the error).
     pub outcome: &'static str,
     /// The outcome the policy is told next turn.
     pub feedback: String,
@@ -244,7 +251,13 @@ pub fn explore(
             break "budget".to_string();
         }
         let skills = adapter.skills(goal, &belief, &record, env);
-        let history = record.decisions.iter().enumerate().map(|(i, d)| format!("{}. {} -> {}", i + 1, d.skill, d.outcome)).collect();
+        let history = record
+            .decisions
+            .iter()
+            .filter(|d| d.outcome != "error")
+            .enumerate()
+            .map(|(i, d)| format!("{}. {} -> {}", i + 1, d.skill, d.outcome))
+            .collect();
         let input = PolicyInput {
             benchmark: &benchmark,
             task: &sentence,
@@ -257,13 +270,42 @@ pub fn explore(
         };
         let reply = match policy.choose(&input) {
             Ok(reply) => reply,
-            Err(e) => break format!("policy error: {e}"),
+            Err(e) => {
+                // An unreadable reply is refused like an invalid skill.
+                refusals += 1;
+                feedback = "Your reply could not be read; answer with the JSON asked for.".to_string();
+                record.decisions.push(Decision {
+                    skill: String::new(),
+                    offered: skills.list.iter().map(Skill::to_string).collect(),
+                    steps: Vec::new(),
+                    admitted: Vec::new(),
+                    refused: Vec::new(),
+                    required: false,
+                    outcome: "error",
+                    feedback: format!("policy error: {e}"),
+                });
+                if refusals >= MAX_REFUSALS {
+                    break format!("policy error: {e}");
+                }
+                continue;
+            }
         };
         let before = belief.facts();
         belief.propose(&reply.proposed);
         let offered: Vec<String> = skills.list.iter().map(Skill::to_string).collect();
-        if reply.done || reply.skill == Skill::Done {
-            break "done".to_string();
+        // Done before Ready: the harness requires the sweep's next inspection while it has one
+        // (the paper: "the harness may require another inspection or container-opening action
+        // when evidence is insufficient"); with none left, Done stands.
+        let mut reply = reply;
+        let mut required = false;
+        if reply.skill == Skill::Done || (reply.done && !skills.list.contains(&reply.skill)) {
+            match skills.sweep {
+                Some(i) => {
+                    reply.skill = skills.list[i].clone();
+                    required = true;
+                }
+                None => break "done".to_string(),
+            }
         }
         if !skills.list.contains(&reply.skill) {
             refusals += 1;
@@ -274,6 +316,7 @@ pub fn explore(
                 steps: Vec::new(),
                 admitted: Vec::new(),
                 refused: reply.proposed.iter().map(Fact::to_string).collect(),
+                required: false,
                 outcome: "refused",
                 feedback: feedback.clone(),
             });
@@ -305,10 +348,10 @@ pub fn explore(
         let after = belief.facts();
         let admitted: Vec<String> = after.iter().filter(|f| !before.contains(f)).map(Fact::to_string).collect();
         let refused: Vec<String> = reply.proposed.iter().filter(|f| !after.contains(f)).map(Fact::to_string).collect();
-        feedback = if executed_all {
-            "The previous action executed successfully.".to_string()
-        } else {
-            format!("The previous action could not be executed: {reason}.")
+        feedback = match (executed_all, required) {
+            (true, false) => "The previous action executed successfully.".to_string(),
+            (true, true) => format!("Not every listed object is grounded yet, so the harness inspected instead: {}.", reply.skill),
+            (false, _) => format!("The previous action could not be executed: {reason}."),
         };
         let outcome = if executed_all { "success" } else { "failed" };
         record.decisions.push(Decision {
@@ -317,6 +360,7 @@ pub fn explore(
             steps,
             admitted,
             refused,
+            required,
             outcome,
             feedback: feedback.clone(),
         });

@@ -8,7 +8,8 @@
 //!   (1000))`, `INSIDE(plate (1001), cabinet (5))`): a visible node's listed states hold and
 //!   every other state does not (the observation lists all of them); its listed ON/INSIDE
 //!   relations to visible nodes hold, and a relation F_t had to a node visible now but not listed
-//!   no longer does; a visible node not held is INSIDE the room the agent stands in; CLOSE to the
+//!   no longer does; a visible node not held was seen in the room the agent stands in (`IN_ROOM`,
+//!   the agent's own fact: the graph's direct INSIDE edge to a room is not always there); CLOSE to the
 //!   character as the observation says, for every visible node; what is held, and in which hand.
 //!   Names are as perceived: class and the id the observation shows.
 //! - K_t ([`VirtualhomeAdapter`]'s `skills`): `goto R` for rooms not yet entered; `open X` for a
@@ -44,6 +45,11 @@ use crate::phase1::{Adapter, Exploration, Record, Skill, Skills, StepRecord};
 
 /// The character's name in F_t (its id is never shown).
 pub const ME: &str = "character";
+
+/// `IN_ROOM(x, r)`: x was seen while the agent stood in room r (visible nodes are those
+/// transitively inside the agent's room). Not the graph's direct INSIDE edge, which an object
+/// put into a container no longer has to its room; the agent's own fact, not a judge atom.
+pub const IN_ROOM: &str = "IN_ROOM";
 
 /// `plate (1001)` → (`plate`, 1001).
 pub fn split_name(name: &str) -> Option<(&str, u32)> {
@@ -106,6 +112,7 @@ pub fn perceive_virtualhome(text: &str, step: usize, belief: &Belief) -> (Vec<St
         }
     }
     let visible: BTreeSet<&str> = seen.iter().map(|(n, ..)| n.as_str()).collect();
+    let prior: Vec<Fact> = belief.facts().into_iter().filter(|f| f.holds && f.args.len() == 2).collect();
     if let Some(room) = &here {
         fact("INSIDE", &[ME, room], true);
         for r in rooms.iter().filter(|r| *r != room) {
@@ -120,7 +127,7 @@ pub fn perceive_virtualhome(text: &str, step: usize, belief: &Belief) -> (Vec<St
             fact(relation, &[name, target], true);
         }
         // A relation F_t had to a node visible now that the observation no longer lists.
-        for f in belief.facts().iter().filter(|f| f.holds && f.args.len() == 2 && f.args[0] == *name) {
+        for f in prior.iter().filter(|f| f.args[0] == *name) {
             if matches!(f.predicate.as_str(), "ON" | "INSIDE")
                 && visible.contains(f.args[1].as_str())
                 && !relations.iter().any(|(r, t)| *r == f.predicate && *t == f.args[1])
@@ -131,12 +138,12 @@ pub fn perceive_virtualhome(text: &str, step: usize, belief: &Belief) -> (Vec<St
         if let Some(room) = &here
             && !held.contains(name)
         {
-            fact("INSIDE", &[name, room], true);
+            fact(IN_ROOM, &[name, room], true);
         }
         fact("CLOSE", &[ME, name], *close);
     }
     // Something F_t said was held and no longer is.
-    for f in belief.facts().iter().filter(|f| f.holds && (f.predicate == "HOLDS_RH" || f.predicate == "HOLDS_LH")) {
+    for f in prior.iter().filter(|f| f.predicate == "HOLDS_RH" || f.predicate == "HOLDS_LH") {
         if !held.contains(&f.args[1]) {
             fact(&f.predicate, &[ME, &f.args[1]], false);
         }
@@ -214,7 +221,7 @@ impl VirtualhomeAdapter {
             .filter(|x| self.has(x, "can_open") && self.has(x, "containers"))
             .filter(|x| belief.holds("CLOSED", &[x]) == Some(true) && !opened.contains(x))
             .map(|x| {
-                let in_room = room.as_ref().is_some_and(|r| belief.holds("INSIDE", &[&x, r]) == Some(true));
+                let in_room = room.as_ref().is_some_and(|r| belief.holds(IN_ROOM, &[&x, r]) == Some(true));
                 (x, in_room)
             })
             .collect();
@@ -362,6 +369,8 @@ impl Handing for VirtualhomeAdapter {
             let (Some(a), Some(b)) = (id_of(&f.args[0]), id_of(&f.args[1])) else { continue };
             match f.predicate.as_str() {
                 "ON" | "INSIDE" | "HOLDS_RH" | "HOLDS_LH" => edges.push(json!({"from_id": a, "relation_type": f.predicate, "to_id": b})),
+                // The room a node was seen in, as the graph's room edge.
+                IN_ROOM => edges.push(json!({"from_id": a, "relation_type": "INSIDE", "to_id": b})),
                 "CLOSE" => {
                     edges.push(json!({"from_id": a, "relation_type": "CLOSE", "to_id": b}));
                     edges.push(json!({"from_id": b, "relation_type": "CLOSE", "to_id": a}));
@@ -428,7 +437,8 @@ impl Handing for VirtualhomeAdapter {
     }
 
     fn judge_view(&self, fact: &Fact) -> Option<JudgeAtom> {
-        (fact.args.first().is_some_and(|a| a != ME)).then(|| JudgeAtom { predicate: fact.predicate.clone(), args: fact.args.clone() })
+        (fact.predicate != IN_ROOM && fact.args.first().is_some_and(|a| a != ME))
+            .then(|| JudgeAtom { predicate: fact.predicate.clone(), args: fact.args.clone() })
     }
 
     fn class_of<'a>(&self, name: &'a str) -> &'a str {
