@@ -321,6 +321,11 @@ impl Adapter for AlfworldAdapter {
         }
         out
     }
+
+    /// The facts that hold, and the places said to be closed (`not opened(cabinet 10)`).
+    fn belief_lines(&self, _goal: &ClassGoal, belief: &Belief) -> Vec<String> {
+        belief.facts().iter().filter(|f| f.holds || f.predicate == "opened").map(Fact::to_string).collect()
+    }
 }
 
 impl crate::episode::Handing for AlfworldAdapter {

@@ -213,6 +213,11 @@ pub trait Adapter {
     fn ready(&self, goal: &ClassGoal, belief: &Belief) -> bool;
     /// The goal's object classes, as the prompt lists them.
     fn objects_to_find(&self, goal: &ClassGoal) -> Vec<String>;
+    /// F_t as the prompt's "Current belief" shows it, one fact a line (default: the facts that
+    /// hold).
+    fn belief_lines(&self, _goal: &ClassGoal, belief: &Belief) -> Vec<String> {
+        belief.facts().iter().filter(|f| f.holds).map(Fact::to_string).collect()
+    }
 }
 
 /// The result of Phase I.
@@ -262,7 +267,7 @@ pub fn explore(
             benchmark: &benchmark,
             task: &sentence,
             objects: &objects,
-            belief: belief.facts().iter().filter(|f| f.holds).map(Fact::to_string).collect(),
+            belief: adapter.belief_lines(goal, &belief),
             history,
             skills: &skills,
             feedback: &feedback,

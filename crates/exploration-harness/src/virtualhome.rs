@@ -331,6 +331,24 @@ impl Adapter for VirtualhomeAdapter {
         })
     }
 
+    /// The facts that hold about instances of the goal's classes, the containers' CLOSED and
+    /// OPEN, and the room the agent is in (a scene shows hundreds of facts; the prompt's belief
+    /// is what bears on the goal, as in the paper's example).
+    fn belief_lines(&self, goal: &ClassGoal, belief: &Belief) -> Vec<String> {
+        let classes = self.objects_to_find(goal);
+        belief
+            .facts()
+            .iter()
+            .filter(|f| f.holds)
+            .filter(|f| {
+                f.args.iter().any(|a| classes.iter().any(|c| c == class_of(a)))
+                    || (matches!(f.predicate.as_str(), "CLOSED" | "OPEN") && self.has(&f.args[0], "containers"))
+                    || (f.predicate == "INSIDE" && f.args[0] == ME)
+            })
+            .map(Fact::to_string)
+            .collect()
+    }
+
     fn objects_to_find(&self, goal: &ClassGoal) -> Vec<String> {
         let mut out: Vec<String> = Vec::new();
         for s in goal.symbols.iter().filter(|s| s.kind != "character") {

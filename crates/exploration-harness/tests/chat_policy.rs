@@ -46,6 +46,9 @@ impl ChatModel for Scripted {
     }
 }
 
+/// A* expansions per plan: a bound that holds on any machine under any load (not a time limit).
+const EXPANSIONS: u64 = 1_000_000;
+
 fn fixtures() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../../fixtures")
 }
@@ -67,7 +70,7 @@ fn a_chat_policy_explores_and_its_proposals_stay_hypotheses() {
         let mut adapter = AlfworldAdapter::new(ontology.clone(), domain.clone(), grammar.clone(), env.goal());
         let mut policy = ChatPolicy::new(Box::new(Scripted { usage: Usage::default(), prompts: Vec::new() }), "scripted");
         let mut planner = |g: &Grounded| {
-            heuristics::search::optimal_plan(&g.model, Duration::from_secs(20))
+            heuristics::search::optimal_plan_expanding(&g.model, EXPANSIONS)
                 .map(|actions| PhaseTwo { actions, ..PhaseTwo::default() })
                 .map_err(|s| format!("{s:?}"))
         };
@@ -91,4 +94,103 @@ fn a_chat_policy_explores_and_its_proposals_stay_hypotheses() {
         }
     }
     assert!(won >= 1, "the scripted policy won {won} games");
+}
+
+/// The Phase I prompt of a game's first step, as the model reads it (the paper's sections).
+#[test]
+fn the_phase_one_prompt_of_a_first_step() {
+    use exploration_harness::phase1::explore;
+    let ontology =
+        Ontology::from_text(&std::fs::read_to_string(fixtures().join("ontology/alfworld.txt")).unwrap(), "alfworld.txt").unwrap();
+    let domain = pddl_syntax::parse_domain(&std::fs::read_to_string(fixtures().join("alfworld/alfred.pddl")).unwrap()).unwrap();
+    let grammar = std::fs::read_to_string(fixtures().join("alfworld/alfred.twl2")).unwrap();
+    let game = fixtures()
+        .join("alfworld/valid_seen/pick_clean_then_place_in_recep-Mug-None-CoffeeMachine-26/trial_T20190907_233056_022802/game.tw-pddl");
+    let mut env = AlfworldEnv::from_game_file(&game).unwrap();
+    let goal = parse_goal(env.goal()).unwrap();
+    let mut adapter = AlfworldAdapter::new(ontology, domain, grammar, env.goal());
+    let mut policy = ChatPolicy::new(Box::new(Scripted { usage: Usage::default(), prompts: Vec::new() }), "scripted");
+    let first = env.reset();
+    let exploration = explore(&mut env, &mut adapter, &mut policy, &goal, &first, 2);
+    assert_eq!(exploration.record.steps.len(), 2);
+    insta::assert_snapshot!(policy.last_prompt);
+}
+
+/// Proposes random facts (over names from the prompt and made-up ones) and a random valid skill.
+struct Random {
+    rng: household_sim::PythonRandom,
+    usage: Usage,
+}
+
+impl ChatModel for Random {
+    fn chat(&mut self, request: &ChatRequest) -> Result<ChatReply, ChatError> {
+        let schema = request.json_schema.as_ref().expect("a reply schema");
+        let skills: Vec<&str> = schema["properties"]["action"]["enum"].as_array().unwrap().iter().filter_map(|v| v.as_str()).collect();
+        let skill = skills[self.rng.choice_index(skills.len())];
+        let names = ["mug 1", "mug 7", "fridge 1", "countertop 1", "apple 3", "cabinet 2", "nowhere 9"];
+        let predicates = ["inReceptacle", "opened", "holds", "isHot", "visited"];
+        let mut facts = Vec::new();
+        for _ in 0..self.rng.choice_index(5) {
+            let p = predicates[self.rng.choice_index(predicates.len())];
+            let (a, b) = (names[self.rng.choice_index(names.len())], names[self.rng.choice_index(names.len())]);
+            let negated = if self.rng.choice_index(4) == 0 { "not " } else { "" };
+            facts.push(if p == "inReceptacle" { format!("{negated}{p}({a}, {b})") } else { format!("{negated}{p}({a})") });
+        }
+        let done = self.rng.choice_index(10) == 0;
+        let text = serde_json::json!({"facts": facts, "action": skill, "done": done}).to_string();
+        let usage = Usage { requests: 1, ..Usage::default() };
+        self.usage.add(&usage);
+        Ok(ChatReply {
+            text,
+            reasoning: None,
+            finish_reason: Some("stop".into()),
+            usage,
+            json_mode: None,
+            attempts: 1,
+            waited: Duration::ZERO,
+        })
+    }
+
+    fn endpoint(&self) -> String {
+        "random".into()
+    }
+
+    fn usage(&self) -> Usage {
+        self.usage
+    }
+}
+
+proptest::proptest! {
+    #![proptest_config(proptest::prelude::ProptestConfig { cases: 12, rng_seed: proptest::test_runner::RngSeed::Fixed(20), failure_persistence: None, ..proptest::prelude::ProptestConfig::default() })]
+
+    /// Whatever a policy proposes, F_τ is exactly what U makes of the environment's observations
+    /// alone: replaying the episode's observations into an empty belief gives the same facts.
+    #[test]
+    fn proposals_never_change_what_phase_one_establishes(seed in 0u64..10_000, game in 0usize..140) {
+        use exploration_harness::phase1::{Adapter, explore};
+        let ontology =
+            Ontology::from_text(&std::fs::read_to_string(fixtures().join("ontology/alfworld.txt")).unwrap(), "alfworld.txt").unwrap();
+        let domain = pddl_syntax::parse_domain(&std::fs::read_to_string(fixtures().join("alfworld/alfred.pddl")).unwrap()).unwrap();
+        let grammar = std::fs::read_to_string(fixtures().join("alfworld/alfred.twl2")).unwrap();
+        let mut games = Vec::new();
+        for family in std::fs::read_dir(fixtures().join("alfworld/valid_seen")).unwrap() {
+            for trial in std::fs::read_dir(family.unwrap().path()).unwrap() {
+                games.push(trial.unwrap().path().join("game.tw-pddl"));
+            }
+        }
+        games.sort();
+        let mut env = AlfworldEnv::from_game_file(&games[game]).unwrap();
+        let goal = parse_goal(env.goal()).unwrap();
+        let mut adapter = AlfworldAdapter::new(ontology.clone(), domain.clone(), grammar.clone(), env.goal());
+        let mut policy = ChatPolicy::new(Box::new(Random { rng: household_sim::PythonRandom::new(seed), usage: Usage::default() }), "random");
+        let first = env.reset();
+        let exploration = explore(&mut env, &mut adapter, &mut policy, &goal, &first, 30);
+        let mut replay = exploration_harness::Belief::default();
+        let mut fresh = AlfworldAdapter::new(ontology, domain, grammar, env.goal());
+        fresh.observe(&first, 0, &mut replay);
+        for (i, step) in exploration.record.steps.iter().enumerate() {
+            fresh.observe(&household_sim::Observation::text(step.observation.clone()), i + 1, &mut replay);
+        }
+        proptest::prop_assert_eq!(exploration.belief.facts(), replay.facts());
+    }
 }

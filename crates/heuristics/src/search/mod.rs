@@ -142,6 +142,19 @@ pub fn optimal_plan(model: &TransitionModel, time_limit: Duration) -> Result<Vec
     }
 }
 
+/// [`optimal_plan`] bounded by expanded states instead of time: the same answer on any machine
+/// under any load (for tests and reproducible records).
+pub fn optimal_plan_expanding(model: &TransitionModel, max_expansions: u64) -> Result<Vec<ActionId>, SearchStatus> {
+    let mut heuristic = crate::LmCut::new(model);
+    let mut config = SearchConfig::new(Algorithm::AStar);
+    config.max_expansions = Some(max_expansions);
+    let result = search(model, &mut heuristic, &config, None);
+    match result.status {
+        SearchStatus::Solved => Ok(result.plan),
+        other => Err(other),
+    }
+}
+
 /// Runs a search from `start` (the task's initial state when `None`).
 pub fn search(model: &TransitionModel, heuristic: &mut dyn Heuristic, config: &SearchConfig, start: Option<&State>) -> SearchResult {
     let budget = Budget { start: Instant::now(), config: config.clone() };
