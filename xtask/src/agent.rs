@@ -17,7 +17,7 @@ use exploration_harness::virtualhome::VirtualhomeAdapter;
 use exploration_harness::{
     ClassGoal, Episode, EpisodeConfig, Grounded, Handing, Ontology, PhaseTwo, Policy, Systematic, parse_goal, run_episode,
 };
-use household_sim::{AlfworldEnv, Environment, Judge, VirtualhomeEnv, VirtualhomeTask};
+use household_sim::{AlfworldEnv, Environment, Judge, VirtualhomeEnv};
 use lm::{LanguageModel, LocalChat, LocalModel};
 use mcts::Decoder;
 use mcts::prompt::planning_prompt;
@@ -29,19 +29,8 @@ use crate::phase2::{DecodeArgs, LmArgs, load_lm};
 
 #[derive(Debug, clap::Args)]
 pub struct AgentArgs {
-    /// An ALFWorld game: `game.tw-pddl` or the folder holding it.
-    #[arg(long, required_unless_present = "benchmark", conflicts_with = "benchmark")]
-    game: Option<PathBuf>,
-    /// A VirtualHome benchmark, with `--task`.
-    #[arg(long, value_parser = ["virtualhome-eai", "virtualhome-rearrange"], requires = "task")]
-    benchmark: Option<String>,
-    /// Task id (`201_1`, `dishwasher-000`), with `--benchmark`.
-    #[arg(long, requires = "benchmark")]
-    task: Option<String>,
-    /// Folder of VirtualHome task files [default: fixtures/virtualhome-eai/graphs, or
-    /// fixtures/virtualhome-rearrange; every EAI task: the folder `cargo xtask fetch-data` prints].
-    #[arg(long, requires = "benchmark")]
-    task_dir: Option<PathBuf>,
+    #[command(flatten)]
+    which: crate::env::TaskArgs,
     /// Phase I's policy: `systematic` (the fixed sweep, no model), `smollm2` (the local default
     /// model, decoding under the reply's schema), a GGUF path, or `openai:URL` (a served chat
     /// model; `--served-model` names it).
@@ -173,13 +162,7 @@ pub fn virtualhome(
     task: &str,
     task_dir: Option<&std::path::Path>,
 ) -> anyhow::Result<(VirtualhomeEnv, VirtualhomeAdapter, ClassGoal)> {
-    let default = if benchmark == "virtualhome-rearrange" { "virtualhome-rearrange" } else { "virtualhome-eai/graphs" };
-    let dir = task_dir.map_or_else(|| benchmark_data::fixtures_dir().join(default), std::path::Path::to_path_buf);
-    let path = dir.join(format!("{task}.json.gz"));
-    if !path.is_file() {
-        anyhow::bail!(InputError(format!("no task {task} in {} (task files there are `<id>.json.gz`)", dir.display())));
-    }
-    let loaded = VirtualhomeTask::load(&path).map_err(|e| InputError(e.to_string()))?;
+    let loaded = crate::env_virtualhome::load_task(benchmark, task, task_dir).map_err(|e| InputError(e.to_string()))?;
     let env = VirtualhomeEnv::new(loaded, benchmark);
     let goal = parse_goal(env.goal()).map_err(|e| InputError(e.to_string()))?;
     let adapter = VirtualhomeAdapter::new(ontology("virtualhome")?).map_err(anyhow::Error::msg)?;
@@ -202,13 +185,13 @@ pub fn episode<E: Environment + Judge>(
 pub fn run(args: AgentArgs) -> anyhow::Result<ExitCode> {
     let mut policy = explorer(&args.explorer, &args.lm.served_model)?;
     let mut phase2 = PhaseTwoRunner::new(&args.planner, &args.lm, &args.decode, args.time_limit)?;
-    let (ep, name) = if let Some(game) = &args.game {
+    let (ep, name) = if let Some(game) = &args.which.game {
         let (mut env, mut adapter, goal) = alfworld(game)?;
         let config = EpisodeConfig { budget: args.budget.unwrap_or(55), closed_loop: args.closed_loop };
         (episode(&mut env, &mut adapter, policy.as_mut(), &goal, config, &mut phase2), game.display().to_string())
     } else {
-        let (benchmark, task) = (args.benchmark.as_deref().unwrap_or_default(), args.task.as_deref().unwrap_or_default());
-        let (mut env, mut adapter, goal) = virtualhome(benchmark, task, args.task_dir.as_deref())?;
+        let (benchmark, task) = (args.which.benchmark.as_deref().unwrap_or_default(), args.which.task.as_deref().unwrap_or_default());
+        let (mut env, mut adapter, goal) = virtualhome(benchmark, task, args.which.task_dir.as_deref())?;
         let config = EpisodeConfig { budget: args.budget.unwrap_or(20), closed_loop: args.closed_loop };
         (episode(&mut env, &mut adapter, policy.as_mut(), &goal, config, &mut phase2), format!("{benchmark}/{task}"))
     };

@@ -12,20 +12,8 @@ use crate::input::InputError;
 
 #[derive(Debug, Args)]
 pub struct EnvArgs {
-    /// An ALFWorld game: `game.tw-pddl` or the folder holding it.
-    #[arg(long, required_unless_present = "benchmark", conflicts_with = "benchmark")]
-    game: Option<PathBuf>,
-    /// A VirtualHome benchmark, with `--task`: `virtualhome-eai` (EAI's tasks) or
-    /// `virtualhome-rearrange` (the rearrangement set in fixtures/virtualhome-rearrange).
-    #[arg(long, value_parser = ["virtualhome-eai", "virtualhome-rearrange"], requires = "task")]
-    benchmark: Option<String>,
-    /// Task id (`201_1`, `dishwasher-000`), with `--benchmark`.
-    #[arg(long, requires = "benchmark")]
-    task: Option<String>,
-    /// Folder of VirtualHome task files [default: fixtures/virtualhome-eai/graphs, or
-    /// fixtures/virtualhome-rearrange; every EAI task: the folder `cargo xtask fetch-data` prints].
-    #[arg(long, requires = "benchmark")]
-    task_dir: Option<PathBuf>,
+    #[command(flatten)]
+    pub which: TaskArgs,
     /// Commands to send, one a line (blank lines and `#` lines skipped) [default: the game's
     /// expert walkthrough].
     #[arg(long, conflicts_with = "random")]
@@ -89,12 +77,31 @@ fn py_line(step: usize, command: Option<&str>, observation: &str, admissible: &[
     out
 }
 
+/// Which task: an ALFWorld game, or a task of a VirtualHome benchmark.
+#[derive(Debug, Clone, clap::Args)]
+pub struct TaskArgs {
+    /// An ALFWorld game: `game.tw-pddl` or the folder holding it.
+    #[arg(long, required_unless_present = "benchmark", conflicts_with = "benchmark")]
+    pub game: Option<PathBuf>,
+    /// A VirtualHome benchmark, with `--task`: `virtualhome-eai` (EAI's tasks) or
+    /// `virtualhome-rearrange` (the rearrangement set in fixtures/virtualhome-rearrange).
+    #[arg(long, value_parser = ["virtualhome-eai", "virtualhome-rearrange"], requires = "task")]
+    pub benchmark: Option<String>,
+    /// Task id (`201_1`, `dishwasher-000`), with `--benchmark`.
+    #[arg(long, requires = "benchmark")]
+    pub task: Option<String>,
+    /// Folder of VirtualHome task files [default: fixtures/virtualhome-eai/graphs, or
+    /// fixtures/virtualhome-rearrange; every EAI task: the folder `cargo xtask fetch-data` prints].
+    #[arg(long, requires = "benchmark")]
+    pub task_dir: Option<PathBuf>,
+}
+
 pub fn run(args: EnvArgs) -> anyhow::Result<ExitCode> {
-    let Some(game) = &args.game else {
+    let Some(game) = &args.which.game else {
         return crate::env_virtualhome::run(&crate::env_virtualhome::VirtualhomeEnvArgs {
-            benchmark: args.benchmark.clone().unwrap_or_default(),
-            task: args.task.clone().unwrap_or_default(),
-            task_dir: args.task_dir.clone(),
+            benchmark: args.which.benchmark.clone().unwrap_or_default(),
+            task: args.which.task.clone().unwrap_or_default(),
+            task_dir: args.which.task_dir.clone(),
             commands: args.commands.clone(),
             random: args.random,
             seed: args.seed,

@@ -64,16 +64,22 @@ fn random_command(env: &VirtualhomeEnv, rng: &mut PythonRandom) -> String {
     line
 }
 
+/// A task of a VirtualHome benchmark: `<task>.json.gz` in `task_dir`, by default
+/// fixtures/virtualhome-eai/graphs or fixtures/virtualhome-rearrange.
+pub fn load_task(benchmark: &str, task: &str, task_dir: Option<&std::path::Path>) -> anyhow::Result<VirtualhomeTask> {
+    let default = if benchmark == "virtualhome-rearrange" { "virtualhome-rearrange" } else { "virtualhome-eai/graphs" };
+    let dir = task_dir.map_or_else(|| benchmark_data::fixtures_dir().join(default), std::path::Path::to_path_buf);
+    let path = dir.join(format!("{task}.json.gz"));
+    if !path.is_file() {
+        bail!("no task {task} in {} (task files there are `<id>.json.gz`)", dir.display());
+    }
+    Ok(VirtualhomeTask::load(&path)?)
+}
+
 /// Runs `cargo xtask env` for a VirtualHome benchmark. Exit 0 when the goal holds at the
 /// end, 1 when not; errors (exit 2) for a missing task or an unreadable command file.
 pub fn run(args: &VirtualhomeEnvArgs) -> anyhow::Result<ExitCode> {
-    let default = if args.benchmark == "virtualhome-rearrange" { "virtualhome-rearrange" } else { "virtualhome-eai/graphs" };
-    let dir = args.task_dir.clone().unwrap_or_else(|| benchmark_data::fixtures_dir().join(default));
-    let path = dir.join(format!("{}.json.gz", args.task));
-    if !path.is_file() {
-        bail!("no task {} in {} (task files there: the EAI kitchen tasks, `<id>.json.gz`)", args.task, dir.display());
-    }
-    let task = VirtualhomeTask::load(&path)?;
+    let task = load_task(&args.benchmark, &args.task, args.task_dir.as_deref())?;
     let mut env = VirtualhomeEnv::new(task, &args.benchmark);
     let commands: Option<Vec<String>> = match &args.commands {
         Some(file) => {

@@ -213,8 +213,9 @@ const LOOKING: &[&str] = &["look", "inventory", "examinereceptacle", "examineobj
 /// - K_t: `open X` when the agent stands at X and an observation said X is closed; `close X`
 ///   when it stands at X and X is open; `goto X` for every listed place not yet visited, those
 ///   worth inspecting first (F_str says their class can hold an object class the goal still
-///   lacks, or the goal names their class and none was visited), then places the model's
-///   hypotheses name, then the rest in the room listing's order; `look` where the agent stands at
+///   lacks, or the goal names their class and none was visited; among them places F_str says
+///   are never openable first, since they show their contents in one step), then places the
+///   model's hypotheses name, then the rest in the room listing's order; `look` where the agent stands at
 ///   a place; `done`.
 /// - The sweep: `open` the place it stands at if closed, else the first place worth inspecting.
 /// - Commands: `goto X` is `go to X`, or `examine X` where the agent already stands at X's
@@ -283,8 +284,16 @@ impl Adapter for AlfworldAdapter {
         let unvisited: Vec<&String> = belief.places.iter().filter(|p| belief.holds("visited", &[p]) != Some(true)).collect();
         let hinted: BTreeSet<&str> =
             belief.hypotheses().filter(|f| f.predicate == "inReceptacle" && f.args.len() == 2).map(|f| f.args[1].as_str()).collect();
-        let (worth, rest): (Vec<&String>, Vec<&String>) =
+        let (mut worth, rest): (Vec<&String>, Vec<&String>) =
             unvisited.into_iter().partition(|p| worth_inspecting(goal, &self.ontology, belief, p));
+        // Cheap looks first: a place F_str says is never openable shows its contents on arrival
+        // (one step); an openable one, or one of a class whose instances disagree, may take two.
+        let may_open = |p: &str| {
+            let class = class_of(p);
+            self.ontology.affordances.get(class).is_some_and(|a| a.contains("openable"))
+                || self.ontology.disagreements.get(class).is_some_and(|a| a.contains("openable"))
+        };
+        worth.sort_by_key(|p| may_open(p));
         let (hint, rest): (Vec<&String>, Vec<&String>) = rest.into_iter().partition(|p| hinted.contains(p.as_str()));
         if sweep.is_none() && !worth.is_empty() {
             sweep = Some(list.len());

@@ -132,23 +132,22 @@ impl Budget {
 /// An optimal plan from the initial state: A* with LM-cut within `time_limit`, or the status
 /// that stopped it.
 pub fn optimal_plan(model: &TransitionModel, time_limit: Duration) -> Result<Vec<ActionId>, SearchStatus> {
-    let mut heuristic = crate::LmCut::new(model);
     let mut config = SearchConfig::new(Algorithm::AStar);
     config.time_limit = Some(time_limit);
-    let result = search(model, &mut heuristic, &config, None);
-    match result.status {
-        SearchStatus::Solved => Ok(result.plan),
-        other => Err(other),
-    }
+    astar_lmcut(model, &config)
 }
 
 /// [`optimal_plan`] bounded by expanded states instead of time: the same answer on any machine
 /// under any load (for tests and reproducible records).
 pub fn optimal_plan_expanding(model: &TransitionModel, max_expansions: u64) -> Result<Vec<ActionId>, SearchStatus> {
-    let mut heuristic = crate::LmCut::new(model);
     let mut config = SearchConfig::new(Algorithm::AStar);
     config.max_expansions = Some(max_expansions);
-    let result = search(model, &mut heuristic, &config, None);
+    astar_lmcut(model, &config)
+}
+
+fn astar_lmcut(model: &TransitionModel, config: &SearchConfig) -> Result<Vec<ActionId>, SearchStatus> {
+    let mut heuristic = crate::LmCut::new(model);
+    let result = search(model, &mut heuristic, config, None);
     match result.status {
         SearchStatus::Solved => Ok(result.plan),
         other => Err(other),
