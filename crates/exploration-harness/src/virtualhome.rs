@@ -10,7 +10,8 @@
 //!   relations to visible nodes hold, and a relation F_t had to a node visible now but not listed
 //!   no longer does; a visible node not held was seen in the room the agent stands in (`IN_ROOM`,
 //!   the agent's own fact: the graph's direct INSIDE edge to a room is not always there); CLOSE to the
-//!   character as the observation says, for every visible node; what is held, and in which hand.
+//!   character as the observation says, for every visible node; what is held, and in which hand;
+//!   whether the character sits or lies (`goto` then stands up first).
 //!   Names are as perceived: class and the id the observation shows.
 //! - K_t ([`VirtualhomeAdapter`]'s `skills`): `goto R` for rooms not yet entered; `open X` for a
 //!   container (F_str: `can_open` and `containers`) the agent is close to and saw closed, not yet
@@ -74,9 +75,14 @@ pub fn perceive_virtualhome(text: &str, step: usize, belief: &Belief) -> (Vec<St
     let mut held: Vec<String> = Vec::new();
     let mut seen: Vec<SeenNode> = Vec::new();
     let mut listing = false;
+    let (mut sitting, mut lying) = (false, false);
     for line in text.lines() {
         let line = line.trim();
-        if let Some(room) = line.strip_prefix("You are in the ").and_then(|r| r.strip_suffix('.')) {
+        if line == "You are sitting." {
+            sitting = true;
+        } else if line == "You are lying." {
+            lying = true;
+        } else if let Some(room) = line.strip_prefix("You are in the ").and_then(|r| r.strip_suffix('.')) {
             here = Some(room.to_string());
         } else if let Some(rest) = line.strip_prefix("You hold: ").and_then(|r| r.strip_suffix('.')) {
             for item in rest.split(", ").filter(|i| *i != "nothing") {
@@ -110,6 +116,11 @@ pub fn perceive_virtualhome(text: &str, step: usize, belief: &Belief) -> (Vec<St
             }
             seen.push((name.to_string(), states, relations, close));
         }
+    }
+    // Every observation says whether the character sits or lies (a line only when it does).
+    if here.is_some() {
+        fact("SITTING", &[ME], sitting);
+        fact("LYING", &[ME], lying);
     }
     let visible: BTreeSet<&str> = seen.iter().map(|(n, ..)| n.as_str()).collect();
     let prior: Vec<Fact> = belief.facts().into_iter().filter(|f| f.holds && f.args.len() == 2).collect();
@@ -299,18 +310,16 @@ impl Adapter for VirtualhomeAdapter {
             Some((class, id)) => format!("[{verb}] <{class}> ({id})"),
             None => format!("{} {x}", verb.to_lowercase()),
         };
+        // A sitting or lying character cannot walk: it stands up first.
+        let seated = belief.holds("SITTING", &[ME]) == Some(true) || belief.holds("LYING", &[ME]) == Some(true);
+        let walk = |x: &str| if seated { vec!["[STANDUP]".to_string(), line("WALK", x)] } else { vec![line("WALK", x)] };
         match skill {
-            Skill::Goto(x) => vec![line("WALK", x)],
+            Skill::Goto(x) => walk(x),
             Skill::Open(x) => vec![line("OPEN", x)],
             Skill::Close(x) => vec![line("CLOSE", x)],
             Skill::Look => {
                 let instances = Self::instances(belief);
-                belief
-                    .hypotheses()
-                    .flat_map(|h| h.args.iter())
-                    .find(|a| instances.contains(*a))
-                    .map(|x| vec![line("WALK", x)])
-                    .unwrap_or_default()
+                belief.hypotheses().flat_map(|h| h.args.iter()).find(|a| instances.contains(*a)).map(|x| walk(x)).unwrap_or_default()
             }
             Skill::Done => Vec::new(),
         }
@@ -372,7 +381,8 @@ impl Handing for VirtualhomeAdapter {
         let used: BTreeSet<u32> = names.iter().filter_map(|n| split_name(n).map(|(_, id)| id)).collect();
         let me = (1..).find(|id| !used.contains(id)).unwrap_or(u32::MAX);
         let id_of = |name: &str| if name == ME { Some(me) } else { split_name(name).map(|(_, id)| id) };
-        let mut nodes = vec![json!({"id": me, "class_name": "character", "category": "Characters", "properties": [], "states": []})];
+        let me_states: Vec<&str> = ["SITTING", "LYING"].into_iter().filter(|s| belief.holds(s, &[ME]) == Some(true)).collect();
+        let mut nodes = vec![json!({"id": me, "class_name": "character", "category": "Characters", "properties": [], "states": me_states})];
         for n in &names {
             let Some((class, id)) = split_name(n) else { continue };
             let room = belief.places.contains(n);

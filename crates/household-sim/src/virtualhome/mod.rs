@@ -308,11 +308,13 @@ impl VirtualhomeEnv {
         &self.executed
     }
 
-    /// The observation text: the room, what the character holds, and every visible node
+    /// The observation text: the room, whether the character sits or lies (a line only when it
+    /// does), what the character holds, and every visible node
     /// with its states and its ON/INSIDE relations to visible nodes, one per line, by id:
     ///
     /// ```text
     /// You are in the kitchen (11).
+    /// You are sitting.
     /// You hold: plate (1001) in the right hand.
     /// Rooms: bathroom (1), kitchen (11).
     /// You see:
@@ -326,6 +328,11 @@ impl VirtualhomeEnv {
         let mut out = String::new();
         let rooms: Vec<String> = g.targets(w.character, Relation::Inside).into_iter().filter(|&r| g.node(r).is_room()).map(name).collect();
         let _ = writeln!(out, "You are in the {}.", if rooms.is_empty() { "nowhere".to_string() } else { rooms.join(", ") });
+        for (state, words) in [(NodeState::Sitting, "You are sitting."), (NodeState::Lying, "You are lying.")] {
+            if g.node(w.character).states.contains(state) {
+                let _ = writeln!(out, "{words}");
+            }
+        }
         let hand = |ix: NodeIx| if g.has_edge(w.character, Relation::HoldsLh, ix) { "left" } else { "right" };
         let held: Vec<String> = w.held().into_iter().map(|ix| format!("{} in the {} hand", name(ix), hand(ix))).collect();
         let _ = writeln!(out, "You hold: {}.", if held.is_empty() { "nothing".to_string() } else { held.join(", ") });
