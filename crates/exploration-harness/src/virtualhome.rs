@@ -8,8 +8,8 @@
 //!   (1000))`, `INSIDE(plate (1001), cabinet (5))`): a visible node's listed states hold and
 //!   every other state does not (the observation lists all of them); its listed ON/INSIDE
 //!   relations to visible nodes hold, and a relation F_t had to a node visible now but not listed
-//!   no longer does; a visible node not held was seen in the room the agent stands in (`IN_ROOM`,
-//!   the agent's own fact: the graph's direct INSIDE edge to a room is not always there); CLOSE to the
+//!   no longer does; a visible node not held is in the room the agent stands in (`IN_ROOM`: the
+//!   graph's direct INSIDE edge to a room is not always there); CLOSE to the
 //!   character as the observation says, for every visible node; what is held, and in which hand;
 //!   whether the character sits or lies (`goto` then stands up first).
 //!   Names are as perceived: class and the id the observation shows.
@@ -49,7 +49,8 @@ pub const ME: &str = "character";
 
 /// `IN_ROOM(x, r)`: x was seen while the agent stood in room r (visible nodes are those
 /// transitively inside the agent's room). Not the graph's direct INSIDE edge, which an object
-/// put into a container no longer has to its room; the agent's own fact, not a judge atom.
+/// put into a container no longer has to its room; the judge's `IN_ROOM` is the executor's
+/// `room_of`.
 pub const IN_ROOM: &str = "IN_ROOM";
 
 /// `plate (1001)` → (`plate`, 1001).
@@ -465,8 +466,7 @@ impl Handing for VirtualhomeAdapter {
     }
 
     fn judge_view(&self, fact: &Fact) -> Option<JudgeAtom> {
-        (fact.predicate != IN_ROOM && fact.args.first().is_some_and(|a| a != ME))
-            .then(|| JudgeAtom { predicate: fact.predicate.clone(), args: fact.args.clone() })
+        (fact.args.first().is_some_and(|a| a != ME)).then(|| JudgeAtom { predicate: fact.predicate.clone(), args: fact.args.clone() })
     }
 
     fn class_of<'a>(&self, name: &'a str) -> &'a str {
@@ -474,7 +474,7 @@ impl Handing for VirtualhomeAdapter {
     }
 
     fn locates(&self, atom: &JudgeAtom) -> bool {
-        (atom.predicate == "inside" || atom.predicate == "on") && atom.args.get(1).is_some_and(|t| !t.is_empty())
+        matches!(atom.predicate.as_str(), "inside" | "on" | "in_room") && atom.args.get(1).is_some_and(|t| !t.is_empty())
     }
 }
 

@@ -494,6 +494,25 @@ impl Judge for VirtualhomeEnv {
         for (from, relation, to) in g.all_edges() {
             atoms.push(JudgeAtom { predicate: relation.as_str().to_string(), args: vec![name(from), name(to)] });
         }
+        // The rooms each node is in: reached through INSIDE edges (as `get_visible_nodes` reads
+        // them), which a direct INSIDE edge to the room does not always say.
+        let inside = g.targets_of_all(Relation::Inside);
+        for ix in g.indices().filter(|&ix| !g.node(ix).is_room() && ix != self.world.character) {
+            let mut seen = vec![ix];
+            let mut frontier = vec![ix];
+            while let Some(n) = frontier.pop() {
+                for &t in &inside[n as usize] {
+                    if !seen.contains(&t) {
+                        seen.push(t);
+                        if g.node(t).is_room() {
+                            atoms.push(JudgeAtom { predicate: "IN_ROOM".to_string(), args: vec![name(ix), name(t)] });
+                        } else {
+                            frontier.push(t);
+                        }
+                    }
+                }
+            }
+        }
         atoms.sort();
         atoms
     }
