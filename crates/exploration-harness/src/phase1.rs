@@ -372,3 +372,23 @@ pub fn explore(
     };
     Exploration { belief, record, stop }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn skills_read_back_as_written() {
+        for skill in [
+            Skill::Goto("fridge 1".into()),
+            Skill::Open("dishwasher (1000)".into()),
+            Skill::Close("cabinet 10".into()),
+            Skill::Look,
+            Skill::Done,
+        ] {
+            assert_eq!(Skill::parse(&skill.to_string()), Some(skill.clone()), "{skill}");
+        }
+        assert_eq!(Skill::parse("goto"), None);
+        assert_eq!(Skill::parse("fly to the moon"), None);
+    }
+}
