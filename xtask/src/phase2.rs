@@ -21,7 +21,7 @@ use transition_model::{Spelling, TransitionModel};
 use crate::input::{self, InputError};
 
 /// Which language model writes the plan.
-#[derive(Debug, Clone, clap::Args)]
+#[derive(Debug, Clone, clap::Args, Serialize)]
 pub struct LmArgs {
     /// `uniform` (every allowed token equally likely, over the Qwen3 tokenizer in fixtures/),
     /// `smollm2` (the default model; `cargo xtask fetch-model` first), `openai:URL` (an
@@ -43,7 +43,7 @@ pub struct LmArgs {
 }
 
 /// How the plan is decoded (defaults: the paper's, Appendix A.4 and Table 6).
-#[derive(Debug, Clone, clap::Args)]
+#[derive(Debug, Clone, clap::Args, Serialize)]
 pub struct DecodeArgs {
     /// The Phase II condition.
     #[arg(long, default_value = "constrained-mcts", value_parser = Mode::NAMES)]
@@ -290,6 +290,34 @@ pub struct Record {
     pub millis: f64,
     /// Everything for this task: grounding, prompt, decoding.
     pub total_millis: f64,
+    /// The run configuration's hash ([`RunConfig::hash`]): which settings made this record.
+    #[serde(default)]
+    pub config: String,
+}
+
+/// Every setting that changes what a run records: the set, the model and every decoding
+/// setting, the time limit. Its hash names the record file and is stored in every record, so
+/// runs that differ in any setting never append to or resume from each other's records.
+#[derive(Debug, Serialize)]
+pub struct RunConfig<'a> {
+    pub benchmark: &'a str,
+    pub set: &'a str,
+    pub lm: &'a LmArgs,
+    pub decode: &'a DecodeArgs,
+    pub time_limit: f64,
+}
+
+impl RunConfig<'_> {
+    /// The configuration as JSON (fields in declaration order, whatever serde_json's features).
+    pub fn json(&self) -> String {
+        serde_json::to_string(self).unwrap_or_default()
+    }
+
+    /// The first 12 hex digits of the sha256 of [`RunConfig::json`].
+    pub fn hash(&self) -> String {
+        use sha2::{Digest, Sha256};
+        Sha256::digest(self.json().as_bytes()).iter().take(6).map(|b| format!("{b:02x}")).collect()
+    }
 }
 
 fn yes() -> bool {
@@ -342,6 +370,7 @@ pub fn solve(
         heuristic_evaluations: outcome.stats.heuristic_evaluations,
         millis: outcome.stats.millis,
         total_millis: start.elapsed().as_secs_f64() * 1e3,
+        config: String::new(),
     };
     Ok((record, outcome, model))
 }
@@ -456,7 +485,10 @@ pub fn run(args: Phase2Args) -> anyhow::Result<ExitCode> {
         None => benchmark_data::load(benchmark)?,
     };
     tasks.truncate(args.limit.unwrap_or(usize::MAX));
-    let lm_name = if args.lm.lm.contains('/') {
+    let lm_name = if args.lm.lm.starts_with("openai:") {
+        // A URL's last segment (`v1`) names nothing; the configuration's hash tells servers apart.
+        "openai".to_string()
+    } else if args.lm.lm.contains('/') {
         Path::new(&args.lm.lm).file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_else(|| args.lm.lm.clone())
     } else {
         args.lm.lm.clone()
@@ -471,12 +503,25 @@ pub fn run(args: Phase2Args) -> anyhow::Result<ExitCode> {
     };
     std::fs::create_dir_all(&args.out).with_context(|| format!("cannot create {}", args.out.display()))?;
     let variant = args.decode.variant();
-    let stem = file_safe(&format!("{set}-{}{variant}-{lm_name}", args.decode.mode));
+    let config = RunConfig { benchmark: &args.benchmark, set: &set, lm: &args.lm, decode: &args.decode, time_limit: args.time_limit };
+    let hash = config.hash();
+    let stem = file_safe(&format!("{set}-{}{variant}-{lm_name}-{hash}", args.decode.mode));
     let path = args.out.join(format!("{stem}.jsonl"));
     if args.fresh && path.exists() {
         std::fs::remove_file(&path).with_context(|| format!("cannot remove {}", path.display()))?;
     }
+    // The configuration beside its records, for people; records carry its hash.
+    let config_path = args.out.join(format!("{stem}.config.json"));
+    std::fs::write(&config_path, config.json() + "\n").with_context(|| format!("cannot write {}", config_path.display()))?;
     let mut records = read_records(&path)?;
+    if let Some(other) = records.iter().find(|r| r.config != hash) {
+        anyhow::bail!(InputError(format!(
+            "{}: holds a record of task {} made under configuration {:?}, not this run's {hash}; refusing to resume it (use --fresh or another --out)",
+            path.display(),
+            other.task,
+            other.config
+        )));
+    }
     let done: BTreeSet<String> = records.iter().map(|r| r.task.clone()).collect();
     let todo: Vec<&TaskFiles> = tasks.iter().filter(|t| !done.contains(&t.id)).collect();
 
@@ -494,8 +539,9 @@ pub fn run(args: Phase2Args) -> anyhow::Result<ExitCode> {
     bar.set_position((tasks.len() - todo.len()) as u64);
     let mut solved = records.iter().filter(|r| r.solved).count();
     for files in todo {
-        let (record, _, _) =
+        let (mut record, _, _) =
             solve(files, lm.as_mut(), &lm_name, &vocab, &args.decode, args.time_limit).with_context(|| format!("task {}", files.id))?;
+        record.config.clone_from(&hash);
         writeln!(out, "{}", serde_json::to_string(&record)?)?;
         out.flush()?;
         solved += usize::from(record.solved);

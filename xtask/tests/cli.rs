@@ -208,18 +208,37 @@ fn phase2_writes_records_resumes_and_plan_mcts_prints_json() {
     assert!(first.status.success(), "{}", String::from_utf8_lossy(&first.stderr));
     let summary: serde_json::Value = serde_json::from_str(stdout(&first).trim()).expect("one JSON object");
     assert_eq!(summary["tasks"], 2);
-    let records = std::fs::read_to_string(out.join("virtualhome-eai-50-constrained-mcts-uniform.jsonl")).expect("records");
+    // Records are named by the set, mode, model and the configuration's hash, which every record carries.
+    let path = PathBuf::from(summary["records"].as_str().unwrap());
+    let name = path.file_name().unwrap().to_string_lossy().into_owned();
+    assert!(name.starts_with("virtualhome-eai-50-constrained-mcts-uniform-") && name.ends_with(".jsonl"), "{name}");
+    let hash = name.trim_end_matches(".jsonl").rsplit('-').next().unwrap().to_string();
+    assert_eq!(hash.len(), 12);
+    assert!(path.with_extension("config.json").is_file());
+    let records = std::fs::read_to_string(&path).expect("records");
     assert_eq!(records.lines().count(), 2);
     for line in records.lines() {
         let record: serde_json::Value = serde_json::from_str(line).expect("record");
         assert_eq!(record["valid"], true, "{record}");
         assert_eq!(record["solvable"], true, "{record}");
+        assert_eq!(record["config"], hash.as_str(), "{record}");
     }
     assert_eq!(summary["solvable"], 2);
     // A second run finds both tasks done and adds nothing.
     let again = xtask(&args);
     assert!(again.status.success());
-    assert_eq!(std::fs::read_to_string(out.join("virtualhome-eai-50-constrained-mcts-uniform.jsonl")).expect("records").lines().count(), 2);
+    assert_eq!(std::fs::read_to_string(&path).expect("records").lines().count(), 2);
+    // Another time limit is another configuration: its own file, nothing resumed from this one.
+    let longer: Vec<&str> = args.iter().copied().chain(["--time-limit", "300"]).collect();
+    let other = xtask(&longer);
+    assert!(other.status.success(), "{}", String::from_utf8_lossy(&other.stderr));
+    let other: serde_json::Value = serde_json::from_str(stdout(&other).trim()).expect("one JSON object");
+    assert_ne!(other["records"], summary["records"]);
+    // A record file holding another configuration's records is refused, not resumed.
+    std::fs::copy(&path, other["records"].as_str().unwrap()).unwrap();
+    let refused = xtask(&longer);
+    assert_eq!(refused.status.code(), Some(2), "{}", String::from_utf8_lossy(&refused.stderr));
+    assert!(String::from_utf8_lossy(&refused.stderr).contains("refusing to resume"));
 
     // Non-default settings are recorded and name their own records (no resuming another's).
     let greedy_args: Vec<&str> = args
@@ -232,9 +251,17 @@ fn phase2_writes_records_resumes_and_plan_mcts_prints_json() {
     let summary: serde_json::Value = serde_json::from_str(stdout(&greedy).trim()).expect("one JSON object");
     assert_eq!((summary["end"].as_str(), summary["tasks"].as_u64()), (Some("at-goal"), Some(2)));
     assert_eq!((summary["prior_mix"].as_f64(), &summary["weights"]), (Some(0.25), &serde_json::json!([1.0, 1.0, 1.0])));
-    let records =
-        std::fs::read_to_string(out.join("virtualhome-eai-50-constrained-greedy-end-at-goal-mix-0.25-weights-1-1-1-uniform.jsonl"))
-            .expect("records");
+    let greedy_path = PathBuf::from(summary["records"].as_str().unwrap());
+    assert!(
+        greedy_path
+            .file_name()
+            .unwrap()
+            .to_string_lossy()
+            .starts_with("virtualhome-eai-50-constrained-greedy-end-at-goal-mix-0.25-weights-1-1-1-uniform-"),
+        "{}",
+        greedy_path.display()
+    );
+    let records = std::fs::read_to_string(&greedy_path).expect("records");
     for line in records.lines() {
         let record: serde_json::Value = serde_json::from_str(line).expect("record");
         // The plan may end only at the goal: a plan that stopped is either solved or cut by a limit.
@@ -251,10 +278,13 @@ fn phase2_writes_records_resumes_and_plan_mcts_prints_json() {
     assert!(run.status.success(), "{}", String::from_utf8_lossy(&run.stderr));
     let summary: serde_json::Value = serde_json::from_str(stdout(&run).trim()).expect("one JSON object");
     assert_eq!((summary["tasks"].as_u64(), summary["solvable"].as_u64(), summary["solved"].as_u64()), (Some(1), Some(0), Some(0)));
-    let record: serde_json::Value = serde_json::from_str(
-        std::fs::read_to_string(out.join("unsolvable-constrained-mcts-uniform.jsonl")).expect("records named by the stem").trim(),
-    )
-    .expect("record");
+    let unsolvable_path = PathBuf::from(summary["records"].as_str().unwrap());
+    assert!(
+        unsolvable_path.file_name().unwrap().to_string_lossy().starts_with("unsolvable-constrained-mcts-uniform-"),
+        "named by the stem"
+    );
+    let record: serde_json::Value =
+        serde_json::from_str(std::fs::read_to_string(&unsolvable_path).expect("records").trim()).expect("record");
     assert_eq!((record["solvable"].as_bool(), record["stop"].as_str()), (Some(false), Some("dead-end")));
     std::fs::remove_dir_all(&out).ok();
 
