@@ -64,6 +64,12 @@ pub fn class_of(name: &str) -> &str {
     split_name(name).map_or(name, |(c, _)| c)
 }
 
+/// A relation's target: the character (clothes it wears are ON it) is [`ME`], whatever id the
+/// observation shows for it.
+fn me_or(target: &str) -> String {
+    if class_of(target) == "character" { ME.to_string() } else { target.to_string() }
+}
+
 /// One `- name: parts` line of the observation: name, states, (relation, target), close.
 type SeenNode = (String, Vec<String>, Vec<(String, String)>, bool);
 
@@ -108,9 +114,9 @@ pub fn perceive_virtualhome(text: &str, step: usize, belief: &Belief) -> (Vec<St
                 if part == "close to you" {
                     close = true;
                 } else if let Some(t) = part.strip_prefix("on ") {
-                    relations.push(("ON".to_string(), t.to_string()));
+                    relations.push(("ON".to_string(), me_or(t)));
                 } else if let Some(t) = part.strip_prefix("inside ") {
-                    relations.push(("INSIDE".to_string(), t.to_string()));
+                    relations.push(("INSIDE".to_string(), me_or(t)));
                 } else {
                     states.extend(part.split(", ").map(str::to_string));
                 }
