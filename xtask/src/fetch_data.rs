@@ -34,13 +34,7 @@ pub struct FetchDataArgs {
 
 /// The data cache: `$NSEA_DATA_DIR`, else `$XDG_CACHE_HOME/nsea/data`, else `~/.cache/nsea/data`.
 pub fn data_dir() -> PathBuf {
-    if let Some(dir) = std::env::var_os("NSEA_DATA_DIR") {
-        return PathBuf::from(dir);
-    }
-    let cache = std::env::var_os("XDG_CACHE_HOME")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| PathBuf::from(std::env::var_os("HOME").unwrap_or_default()).join(".cache"));
-    cache.join("nsea/data")
+    lm::cache::cache_dir("NSEA_DATA_DIR", "data")
 }
 
 pub fn run(args: FetchDataArgs) -> anyhow::Result<ExitCode> {

@@ -282,7 +282,7 @@ impl Adapter for VirtualhomeAdapter {
         self.entered.extend(Self::room_now(belief));
     }
 
-    fn skills(&self, goal: &ClassGoal, belief: &Belief, record: &Record, _env: &dyn Environment) -> Skills {
+    fn skills(&self, _goal: &ClassGoal, belief: &Belief, record: &Record, _env: &dyn Environment) -> Skills {
         let mut list = Vec::new();
         let mut sweep = None;
         let closed = self.closed_containers(belief, record);
@@ -307,7 +307,6 @@ impl Adapter for VirtualhomeAdapter {
         if belief.hypotheses().any(|h| h.args.iter().any(|a| instances.contains(a))) {
             list.push(Skill::Look);
         }
-        let _ = goal;
         list.push(Skill::Done);
         Skills { list, sweep }
     }

@@ -9,13 +9,19 @@ pub const DEFAULT_MODEL_FILE: &str = "SmolLM2-135M-Instruct.Q4_1.gguf";
 /// The model cache: `$NSEA_MODEL_DIR`, else `$XDG_CACHE_HOME/nsea/models`, else
 /// `~/.cache/nsea/models`.
 pub fn model_dir() -> PathBuf {
-    if let Some(dir) = std::env::var_os("NSEA_MODEL_DIR") {
+    cache_dir("NSEA_MODEL_DIR", "models")
+}
+
+/// One of the project's caches: `$VAR` when set, else `$XDG_CACHE_HOME/nsea/SUB`, else
+/// `~/.cache/nsea/SUB` (models here; `cargo xtask fetch-data`'s task files under `data`).
+pub fn cache_dir(var: &str, sub: &str) -> PathBuf {
+    if let Some(dir) = std::env::var_os(var) {
         return PathBuf::from(dir);
     }
     let cache = std::env::var_os("XDG_CACHE_HOME")
         .map(PathBuf::from)
         .unwrap_or_else(|| PathBuf::from(std::env::var_os("HOME").unwrap_or_default()).join(".cache"));
-    cache.join("nsea/models")
+    cache.join("nsea").join(sub)
 }
 
 /// Where the default model is (or will be, once fetched).
