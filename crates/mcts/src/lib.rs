@@ -20,16 +20,21 @@
 //! ```
 
 pub mod canonical;
+mod config;
 pub mod cursor;
 mod decode;
 pub mod prompt;
 mod sampling;
 mod search;
+mod step;
 mod value;
 mod vocab;
 
-pub use decode::{Budget, DecodeConfig, DecodeError, Decoder, InvalidStep, Mode, Outcome, Stats, StopReason, Strategy, Tokenization};
+pub use config::{
+    Backup, Budget, DecodeConfig, DecodeError, InvalidStep, MctsConfig, Mode, Normalization, Outcome, Stats, StopReason, Strategy,
+    Tokenization,
+};
+pub use decode::Decoder;
 pub use sampling::{Sampler, SamplingConfig};
-pub use search::{Backup, MctsConfig, Normalization};
 pub use value::{Evaluator, ValueConfig};
 pub use vocab::constraint_vocabulary;

@@ -58,84 +58,14 @@
 //! cheapest of them), then the highest value. Ties break on token order, so a run is
 //! deterministic.
 
-use std::time::Instant;
-
-use lm::LanguageModel;
 use rustc_hash::FxHashMap;
-use serde::Serialize;
 use token_constraint::TokenId;
-use transition_model::State;
+use transition_model::{State, TransitionModel};
 
+use crate::config::{Backup, DecodeConfig, DecodeError, MctsConfig, Normalization, Run, StopReason};
 use crate::cursor::{Cursor, Event};
-use crate::decode::{DecodeConfig, DecodeError, Decoder, Run, StopReason};
-
-/// The search's settings (paper Appendix A.4).
-#[derive(Debug, Clone, PartialEq, Serialize)]
-pub struct MctsConfig {
-    /// Children kept per expanded node: the most likely allowed tokens.
-    pub width: usize,
-    /// `c_explore`, the constant part of the PUCB coefficient.
-    pub exploration: f64,
-    /// `c_base`: the coefficient grows by `ln((N + c_base + 1) / c_base)`.
-    pub base: f64,
-    /// Tokens one rollout may write before it is valued where it stands.
-    pub tokens_per_expansion: usize,
-    /// Close a prefix whose state repeats an earlier state of the same prefix: with
-    /// non-negative costs such a plan is never needed.
-    pub prune_cycles: bool,
-    /// Close a prefix whose state another prefix of the tree reached first with no more
-    /// actions (a transposition): every continuation of it is open to the other prefix at no
-    /// higher cost. Implies `prune_cycles`.
-    pub prune_transpositions: bool,
-    /// How a node's value summarises the values backed up through it.
-    pub backup: Backup,
-    /// Over which values `Q` is min-max normalised into `[0, 1]`.
-    pub normalization: Normalization,
-    /// `ε`: a node's children take the prior `(1 − ε)·p + ε/k` (`k` children) instead of the
-    /// model's `p`. 0 (the default) is the paper's prior (Eq. 6). A small model can give the
-    /// right token a prior so small that PUCB tries it only after thousands of visits to its
-    /// siblings; mixing in the uniform over the kept children bounds that wait, as AlphaZero's
-    /// root noise does. The children kept (the `width` most likely) are the same either way.
-    pub prior_mix: f64,
-}
-
-/// The range `Q` is min-max normalised over, so that it and the prior term are on one scale.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
-#[serde(rename_all = "kebab-case")]
-pub enum Normalization {
-    /// Every value the tree has backed up (MuZero).
-    Tree,
-    /// The visited open children of the node being selected from: the best is 1, the worst
-    /// 0, whatever the spread of values elsewhere in the tree.
-    Siblings,
-}
-
-/// The statistic a node keeps of the values backed up through it.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
-#[serde(rename_all = "kebab-case")]
-pub enum Backup {
-    /// The mean (Monte-Carlo backup, as AlphaZero).
-    Mean,
-    /// The best value seen below the node (a Bellman backup for a deterministic model: the
-    /// value of a prefix is the value of its best continuation found so far).
-    Max,
-}
-
-impl Default for MctsConfig {
-    fn default() -> Self {
-        MctsConfig {
-            width: 16,
-            exploration: 2.5,
-            base: 10.0,
-            tokens_per_expansion: 128,
-            prune_cycles: true,
-            prune_transpositions: true,
-            backup: Backup::Max,
-            normalization: Normalization::Siblings,
-            prior_mix: 0.0,
-        }
-    }
-}
+use crate::step::{Session, Stepper};
+use crate::value::Evaluator;
 
 const EXPANDED: u8 = 1;
 const CLOSED: u8 = 2;
@@ -338,95 +268,95 @@ impl PathStates {
     }
 }
 
-/// What valuing a newly reached node needs.
-struct Arrival<'a, 'm> {
-    model: &'m transition_model::TransitionModel,
-    evaluator: &'a mut crate::value::Evaluator<'m>,
-    states: &'a mut PathStates,
-    best: &'a mut Best,
+/// What valuing a newly reached node needs besides the evaluator: the run's bookkeeping.
+struct Arrivals<'a> {
     config: &'a DecodeConfig,
+    states: PathStates,
+    best: Best,
     prune_cycles: bool,
     /// With transposition pruning: the fewest actions any prefix reached each state with.
-    reached: Option<&'a mut FxHashMap<State, u32>>,
+    reached: Option<FxHashMap<State, u32>>,
     dead_value: f64,
 }
 
-/// Values a node reached for the first time, after `event`: `None` inside an action (the
-/// rollout goes on), else the leaf it is.
-fn arrival(a: &mut Arrival<'_, '_>, cursor: &Cursor, event: Event, depth: usize) -> Option<Leaf> {
-    let budget = &a.config.budget;
-    let ended = match event {
-        Event::Partial => {
-            if depth >= budget.max_tokens {
-                return Some(Leaf::Terminal(a.evaluator.value(cursor.state(), cursor.plan().len()).unwrap_or(a.dead_value)));
-            }
-            return None;
-        }
-        Event::Invalid(_) => return Some(Leaf::Terminal(a.dead_value)),
-        Event::Action => false,
-        Event::End => true,
-    };
-    let state = cursor.state();
-    let length = cursor.plan().len();
-    if a.model.is_goal(state) {
-        let reward = a.evaluator.config().goal_reward;
-        let cost = transition_model::plan_cost(a.model.task(), cursor.plan());
-        if a.best.beaten_by(true, cost, reward) {
-            *a.best = Best { plan: cursor.plan().to_vec(), state: state.clone(), goal: true, cost, value: reward };
-        }
-        return Some(if a.config.stop_at_goal { Leaf::Goal } else { Leaf::Terminal(reward) });
-    }
-    if !ended {
-        let repeated = match a.reached.as_deref_mut() {
-            Some(reached) => match reached.get_mut(state) {
-                Some(fewest) if *fewest as usize <= length => true,
-                Some(fewest) => {
-                    *fewest = length as u32;
-                    false
+impl Arrivals<'_> {
+    /// Values a node reached for the first time, after `event`: `None` inside an action (the
+    /// rollout goes on), else the leaf it is.
+    fn value(
+        &mut self,
+        model: &TransitionModel,
+        evaluator: &mut Evaluator<'_>,
+        cursor: &Cursor,
+        event: Event,
+        depth: usize,
+    ) -> Option<Leaf> {
+        let budget = &self.config.budget;
+        let ended = match event {
+            Event::Partial => {
+                if depth >= budget.max_tokens {
+                    return Some(Leaf::Terminal(evaluator.value(cursor.state(), cursor.plan().len()).unwrap_or(self.dead_value)));
                 }
-                None => {
-                    reached.insert(state.clone(), length as u32);
-                    false
-                }
-            },
-            None if a.prune_cycles => {
-                a.states.push(state);
-                a.states.last_repeats()
+                return None;
             }
-            None => false,
+            Event::Invalid(_) => return Some(Leaf::Terminal(self.dead_value)),
+            Event::Action => false,
+            Event::End => true,
         };
-        if repeated {
-            return Some(Leaf::Terminal(a.evaluator.value(state, length).unwrap_or(a.dead_value)));
+        let state = cursor.state();
+        let length = cursor.plan().len();
+        if model.is_goal(state) {
+            let reward = evaluator.config().goal_reward;
+            let cost = transition_model::plan_cost(model.task(), cursor.plan());
+            if self.best.beaten_by(true, cost, reward) {
+                self.best = Best { plan: cursor.plan().to_vec(), state: state.clone(), goal: true, cost, value: reward };
+            }
+            return Some(if self.config.stop_at_goal { Leaf::Goal } else { Leaf::Terminal(reward) });
         }
+        if !ended {
+            let repeated = match self.reached.as_mut() {
+                Some(reached) => match reached.get_mut(state) {
+                    Some(fewest) if *fewest as usize <= length => true,
+                    Some(fewest) => {
+                        *fewest = length as u32;
+                        false
+                    }
+                    None => {
+                        reached.insert(state.clone(), length as u32);
+                        false
+                    }
+                },
+                None if self.prune_cycles => {
+                    self.states.push(state);
+                    self.states.last_repeats()
+                }
+                None => false,
+            };
+            if repeated {
+                return Some(Leaf::Terminal(evaluator.value(state, length).unwrap_or(self.dead_value)));
+            }
+        }
+        let Some(value) = evaluator.value(state, length) else { return Some(Leaf::Terminal(self.dead_value)) };
+        if self.best.beaten_by(false, 0, value) {
+            self.best = Best { plan: cursor.plan().to_vec(), state: state.clone(), goal: false, cost: 0, value };
+        }
+        Some(if ended || length >= budget.max_actions || depth >= budget.max_tokens { Leaf::Terminal(value) } else { Leaf::Open(value) })
     }
-    let Some(value) = a.evaluator.value(state, length) else { return Some(Leaf::Terminal(a.dead_value)) };
-    if a.best.beaten_by(false, 0, value) {
-        *a.best = Best { plan: cursor.plan().to_vec(), state: state.clone(), goal: false, cost: 0, value };
-    }
-    Some(if ended || length >= budget.max_actions || depth >= budget.max_tokens { Leaf::Terminal(value) } else { Leaf::Open(value) })
 }
 
-#[allow(clippy::too_many_arguments)]
-pub(crate) fn run(
-    decoder: &mut Decoder<'_>,
-    lm: &mut dyn LanguageModel,
-    prompt: &[TokenId],
-    root: Cursor,
-    config: &DecodeConfig,
-    mcts: &MctsConfig,
-    stats: &mut crate::decode::Stats,
-    started: Instant,
-) -> Result<Run, DecodeError> {
-    let model = decoder.model;
+/// Token-level MCTS from `root` until the goal, the budget, or an exhausted tree.
+pub(crate) fn run(stepper: &mut Stepper<'_>, session: &mut Session<'_>, root: Cursor, mcts: &MctsConfig) -> Result<Run, DecodeError> {
+    let model = stepper.model;
+    let config = session.config;
+    let prompt = session.prompt;
     let budget = &config.budget;
     let start = root.state().clone();
     let finish = |best: &Best, stop| Run { plan: best.plan.clone(), end_state: best.state.clone(), invalid: None, stop, text: None };
-    let lambda = decoder.evaluator.config().length_penalty;
+    let lambda = stepper.evaluator.config().length_penalty;
     let mut best = Best { plan: Vec::new(), state: start.clone(), goal: model.is_goal(&start), cost: 0, value: 0.0 };
     if best.goal {
         return Ok(finish(&best, StopReason::Goal));
     }
-    let Some(h0) = decoder.evaluator.heuristic(&start) else {
+    let Some(h0) = stepper.evaluator.heuristic(&start) else {
         return Ok(finish(&best, StopReason::DeadEnd));
     };
     best.value = -h0;
@@ -437,45 +367,34 @@ pub(crate) fn run(
     let mut tree = Tree::new(mcts);
     let mut sequence = prompt.to_vec();
     let mut path: Vec<usize> = Vec::new();
-    let mut states = PathStates { states: Vec::new(), depth: 0 };
     // The path's states are kept only to close cycles without transposition pruning, which
     // closes them too.
     let path_cycles = mcts.prune_cycles && !mcts.prune_transpositions;
-    let mut reached: FxHashMap<State, u32> = FxHashMap::default();
-    reached.insert(start.clone(), 0);
-    macro_rules! arrival_context {
-        () => {
-            Arrival {
-                model,
-                evaluator: &mut decoder.evaluator,
-                states: &mut states,
-                best: &mut best,
-                config,
-                prune_cycles: mcts.prune_cycles,
-                reached: if mcts.prune_transpositions { Some(&mut reached) } else { None },
-                dead_value,
-            }
-        };
-    }
+    let reached = mcts.prune_transpositions.then(|| FxHashMap::from_iter([(start.clone(), 0)]));
+    let mut arrivals = Arrivals {
+        config,
+        states: PathStates { states: Vec::new(), depth: 0 },
+        best,
+        prune_cycles: mcts.prune_cycles,
+        reached,
+        dead_value,
+    };
     let stop = loop {
-        if budget.simulations.is_some_and(|limit| stats.simulations >= limit) {
+        if budget.simulations.is_some_and(|limit| session.stats.simulations >= limit) {
             break StopReason::Simulations;
         }
-        if budget.wall_clock.is_some_and(|limit| started.elapsed() >= limit) {
-            break StopReason::WallClock;
-        }
-        if budget.model_calls.is_some_and(|limit| stats.decoded_tokens - stats.forced_tokens >= limit) {
-            break StopReason::ModelCalls;
+        if let Some(stop) = session.out_of_budget() {
+            break stop;
         }
         if tree.nodes[0].closed() {
             break StopReason::Exhausted;
         }
-        stats.simulations += 1;
+        session.stats.simulations += 1;
         let mut cursor = root.clone();
         sequence.truncate(prompt.len());
         path.clear();
         path.push(0);
-        states.reset(&start);
+        arrivals.states.reset(&start);
 
         // Selection: replay the tree's tokens while the nodes were visited before; a node
         // reached for the first time is valued on arrival.
@@ -490,13 +409,13 @@ pub(crate) fn run(
             let token = tree.nodes[child].token;
             sequence.push(token);
             path.push(child);
-            let event = cursor.advance(model, &mut decoder.languages, &decoder.vocab, token)?;
+            let event = stepper.advance(&mut cursor, token)?;
             if tree.nodes[child].visits == 0 {
-                arrived = arrival(&mut arrival_context!(), &cursor, event, sequence.len() - prompt.len());
+                arrived = arrivals.value(model, &mut stepper.evaluator, &cursor, event, sequence.len() - prompt.len());
                 break;
             }
             if event == Event::Action && path_cycles {
-                states.push(cursor.state());
+                arrivals.states.push(cursor.state());
             }
         }
 
@@ -507,19 +426,17 @@ pub(crate) fn run(
                 break leaf;
             }
             let node = *path.last().expect("root");
-            let distribution = decoder.distribution(lm, &sequence, &cursor, width)?;
+            let distribution = stepper.distribution(session.lm, &sequence, &cursor, width)?;
             tree.expand(node, &distribution.candidates, prior_mix);
             let Some(&(token, _)) = distribution.candidates.first() else { break Leaf::Terminal(dead_value) };
             let child = tree.nodes[node].first_child as usize;
-            stats.decoded_tokens += 1;
-            stats.forced_tokens += u64::from(distribution.forced);
-            sequence.push(token);
+            session.push(&mut sequence, token, distribution.forced);
             path.push(child);
             steps += 1;
-            let event = cursor.advance(model, &mut decoder.languages, &decoder.vocab, token)?;
-            arrived = arrival(&mut arrival_context!(), &cursor, event, sequence.len() - prompt.len());
+            let event = stepper.advance(&mut cursor, token)?;
+            arrived = arrivals.value(model, &mut stepper.evaluator, &cursor, event, sequence.len() - prompt.len());
             if arrived.is_none() && steps >= mcts.tokens_per_expansion {
-                let value = decoder.evaluator.value(cursor.state(), cursor.plan().len());
+                let value = stepper.evaluator.value(cursor.state(), cursor.plan().len());
                 break value.map_or(Leaf::Terminal(dead_value), Leaf::Open);
             }
         };
@@ -532,8 +449,8 @@ pub(crate) fn run(
             }
         }
     };
-    stats.nodes = tree.nodes.len() as u64;
-    Ok(finish(&best, stop))
+    session.stats.nodes = tree.nodes.len() as u64;
+    Ok(finish(&arrivals.best, stop))
 }
 
 #[cfg(test)]
