@@ -36,6 +36,7 @@ mod join;
 mod lifted;
 mod prune;
 mod reach;
+pub mod relevance;
 mod task;
 
 pub use ids::{ActionId, FactId, ObjectId, PredicateId, SchemaId};

@@ -14,7 +14,7 @@
 //!
 //! **Names.** The model writes the plan in the spelling the constraint uses, so the prompt
 //! names objects the way that spelling does, never by a PDDL id the agent could not have
-//! perceived:
+//! perceived ([`transition_model::ObjectNames`], beside the spellings):
 //! - ALFWorld ([`transition_model::alfworld::display_names`]): `apple 1`, `countertop 2`. The
 //!   agent argument is left out (`holds apple 1`, `holdsany`). A location is named by the
 //!   receptacles standing at it (`atlocation drawer 1 and drawer 2`); a location without a
@@ -36,7 +36,8 @@
 //! disjunct left: its lines. Several: the lines common to all, then `one of:` and one `- `
 //! line per alternative (its remaining lines joined by `, `).
 //!
-//! **Relevance** ([`relevant_facts`], [`Relevance`]). When planning from a full benchmark
+//! **Relevance** ([`relevant_facts`], [`Relevance`]; the analysis is
+//! [`grounding::relevance`]). When planning from a full benchmark
 //! problem the prompt shows only what bears on the goal; the transition model keeps the full
 //! state. Shown: the start state's true fluent facts that backward relevance finds within
 //! [`DEFAULT_RELEVANCE_DEPTH`] regression steps of the goal, and the static facts all of whose
@@ -57,8 +58,10 @@
 //! where every fact of the state matters, use [`Relevance::All`] or an unbounded depth:
 //! depth 2 hides, in Blocksworld, the blocks the goal does not mention.
 
-use grounding::{Atom, Condition, FactId, Literal, ObjectId, Task};
-use transition_model::{Spelling, State, SurfaceLanguage, TransitionModel};
+use grounding::relevance::Closure;
+pub use grounding::relevance::RelevantFacts;
+use grounding::{Atom, FactId, ObjectId, Task};
+use transition_model::{ObjectNames, Spelling, State, SurfaceLanguage, TransitionModel, natural_order};
 
 /// Regression steps of the default backward relevance ([`Relevance::default`]). Two is the
 /// least that keeps, in ALFWorld, where the goal objects are and whether their receptacles
@@ -148,7 +151,7 @@ impl PlanningPrompt {
 pub fn planning_prompt(model: &TransitionModel, spelling: &Spelling, state: &State, options: &PromptOptions) -> PlanningPrompt {
     let task = model.task();
     let style = PromptStyle::from(spelling.language());
-    let names = Names::new(task, style);
+    let names = ObjectNames::new(task, spelling.language());
     let relevant = match options.relevance {
         Relevance::All => None,
         Relevance::Backward { depth } => Some(relevant_facts(task, depth)),
@@ -224,237 +227,13 @@ fn closing(style: PromptStyle) -> &'static str {
     }
 }
 
-/// The facts within `depth` regression steps of the goal, by backward relevance over
-/// literals:
-///
-/// - step 0: every literal of every goal disjunct (positive and negative literals, and each
-///   literal of each clause);
-/// - step k+1: for every literal `l` found at step k, every action that *achieves* `l` (an
-///   unconditional or conditional add of `f` for `l = f`, a delete for `l = ¬f`) contributes
-///   its precondition literals (each clause literal included), and, when `l` comes from a
-///   conditional effect, that effect's condition literals.
-///
-/// An action's precondition enters once, at the first step that reaches the action. A fact
-/// is relevant when either of its literals is; [`RelevantFacts::step`] says at which step.
-/// Static facts have no [`FactId`]: grounding evaluated them away, so they take no part here;
+/// The facts within `depth` regression steps of the goal, by the literal closure of
+/// [`grounding::relevance`] (an action enters through the literal it achieves).
 /// [`planning_prompt`] shows a static fact when every object it names (agents aside) is
 /// mentioned by a relevant fact true in the state, by a goal fact, or by a fact of step 1
 /// (true or not: what the goal's achievers need, such as being at the microwave in ALFWorld).
-/// Each step visits every achiever of a new literal once, so the cost is linear in the
-/// task's size per step; the loop stops at the fixpoint.
 pub fn relevant_facts(task: &Task, depth: usize) -> RelevantFacts {
-    let literal_index = |l: Literal| l.fact().index() * 2 + usize::from(l.is_negated());
-    // Achievers of each literal: (action, conditional effect index + 1, or 0 for unconditional).
-    let mut achievers: Vec<Vec<(u32, u32)>> = vec![Vec::new(); task.facts.len() * 2];
-    for (a, action) in task.actions.iter().enumerate() {
-        let a = a as u32;
-        for &f in &action.add {
-            achievers[literal_index(Literal::positive(f))].push((a, 0));
-        }
-        for &f in &action.del {
-            achievers[literal_index(Literal::negative(f))].push((a, 0));
-        }
-        for (e, effect) in action.conditional.iter().enumerate() {
-            let e = e as u32 + 1;
-            for &f in &effect.add {
-                achievers[literal_index(Literal::positive(f))].push((a, e));
-            }
-            for &f in &effect.del {
-                achievers[literal_index(Literal::negative(f))].push((a, e));
-            }
-        }
-    }
-    // The step at which each literal became relevant (`UNREACHED`: not relevant).
-    let mut steps = vec![UNREACHED; task.facts.len() * 2];
-    let mark = |condition: &Condition, step: u32, steps: &mut Vec<u32>, frontier: &mut Vec<Literal>| {
-        let clause_literals = condition.clauses.iter().flatten().copied();
-        for literal in condition.literals().chain(clause_literals) {
-            let i = literal_index(literal);
-            if steps[i] == UNREACHED {
-                steps[i] = step;
-                frontier.push(literal);
-            }
-        }
-    };
-    let mut frontier = Vec::new();
-    for disjunct in &task.goal.disjuncts {
-        mark(disjunct, 0, &mut steps, &mut frontier);
-    }
-    let mut action_seen = vec![false; task.actions.len()];
-    for step in 1..=depth.min(UNREACHED as usize - 1) as u32 {
-        if frontier.is_empty() {
-            break;
-        }
-        let mut next = Vec::new();
-        for literal in std::mem::take(&mut frontier) {
-            for &(a, e) in &achievers[literal_index(literal)] {
-                let action = &task.actions[a as usize];
-                if !std::mem::replace(&mut action_seen[a as usize], true) {
-                    mark(&action.pre, step, &mut steps, &mut next);
-                }
-                if e > 0 {
-                    mark(&action.conditional[e as usize - 1].condition, step, &mut steps, &mut next);
-                }
-            }
-        }
-        frontier = next;
-    }
-    RelevantFacts { steps: steps.chunks(2).map(|pair| pair[0].min(pair[1])).collect() }
-}
-
-const UNREACHED: u32 = u32::MAX;
-
-/// The result of [`relevant_facts`]: a set of fluent facts, each with the regression step
-/// that found it (0: a goal fact).
-#[derive(Debug, Clone, PartialEq, Eq)]
-pub struct RelevantFacts {
-    steps: Vec<u32>,
-}
-
-impl RelevantFacts {
-    pub fn contains(&self, fact: FactId) -> bool {
-        self.step(fact).is_some()
-    }
-
-    /// The regression step that made `fact` relevant, if any.
-    pub fn step(&self, fact: FactId) -> Option<usize> {
-        self.steps.get(fact.index()).filter(|&&s| s != UNREACHED).map(|&s| s as usize)
-    }
-
-    /// How many facts are relevant.
-    pub fn len(&self) -> usize {
-        self.steps.iter().filter(|&&s| s != UNREACHED).count()
-    }
-
-    pub fn is_empty(&self) -> bool {
-        self.len() == 0
-    }
-
-    /// The relevant facts, in id order.
-    pub fn iter(&self) -> impl Iterator<Item = FactId> + '_ {
-        self.steps.iter().enumerate().filter(|(_, s)| **s != UNREACHED).map(|(i, _)| FactId::from_index(i))
-    }
-}
-
-/// How the prompt names each object.
-struct Names {
-    /// The instance name (`apple 1`); `None`: facts naming the object are not shown.
-    instance: Vec<Option<String>>,
-    /// The class name for the goal (`apple`).
-    class: Vec<String>,
-    /// Left out of literal lines (ALFWorld's agent, VirtualHome's character).
-    omitted: Vec<bool>,
-    /// Predicates never shown (ALFWorld's `receptacleatlocation`, said by the location names).
-    hidden_predicates: Vec<bool>,
-    /// ALFWorld: the receptacles at each location, which name it.
-    receptacles_at: Vec<Vec<ObjectId>>,
-    /// ALFWorld: receptacles, which get a `receptacle <name>` line when relevant and named by
-    /// no other line.
-    receptacle: Vec<bool>,
-}
-
-impl Names {
-    fn new(task: &Task, style: PromptStyle) -> Names {
-        let has_type = |o: usize, t: &str| task.objects[o].types.iter().any(|x| x == t);
-        let count = task.objects.len();
-        let plain = |omitted: Vec<bool>| Names {
-            instance: task.objects.iter().map(|o| Some(o.name.clone())).collect(),
-            class: task.objects.iter().map(|o| o.name.clone()).collect(),
-            omitted,
-            hidden_predicates: vec![false; task.predicates.len()],
-            receptacles_at: vec![Vec::new(); count],
-            receptacle: vec![false; count],
-        };
-        match style {
-            PromptStyle::Pddl => plain(vec![false; count]),
-            PromptStyle::Virtualhome => plain((0..count).map(|o| has_type(o, "character")).collect()),
-            PromptStyle::Alfworld => {
-                let mut instance = transition_model::alfworld::display_names(task);
-                let type_name = |o: usize| task.objects[o].types.first().cloned().unwrap_or_else(|| "object".into());
-                let mut class: Vec<String> = (0..count)
-                    .map(|o| match &instance[o] {
-                        Some(name) => name.rsplit_once(' ').map_or(name.as_str(), |(c, _)| c).to_string(),
-                        None => type_name(o),
-                    })
-                    .collect();
-                let mut hidden_predicates = vec![false; task.predicates.len()];
-                let at_location = task.predicates.iter().position(|p| p.name == "receptacleatlocation");
-                if let Some(p) = at_location {
-                    hidden_predicates[p] = true;
-                }
-                let mut receptacles_at: Vec<Vec<ObjectId>> = vec![Vec::new(); count];
-                for atom in &task.static_facts {
-                    if Some(atom.predicate.index()) == at_location && atom.args.len() == 2 {
-                        receptacles_at[atom.args[1].index()].push(atom.args[0]);
-                    }
-                }
-                for (location, at) in receptacles_at.iter_mut().enumerate() {
-                    if !has_type(location, "location") {
-                        at.clear();
-                        continue;
-                    }
-                    at.retain(|r| instance[r.index()].is_some());
-                    at.sort_by(|a, b| {
-                        natural_order(instance[a.index()].as_deref().unwrap_or(""), instance[b.index()].as_deref().unwrap_or(""))
-                    });
-                    if at.is_empty() {
-                        instance[location] = None;
-                        continue;
-                    }
-                    let join = |names: Vec<&str>| names.join(" and ");
-                    let mut classes: Vec<&str> = at.iter().map(|r| class[r.index()].as_str()).collect();
-                    classes.dedup();
-                    let class_name = join(classes);
-                    instance[location] = Some(join(at.iter().map(|r| instance[r.index()].as_deref().unwrap_or("")).collect()));
-                    class[location] = class_name;
-                }
-                Names {
-                    instance,
-                    class,
-                    omitted: (0..count).map(|o| has_type(o, "agent")).collect(),
-                    hidden_predicates,
-                    receptacles_at,
-                    receptacle: (0..count).map(|o| has_type(o, "receptacle")).collect(),
-                }
-            }
-        }
-    }
-
-    /// `predicate arg ...` with instance names; `None` if the atom is not shown.
-    fn atom_line(&self, task: &Task, atom: &Atom) -> Option<String> {
-        if self.hidden_predicates[atom.predicate.index()] {
-            return None;
-        }
-        let mut out = task.predicates[atom.predicate.index()].name.clone();
-        for arg in &atom.args {
-            if self.omitted[arg.index()] {
-                continue;
-            }
-            out.push(' ');
-            out.push_str(self.instance[arg.index()].as_deref()?);
-        }
-        Some(out)
-    }
-
-    /// `predicate arg ...` with class names (goal lines), or `not ...`.
-    fn class_literal_line(&self, task: &Task, literal: Literal) -> String {
-        let atom = task.fact(literal.fact());
-        let mut out = if literal.is_negated() { String::from("not ") } else { String::new() };
-        out.push_str(&task.predicates[atom.predicate.index()].name);
-        for arg in atom.args.iter().filter(|a| !self.omitted[a.index()]) {
-            out.push(' ');
-            out.push_str(&self.class[arg.index()]);
-        }
-        out
-    }
-}
-
-/// `drawer 2` before `drawer 10`: names compared word by word, numbers as numbers.
-fn natural_order(a: &str, b: &str) -> std::cmp::Ordering {
-    let key = |s: &str| -> Vec<(u64, String)> {
-        s.split(' ').map(|w| w.parse::<u64>().map_or((u64::MAX, w.to_string()), |n| (n, String::new()))).collect()
-    };
-    key(a).cmp(&key(b))
+    grounding::relevance::relevant_facts(task, Closure::Literals, Some(depth))
 }
 
 /// The `Initial state:` lines, in natural order: the true fluent facts that are relevant,
@@ -463,7 +242,7 @@ fn natural_order(a: &str, b: &str) -> std::cmp::Ordering {
 /// not, e.g. being at the microwave). An ALFWorld location mentions the receptacles at it, and
 /// a mentioned receptacle that no other line names gets `receptacle <name>`, so the model
 /// knows the receptacles it must go to.
-fn state_lines(task: &Task, names: &Names, state: &State, relevant: Option<&RelevantFacts>) -> Vec<String> {
+fn state_lines(task: &Task, names: &ObjectNames, state: &State, relevant: Option<&RelevantFacts>) -> Vec<String> {
     let shown: Vec<FactId> = state.facts().filter(|&f| relevant.is_none_or(|r| r.contains(f))).collect();
     let mut mentioned = vec![relevant.is_none(); task.objects.len()];
     let goal_facts = task.goal.disjuncts.iter().flat_map(|d| d.literals().chain(d.clauses.iter().flatten().copied()).map(|l| l.fact()));
@@ -512,7 +291,7 @@ fn state_lines(task: &Task, names: &Names, state: &State, relevant: Option<&Rele
 }
 
 /// The `Goal:` lines (see the module docs).
-fn goal_lines(task: &Task, names: &Names) -> Vec<String> {
+fn goal_lines(task: &Task, names: &ObjectNames) -> Vec<String> {
     let mut disjuncts: Vec<Vec<String>> = Vec::new();
     for disjunct in &task.goal.disjuncts {
         let mut lines: Vec<String> = disjunct.literals().map(|l| names.class_literal_line(task, l)).collect();
@@ -631,7 +410,7 @@ const VIRTUALHOME_DOCS: &[FormDoc] = &[
 /// from the spelling itself, so they are exactly what the constraint accepts; schemas the
 /// spelling cannot write, with no reachable action, or whose only actions act on the agent
 /// itself (VirtualHome's `putin <object> character`), are not listed. Identical forms merge.
-fn action_forms(task: &Task, spelling: &Spelling, style: PromptStyle, names: &Names) -> Vec<String> {
+fn action_forms(task: &Task, spelling: &Spelling, style: PromptStyle, names: &ObjectNames) -> Vec<String> {
     let docs = match style {
         PromptStyle::Alfworld => ALFWORLD_DOCS,
         PromptStyle::Virtualhome => VIRTUALHOME_DOCS,

@@ -27,7 +27,7 @@ mod state;
 mod successor;
 mod validate;
 
-pub use spelling::{Spelling, SpellingError, SurfaceLanguage, alfworld, normalize, virtualhome};
+pub use spelling::{ObjectNames, Spelling, SpellingError, SurfaceLanguage, alfworld, natural_order, normalize, virtualhome};
 pub use state::State;
 pub use successor::SuccessorGenerator;
 pub use validate::{PlanError, Unmet, ValidPlan, plan_cost, unmet};

@@ -11,57 +11,17 @@ use hashbrown::HashTable;
 use rustc_hash::FxHasher;
 use std::hash::Hasher;
 
-use grounding::{Condition, Task};
+use grounding::Task;
+use grounding::relevance::{self, Closure};
 use transition_model::State;
 
-/// The facts a plan can depend on, as a bit mask over fact ids: a backward fixpoint from
-/// the goal. A fact is relevant when the goal mentions it, or when it occurs in the
-/// precondition of an action that adds or deletes a relevant fact (or in the condition of
-/// a conditional effect that does). Every other fact is never read by the goal nor by any
-/// action that can change a relevant fact: actions applicable only through it change
-/// irrelevant facts alone, so dropping it from states loses no plan and merges states
-/// that are the same for the goal. (Fast Downward's translator does the same over its
-/// causal graph; this is the fact-level version of that analysis, written by hand since
-/// no crate does it on our task type.) `mcts::prompt::relevant_facts` is a different
-/// analysis for a different purpose: it regresses literals (an action enters only through
-/// the literal it achieves), which is right for choosing prompt lines but would leave out
-/// the preconditions of an action that only deletes relevant facts, and a projection must
-/// keep those for applicability to stay exact.
+/// The facts a plan can depend on, as a bit mask over fact ids: the fact closure of
+/// [`grounding::relevance`] from the goal, to its fixpoint. A fact outside it is never read
+/// by the goal nor by any action that can change a relevant fact, so dropping it from states
+/// loses no plan and merges states that are the same for the goal (Fast Downward's
+/// translator drops irrelevant variables the same way).
 pub fn relevant_facts(task: &Task) -> Vec<u64> {
-    let mut mask = vec![0u64; task.facts.len().div_ceil(64)];
-    let is_set = |mask: &[u64], f: u32| mask[f as usize / 64] >> (f % 64) & 1 == 1;
-    let mark = |mask: &mut [u64], condition: &Condition| {
-        let mut changed = false;
-        let facts = condition.pos.iter().chain(&condition.neg).map(|f| f.0).chain(condition.clauses.iter().flatten().map(|l| l.fact().0));
-        for f in facts {
-            let word = &mut mask[f as usize / 64];
-            changed |= *word >> (f % 64) & 1 == 0;
-            *word |= 1 << (f % 64);
-        }
-        changed
-    };
-    for disjunct in &task.goal.disjuncts {
-        mark(&mut mask, disjunct);
-    }
-    let mut changed = true;
-    while changed {
-        changed = false;
-        for action in &task.actions {
-            let touches =
-                |adds: &[grounding::FactId], dels: &[grounding::FactId], mask: &[u64]| adds.iter().chain(dels).any(|f| is_set(mask, f.0));
-            let mut any = touches(&action.add, &action.del, &mask);
-            for effect in &action.conditional {
-                if touches(&effect.add, &effect.del, &mask) {
-                    any = true;
-                    changed |= mark(&mut mask, &effect.condition);
-                }
-            }
-            if any {
-                changed |= mark(&mut mask, &action.pre);
-            }
-        }
-    }
-    mask
+    relevance::relevant_facts(task, Closure::Facts, None).mask()
 }
 
 pub type StateId = u32;

@@ -12,7 +12,10 @@
 //! verbs from a table ([`virtualhome::VERBS`]).
 
 pub mod alfworld;
+mod names;
 pub mod virtualhome;
+
+pub use names::{ObjectNames, natural_order};
 
 use grounding::{ActionId, Task};
 use rustc_hash::FxHashMap;
