@@ -67,7 +67,12 @@ fn chat_prompt_renders_the_files_template() {
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig::with_cases(64))]
+    #![proptest_config(ProptestConfig {
+        cases: 64,
+        rng_seed: proptest::test_runner::RngSeed::Fixed(274),
+        failure_persistence: Some(Box::new(proptest::test_runner::FileFailurePersistence::WithSource("proptest-regressions"))),
+        ..ProptestConfig::default()
+    })]
     #[test]
     fn any_text_round_trips(text in "\\PC{0,40}") {
         let dir = TempDir::new("roundtrip");
