@@ -96,6 +96,7 @@ fn crates_share_settings_and_respect_their_boundaries() {
         ("lm", &["vlm-client"]),
         ("mcts", &["grounding", "transition-model", "heuristics", "token-constraint", "lm"]),
         ("household-sim", &["pddl-syntax", "grounding", "transition-model"]),
+        ("eval-harness", &[]),
         (
             "exploration-harness",
             &[
