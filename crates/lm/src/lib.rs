@@ -21,7 +21,9 @@
 //!   [`Tokenizer`]: a GGUF file's, or a Hugging Face `tokenizer.json`'s
 //!   ([`Tokenizer::from_tokenizer_json`]), which needs no model file.
 //!
-//! With the `chat` feature, `LocalChat` makes a [`LocalModel`] a `vlm_client::ChatModel`:
+//! Features: `local` (the forward pass) and `openai` (the server backend) are on by default;
+//! without them the crate is the interface, tokenizers, chat templates, GGUF metadata and the
+//! uniform prior. With the `chat` feature, `LocalChat` makes a [`LocalModel`] a `vlm_client::ChatModel`:
 //! the chat template renders the messages and, when a JSON schema is asked for, llguidance
 //! masks every decoding step to it, so even a 135M model replies with schema-valid JSON.
 //!
@@ -49,12 +51,16 @@ mod chat;
 mod chat_model;
 mod error;
 mod gguf;
+#[cfg(feature = "local")]
 mod llama;
+#[cfg(feature = "local")]
 mod local;
 mod model;
+#[cfg(feature = "openai")]
 mod openai;
 #[cfg(feature = "reference")]
 pub mod reference;
+#[cfg(feature = "local")]
 pub mod tiny;
 mod tokenizer;
 mod uniform;
@@ -66,9 +72,12 @@ pub use chat::ChatTemplate;
 pub use chat_model::LocalChat;
 pub use error::{HttpError, HttpErrorKind, LmError};
 pub use gguf::{GgufFile, Metadata};
+#[cfg(feature = "local")]
 pub use llama::{Architecture, KvCache, LlamaModel, ModelConfig, RopeConfig};
+#[cfg(feature = "local")]
 pub use local::{DEFAULT_BRANCH_STORE_BYTES, LocalModel};
 pub use model::{LanguageModel, Logprobs, Prior, Usage, generate_greedy};
+#[cfg(feature = "openai")]
 pub use openai::{OpenAiConfig, OpenAiModel, ServerDialect};
 pub use tokenizer::{BpeParts, COMMON_BOS_TOKENS, COMMON_STOP_TOKENS, PreTokenizer, Tokenizer};
 pub use uniform::UniformModel;

@@ -10,7 +10,8 @@
 //!   [`Matcher`]: the position `u` in it, with [`Matcher::fill_mask`] (a paired walk of the
 //!   two tries, so a mask costs the allowed tokens and their prefixes, not the vocabulary
 //!   size) and [`Matcher::advance`], which reports a completed action.
-//! - [`PlanLanguages`] / [`PlanConstraint`]: the adapter to `transition-model`: a state and
+//! - [`PlanLanguages`] / [`PlanConstraint`] (feature `planning`, on by default): the adapter
+//!   to `transition-model`: a state and
 //!   a spelling give the state's language, cached by state; completed actions are applied.
 //! - `hf` (feature `hf`): a Hugging Face `tokenizer.json` to a [`Vocabulary`].
 //!
@@ -39,6 +40,7 @@
 
 mod language;
 mod mask;
+#[cfg(feature = "planning")]
 mod plan;
 mod trie;
 mod vocab;
@@ -48,6 +50,7 @@ pub mod hf;
 
 pub use language::{Language, LanguageBuilder, LanguageConfig, LanguageError, Matcher, Step, TokenError};
 pub use mask::TokenMask;
+#[cfg(feature = "planning")]
 pub use plan::{EndPolicy, PlanConstraint, PlanLanguages, PlanStep, PlanTokenError, StateLanguage};
 pub use vocab::{Token, VocabNode, VocabTrie, Vocabulary, VocabularyError};
 
