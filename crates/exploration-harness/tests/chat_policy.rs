@@ -156,7 +156,12 @@ impl ChatModel for Random {
 }
 
 proptest::proptest! {
-    #![proptest_config(proptest::prelude::ProptestConfig { cases: 12, rng_seed: proptest::test_runner::RngSeed::Fixed(20), failure_persistence: None, ..proptest::prelude::ProptestConfig::default() })]
+    #![proptest_config(proptest::prelude::ProptestConfig {
+        cases: 12,
+        rng_seed: proptest::test_runner::RngSeed::Fixed(20),
+        failure_persistence: Some(Box::new(proptest::test_runner::FileFailurePersistence::WithSource("proptest-regressions"))),
+        ..proptest::prelude::ProptestConfig::default()
+    })]
 
     /// Whatever a policy proposes, F_τ is exactly what U makes of the environment's observations
     /// alone: replaying the episode's observations into an empty belief gives the same facts.

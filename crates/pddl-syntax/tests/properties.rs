@@ -164,7 +164,12 @@ fn problem() -> impl Strategy<Value = Problem> {
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig { cases: 256, failure_persistence: None, ..ProptestConfig::default() })]
+    #![proptest_config(ProptestConfig {
+        cases: 256,
+        rng_seed: proptest::test_runner::RngSeed::Fixed(2561),
+        failure_persistence: Some(Box::new(proptest::test_runner::FileFailurePersistence::WithSource("proptest-regressions"))),
+        ..ProptestConfig::default()
+    })]
 
     #[test]
     fn printed_domains_parse_back_to_the_same_tree(domain in domain()) {
@@ -255,7 +260,12 @@ fn apply(text: &str, mutations: &[Mutation]) -> String {
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig { cases: 512, failure_persistence: None, ..ProptestConfig::default() })]
+    #![proptest_config(ProptestConfig {
+        cases: 512,
+        rng_seed: proptest::test_runner::RngSeed::Fixed(5121),
+        failure_persistence: Some(Box::new(proptest::test_runner::FileFailurePersistence::WithSource("proptest-regressions"))),
+        ..ProptestConfig::default()
+    })]
 
     /// Mutated real files never make the parser or checker panic, and every diagnostic
     /// points inside the text and renders with a line and column.
@@ -277,4 +287,15 @@ proptest! {
             prop_assert!(!diagnostic.message.is_empty());
         }
     }
+}
+
+/// The configs above keep failures beside this file: `WithSource` swaps `.rs` for
+/// `.proptest-regressions`, so `tests/properties.proptest-regressions` (committed) is read and
+/// its cases are replayed before novel ones. Renaming either file breaks that silently; this
+/// does not.
+#[test]
+fn the_kept_regressions_are_found_and_read() {
+    use proptest::test_runner::{FailurePersistence, FileFailurePersistence};
+    let seeds = FileFailurePersistence::WithSource("proptest-regressions").load_persisted_failures2(Some(file!()));
+    assert!(!seeds.is_empty(), "{} has no readable `cc` line beside it", file!());
 }
