@@ -132,3 +132,65 @@ fn crates_share_settings_and_respect_their_boundaries() {
         }
     }
 }
+
+/// The `[section]` of a manifest, as its lines (trimmed, comments and blanks dropped).
+fn section<'a>(manifest: &'a str, name: &str) -> Vec<&'a str> {
+    let mut out = Vec::new();
+    let mut inside = false;
+    for line in manifest.lines().map(str::trim) {
+        if line.starts_with('[') {
+            inside = line == name;
+            continue;
+        }
+        if inside && !line.is_empty() && !line.starts_with('#') {
+            out.push(line);
+        }
+    }
+    out
+}
+
+#[test]
+fn dependencies_are_declared_once_and_crates_build_alone() {
+    // Every dependency of a member comes from `[workspace.dependencies]`: one version each.
+    for dir in crates() {
+        let manifest = std::fs::read_to_string(dir.join("Cargo.toml")).expect("Cargo.toml");
+        for table in ["[dependencies]", "[dev-dependencies]", "[build-dependencies]"] {
+            for line in section(&manifest, table) {
+                let (name, spec) = line.split_once('=').expect("name = spec");
+                let (name, spec) = (name.trim(), spec.trim());
+                let own_path = spec.contains("path = \".\"");
+                assert!(
+                    name.ends_with(".workspace") || spec.contains("workspace = true") || own_path,
+                    "{}: `{line}` in {table}: declare it in the root [workspace.dependencies] and use `workspace = true`",
+                    dir.display()
+                );
+            }
+        }
+    }
+    let manifest = |name: &str| std::fs::read_to_string(root().join("crates").join(name).join("Cargo.toml")).expect("manifest");
+    // token-constraint's byte-level core builds without the planner.
+    let token_constraint = manifest("token-constraint");
+    for planner in ["grounding", "transition-model"] {
+        assert!(
+            section(&token_constraint, "[dependencies]").iter().any(|l| l.starts_with(planner) && l.contains("optional = true")),
+            "token-constraint: {planner} must be optional (feature `planning`)"
+        );
+    }
+    assert!(section(&token_constraint, "[features]").contains(&"default = [\"planning\"]"));
+    // lm's backends are features, and mcts takes lm without them (no network client).
+    let lm = manifest("lm");
+    for client in ["vlm-client", "ureq"] {
+        assert!(
+            section(&lm, "[dependencies]").iter().any(|l| l.starts_with(client) && l.contains("optional = true")),
+            "lm: {client} must be optional (feature `openai`)"
+        );
+    }
+    let workspace = std::fs::read_to_string(root().join("Cargo.toml")).expect("root manifest");
+    assert!(workspace.contains("lm = { path = \"crates/lm\", default-features = false }"), "members choose lm's backends");
+    let mcts = manifest("mcts");
+    assert!(section(&mcts, "[dependencies]").contains(&"lm.workspace = true"), "mcts depends on lm's interface alone");
+    // benchmark-data: the compile-time path is one fallback, behind a root callers can pass.
+    let data = std::fs::read_to_string(root().join("crates/benchmark-data/src/lib.rs")).expect("lib.rs");
+    assert_eq!(data.matches("env!(\"CARGO_MANIFEST_DIR\")").count(), 1, "benchmark-data: only Fixtures::checkout may use the build path");
+    assert!(data.contains("pub fn at(root: impl Into<PathBuf>) -> Fixtures"));
+}

@@ -130,9 +130,79 @@ pub fn load_alfworld_game(path: &Path, benchmark: Benchmark, id: String) -> Resu
     })
 }
 
-/// The `fixtures/` folder of this checkout.
+/// Where the benchmark files are: a folder laid out as this repository's `fixtures/`
+/// (`alfworld/valid_seen`, `alfworld/valid_train`, `virtualhome-eai`, `ipc`, `subsets`). A
+/// caller that ships or moves the data passes its own root ([`Fixtures::at`]); the free
+/// functions ([`load`], [`load_subset`], [`fixtures_dir`]) use [`Fixtures::from_env`].
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Fixtures {
+    root: PathBuf,
+}
+
+/// The environment variable that points the free functions at another `fixtures/` folder.
+pub const FIXTURES_ENV: &str = "NSEA_FIXTURES";
+
+impl Fixtures {
+    /// The files under `root`.
+    pub fn at(root: impl Into<PathBuf>) -> Fixtures {
+        Fixtures { root: root.into() }
+    }
+
+    /// The `fixtures/` folder of the checkout this crate was built from (a path fixed at
+    /// compile time: right for the workspace's own tests and tools, not for a moved binary).
+    pub fn checkout() -> Fixtures {
+        Fixtures::at(Path::new(env!("CARGO_MANIFEST_DIR")).join("../../fixtures"))
+    }
+
+    /// `$NSEA_FIXTURES` when it is set and not empty, else [`Fixtures::checkout`].
+    pub fn from_env() -> Fixtures {
+        match std::env::var_os(FIXTURES_ENV) {
+            Some(root) if !root.is_empty() => Fixtures::at(root),
+            _ => Fixtures::checkout(),
+        }
+    }
+
+    pub fn root(&self) -> &Path {
+        &self.root
+    }
+
+    /// Every task of a benchmark, in a stable order.
+    pub fn load(&self, benchmark: Benchmark) -> Result<Vec<TaskFiles>, DataError> {
+        load_from(&self.root, benchmark)
+    }
+
+    /// Where a subset lives: `name_or_path` itself when it names a file (has a `/` or ends in
+    /// `.txt`), else `subsets/<name>.txt` under the root.
+    pub fn subset_path(&self, name_or_path: &str) -> PathBuf {
+        if name_or_path.contains('/') || name_or_path.ends_with(".txt") {
+            PathBuf::from(name_or_path)
+        } else {
+            self.root.join("subsets").join(format!("{name_or_path}.txt"))
+        }
+    }
+
+    /// The tasks of a subset (see [`Fixtures::subset_path`], [`subset_ids`]) of `benchmark`,
+    /// in the file's order; an id the benchmark does not have is an error naming its
+    /// `path:line`.
+    pub fn load_subset(&self, benchmark: Benchmark, name_or_path: &str) -> Result<Vec<TaskFiles>, DataError> {
+        let path = self.subset_path(name_or_path);
+        let ids = subset_ids(&path)?;
+        let mut tasks: Vec<Option<TaskFiles>> = self.load(benchmark)?.into_iter().map(Some).collect();
+        let mut out = Vec::with_capacity(ids.len());
+        for (line, id) in ids {
+            let found = tasks.iter_mut().find(|t| t.as_ref().is_some_and(|t| t.id == id)).and_then(Option::take);
+            match found {
+                Some(task) => out.push(task),
+                None => return Err(DataError::UnknownSubsetTask { path, line, id, benchmark: benchmark.name() }),
+            }
+        }
+        Ok(out)
+    }
+}
+
+/// The `fixtures/` folder the free functions read ([`Fixtures::from_env`]).
 pub fn fixtures_dir() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../fixtures")
+    Fixtures::from_env().root
 }
 
 fn sorted_entries(dir: &Path) -> Result<Vec<PathBuf>, DataError> {
@@ -142,9 +212,9 @@ fn sorted_entries(dir: &Path) -> Result<Vec<PathBuf>, DataError> {
     Ok(paths)
 }
 
-/// Every task of a benchmark, in a stable order.
+/// Every task of a benchmark, in a stable order ([`Fixtures::from_env`]).
 pub fn load(benchmark: Benchmark) -> Result<Vec<TaskFiles>, DataError> {
-    load_from(&fixtures_dir(), benchmark)
+    Fixtures::from_env().load(benchmark)
 }
 
 /// Every task of a benchmark under `fixtures`, in a stable order.
@@ -294,14 +364,9 @@ pub fn stratified_subset(tasks: &[TaskFiles], size: usize) -> Vec<&TaskFiles> {
     chosen
 }
 
-/// Where a subset lives: `name_or_path` itself when it names a file (has a `/` or ends in
-/// `.txt`), else `fixtures/subsets/<name>.txt`.
+/// [`Fixtures::subset_path`] under [`Fixtures::from_env`].
 pub fn subset_path(name_or_path: &str) -> PathBuf {
-    if name_or_path.contains('/') || name_or_path.ends_with(".txt") {
-        PathBuf::from(name_or_path)
-    } else {
-        fixtures_dir().join("subsets").join(format!("{name_or_path}.txt"))
-    }
+    Fixtures::from_env().subset_path(name_or_path)
 }
 
 /// The task ids a subset file lists, with their line numbers: one id per line, white space
@@ -322,19 +387,7 @@ pub fn subset_ids(path: &Path) -> Result<Vec<(usize, String)>, DataError> {
     Ok(ids)
 }
 
-/// The tasks of a subset (see [`subset_path`], [`subset_ids`]) of `benchmark`, in the file's
-/// order; an id the benchmark does not have is an error naming its `path:line`.
+/// [`Fixtures::load_subset`] under [`Fixtures::from_env`].
 pub fn load_subset(benchmark: Benchmark, name_or_path: &str) -> Result<Vec<TaskFiles>, DataError> {
-    let path = subset_path(name_or_path);
-    let ids = subset_ids(&path)?;
-    let mut tasks: Vec<Option<TaskFiles>> = load(benchmark)?.into_iter().map(Some).collect();
-    let mut out = Vec::with_capacity(ids.len());
-    for (line, id) in ids {
-        let found = tasks.iter_mut().find(|t| t.as_ref().is_some_and(|t| t.id == id)).and_then(Option::take);
-        match found {
-            Some(task) => out.push(task),
-            None => return Err(DataError::UnknownSubsetTask { path, line, id, benchmark: benchmark.name() }),
-        }
-    }
-    Ok(out)
+    Fixtures::from_env().load_subset(benchmark, name_or_path)
 }

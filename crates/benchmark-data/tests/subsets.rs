@@ -91,3 +91,29 @@ fn the_alfworld_heldout_subset_is_the_rule_over_the_tasks_outside_the_fifty() {
     assert!(listed.iter().all(|id| !fifty.contains(id)), "disjoint from alfworld-seen-50");
     assert_eq!(families(&load_subset(Benchmark::AlfworldSeen, name).expect("loads")), families(&all));
 }
+
+/// A caller passes its own root: a copy of one IPC domain elsewhere loads from there, ids and
+/// subsets resolve against it, and a root without the data is an error naming the path.
+#[test]
+fn fixtures_load_from_a_root_the_caller_passes() {
+    let root = std::env::temp_dir().join(format!("nsea-fixtures-root-{}", std::process::id()));
+    let domain = root.join("ipc").join("blocks");
+    std::fs::create_dir_all(&domain).expect("temp dir");
+    std::fs::create_dir_all(root.join("subsets")).expect("temp dir");
+    let checkout = benchmark_data::Fixtures::checkout();
+    for file in ["domain.pddl", "instance-10.pddl"] {
+        std::fs::copy(checkout.root().join("ipc/blocks").join(file), domain.join(file)).expect("copy");
+    }
+    std::fs::write(root.join("subsets").join("mine.txt"), "# one task\nblocks/instance-10\n").expect("subset");
+    let fixtures = benchmark_data::Fixtures::at(&root);
+    let tasks = fixtures.load(Benchmark::Ipc).expect("loads");
+    assert_eq!(tasks.iter().map(|t| t.id.as_str()).collect::<Vec<_>>(), ["blocks/instance-10"]);
+    assert!(tasks[0].problem_path.starts_with(&root));
+    let original = benchmark_data::load(Benchmark::Ipc).expect("checkout loads");
+    let same = original.iter().find(|t| t.id == "blocks/instance-10").expect("in the checkout");
+    assert_eq!(tasks[0].problem, same.problem);
+    assert_eq!(fixtures.load_subset(Benchmark::Ipc, "mine").expect("subset").len(), 1);
+    let missing = benchmark_data::Fixtures::at(root.join("nowhere")).load(Benchmark::Ipc).expect_err("no data there");
+    assert!(missing.to_string().contains("nowhere"), "{missing}");
+    std::fs::remove_dir_all(&root).ok();
+}
