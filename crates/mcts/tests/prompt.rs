@@ -1,7 +1,7 @@
 //! The Phase II planning prompt on the real benchmarks (every ALFWorld valid_seen game, every
 //! EAI problem, the IPC sets): names the agent could perceive, action forms the spelling
-//! writes, goal relevance, and one exact VirtualHome prompt so that format changes are
-//! deliberate.
+//! writes, goal relevance, and the whole prompt of one small task per benchmark as an insta
+//! snapshot (`tests/snapshots/`) so that format changes are deliberate.
 
 use std::sync::Arc;
 
@@ -359,59 +359,37 @@ fn prompt_style_follows_the_spelling() {
     assert_eq!(PromptOptions::default().end_marker.as_deref(), Some("DONE"), "the constraint's end marker");
 }
 
-/// The whole prompt of one small EAI problem, so that any change of format is deliberate.
+/// Both messages as one text, the boundary marked, for a snapshot.
+fn snapshot_text(prompt: &PlanningPrompt) -> String {
+    format!("[system]\n{}\n\n[user]\n{}", prompt.system, prompt.user)
+}
+
+/// The whole prompt of one small task per benchmark and prompt style, as insta snapshots
+/// (`tests/snapshots/prompt__*.snap`): the prompts are a contract, so that any change of
+/// format is deliberate and shows in review.
 #[test]
-fn virtualhome_prompt_is_exactly_this() {
+fn the_virtualhome_prompt_of_eai_1004_2() {
     let task = load_one(Benchmark::VirtualhomeEai, "1004_2");
     let prompt = prompt(&task, Relevance::default());
-    assert_eq!(
-        prompt.system,
-        "You control an embodied agent in a simulated household called VirtualHome. Output a sequence of actions that changes the \
-         observable initial state into the goal state. An action takes effect only if all of its conditions already hold. The agent \
-         cannot act on an object it is not close to."
-    );
-    let expected = "\
-Actions:
-walk <object>: move close to an object
-walk <room>: enter a room
-find <object>: find a nearby object
-grab <object>: hold a nearby object (at most two, one per hand)
-open <container>: open a nearby closed container
-close <container>: close a nearby open container
-putback <object> <surface>: place a held object on a nearby surface
-puton <clothes>: put on held clothes
-putin <object> <container>: place a held object in a nearby open container
-turnto <object>: turn to face an object
-lookat <object>: look at an object the agent faces
-wipe <object> <cloth>: wipe a nearby object clean with a held cloth
-drop <object> <room>: drop a held object in the room
-type <object>: type on a nearby object
-move <object>: move a nearby object
-wash <object>: wash a nearby object
-plugin <device>: plug in a nearby device
-plugout <device>: unplug a nearby device that is off
-cut <object>: cut a nearby food
-eat <object>: eat a nearby food
-DONE
+    check_shape(&prompt, &task.id);
+    insta::assert_snapshot!(snapshot_text(&prompt));
+}
 
-Initial state:
-can_open freezer
-clean freezer
-closed freezer
-containers freezer
-has_plug freezer
-has_switch freezer
-plugged_in freezer
+#[test]
+fn the_alfworld_prompt_of_a_heat_then_place_game() {
+    let task = load_one(Benchmark::AlfworldSeen, "pick_heat_then_place_in_recep-Apple-None-DiningTable-26/trial_T20190907_060234_011675");
+    let prompt = prompt(&task, Relevance::default());
+    check_shape(&prompt, &task.id);
+    insta::assert_snapshot!(snapshot_text(&prompt));
+}
 
-Goal:
-open freezer
-plugged_in freezer
-
-Each action should make progress toward the goal and respect preconditions. Output one action per line using class names only, and stop \
-immediately after the action that achieves the goal.
-
-Plan:";
-    assert_eq!(prompt.user, expected);
+/// An IPC puzzle with every true fact shown, as the prompt module advises for IPC.
+#[test]
+fn the_pddl_prompt_of_ipc_blocks_instance_1() {
+    let task = load_one(Benchmark::Ipc, "blocks/instance-1");
+    let prompt = prompt(&task, Relevance::All);
+    check_shape(&prompt, &task.id);
+    insta::assert_snapshot!(snapshot_text(&prompt));
 }
 
 #[test]

@@ -52,7 +52,12 @@ fn check(lm: &mut dyn LanguageModel, task: &Loaded, kind: u8, seed: u64, any: bo
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig { cases: 24, failure_persistence: None, ..ProptestConfig::default() })]
+    #![proptest_config(ProptestConfig {
+        cases: 24,
+        rng_seed: proptest::test_runner::RngSeed::Fixed(24),
+        failure_persistence: Some(Box::new(proptest::test_runner::FileFailurePersistence::WithSource("proptest-regressions"))),
+        ..ProptestConfig::default()
+    })]
 
     #[test]
     fn constrained_plans_execute_with_the_uniform_prior(task in 0usize..8, kind in 0u8..3, seed in 0u64..1000, any: bool) {
