@@ -2,8 +2,11 @@
 //! `fixtures/ipc/fd-reference.tsv` (so the tests need not run it): h_max and h_add of every
 //! initial state are equal; h_FF and LM-cut are reported beside Fast Downward's (they depend
 //! on tie-breaking) and LM-cut must be at least as informed on average per domain, within 5%.
+//! Every heuristic's initial-state value beside Fast Downward's is an insta snapshot
+//! (`tests/snapshots/fast_downward__*.snap`), so any change of a value shows as a diff.
 
 use std::collections::BTreeMap;
+use std::fmt::Write;
 
 use benchmark_data::{Benchmark, load};
 use heuristics::{HAdd, HFF, HMax, Heuristic, LmCut};
@@ -68,4 +71,69 @@ fn initial_state_values_match_fast_downward() {
         println!("{domain:<16} LM-cut mean ours {:.1} FD {:.1} ratio {ratio:.3}", *ours as f64 / *n as f64, *theirs as f64 / *n as f64);
         assert!(ratio >= 0.95, "{domain}: LM-cut mean is {ratio:.3} of Fast Downward's");
     }
+}
+
+/// Fast Downward's name for one of ours, where the reference records it.
+fn fd_name(name: &str) -> Option<&'static str> {
+    match name {
+        "hmax" => Some("hmax"),
+        "hadd" => Some("hadd"),
+        "ff" => Some("hff"),
+        "lmcut" => Some("lmcut"),
+        _ => None,
+    }
+}
+
+/// Fast Downward's optimal plan costs (`astar(lmcut())` runs that finished), by (domain, instance file).
+fn optimal_costs() -> BTreeMap<(String, String), u64> {
+    let text = std::fs::read_to_string(benchmark_data::fixtures_dir().join("ipc/fd-reference.tsv")).expect("fd-reference.tsv");
+    text.lines()
+        .filter(|l| !l.starts_with('#'))
+        .map(|l| l.split('\t').collect::<Vec<_>>())
+        .filter(|f| f.len() >= 8 && f[2] == "fd-astar-lmcut" && f[3] == "ok")
+        .map(|f| ((f[0].to_string(), f[1].to_string()), f[7].parse().expect("plan cost")))
+        .collect()
+}
+
+/// The initial-state value of every heuristic of `heuristics::NAMES` on every IPC fixture,
+/// ours beside Fast Downward's where it recorded one (`-`: not recorded; `inf`: dead end),
+/// and h* where Fast Downward's A* finished. h_max and h_add must equal Fast Downward's;
+/// h_FF and LM-cut depend on tie-breaking, but h_max ≤ LM-cut ≤ h_FF and LM-cut ≤ h*.
+#[test]
+fn initial_state_values_beside_fast_downward() {
+    let reference = reference();
+    let optimal = optimal_costs();
+    let names: Vec<&str> = heuristics::NAMES.to_vec();
+    let show = |value: Option<u32>| value.map_or_else(|| "inf".to_string(), |v| v.to_string());
+    let mut table = format!("{:<28}", "task (ours / Fast Downward)");
+    for name in &names {
+        write!(table, " {name:>13}").unwrap();
+    }
+    table.push_str("    h*\n");
+    for files in load(Benchmark::Ipc).expect("fixtures") {
+        let (domain, instance) = files.id.split_once('/').expect("domain/instance");
+        let key = (domain.to_string(), format!("{instance}.pddl"));
+        let expected = reference.get(&key).unwrap_or_else(|| panic!("no reference for {}", files.id));
+        let model = model(&files);
+        let state = model.initial_state();
+        write!(table, "{:<28}", files.id).unwrap();
+        let mut ours = BTreeMap::new();
+        for &name in &names {
+            let value = heuristics::by_name(name, &model).unwrap_or_else(|| panic!("{name} is a heuristic")).evaluate(&state);
+            let theirs = fd_name(name).and_then(|fd| expected.get(fd).copied());
+            if matches!(name, "hmax" | "hadd") {
+                assert_eq!(value, theirs, "{}: {name}", files.id);
+            }
+            let theirs = fd_name(name).map_or_else(|| "-".to_string(), |_| show(theirs));
+            write!(table, " {:>13}", format!("{} / {theirs}", show(value))).unwrap();
+            ours.insert(name, value.expect("every IPC fixture is relaxed-solvable"));
+        }
+        let h_star = optimal.get(&key).copied();
+        assert!(ours["hmax"] <= ours["lmcut"] && ours["lmcut"] <= ours["ff"], "{}: h_max ≤ LM-cut ≤ h_FF", files.id);
+        if let Some(h_star) = h_star {
+            assert!(u64::from(ours["lmcut"]) <= h_star, "{}: LM-cut {} > h* {h_star}", files.id, ours["lmcut"]);
+        }
+        writeln!(table, " {:>5}", h_star.map_or_else(|| "-".to_string(), |h| h.to_string())).unwrap();
+    }
+    insta::assert_snapshot!(table);
 }
