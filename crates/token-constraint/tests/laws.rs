@@ -75,7 +75,12 @@ fn build(texts: &[(Vec<u8>, bool)], end_here: bool) -> Matcher {
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig::with_cases(256))]
+    #![proptest_config(ProptestConfig {
+        cases: 256,
+        rng_seed: proptest::test_runner::RngSeed::Fixed(0x746f_6b65_6e73),
+        failure_persistence: Some(Box::new(proptest::test_runner::FileFailurePersistence::WithSource("proptest-regressions"))),
+        ..ProptestConfig::default()
+    })]
 
     /// Along random tokenizations of every allowed string, the mask at each `u` equals the
     /// oracle's, is never empty, and the string completes with the right event.
