@@ -200,8 +200,10 @@ fn ground(benchmarks: &str, limit: Option<usize>, runs: usize, no_reference: boo
     } else {
         benchmarks
             .split(',')
-            .map(|n| Benchmark::from_name(n.trim()).with_context(|| format!("unknown benchmark `{n}`")))
-            .collect::<anyhow::Result<_>>()?
+            .map(|n| {
+                Benchmark::from_name(n.trim()).ok_or_else(|| crate::input::unknown("benchmark", n, Benchmark::ALL.iter().map(|b| b.name())))
+            })
+            .collect::<Result<_, _>>()?
     };
     let reference = if no_reference { None } else { fd_translator() };
     if !no_reference && reference.is_none() {
@@ -375,8 +377,13 @@ fn run_fd_search(downward: &Path, sas: &Path, search: &str, time_limit: f64) -> 
 fn plan(configs: &str, time_limit: f64, filter: Option<&str>, json: bool) -> anyhow::Result<ExitCode> {
     let chosen: Vec<&PlanConfig> = configs
         .split(',')
-        .map(|name| PLAN_CONFIGS.iter().find(|c| c.name == name.trim()).with_context(|| format!("unknown config `{name}`")))
-        .collect::<anyhow::Result<_>>()?;
+        .map(|name| {
+            PLAN_CONFIGS
+                .iter()
+                .find(|c| c.name == name.trim())
+                .ok_or_else(|| crate::input::unknown("config", name, PLAN_CONFIGS.iter().map(|c| c.name)))
+        })
+        .collect::<Result<_, _>>()?;
     let reference = fd_translator();
     let downward = reference.as_ref().map(|(_, bin)| bin.join("downward")).filter(|p| p.exists());
     if downward.is_none() {

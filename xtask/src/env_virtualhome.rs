@@ -5,7 +5,7 @@
 use std::path::PathBuf;
 use std::process::ExitCode;
 
-use anyhow::{Context, bail};
+use anyhow::bail;
 use household_sim::{Environment, Judge, PythonRandom, VirtualhomeEnv, VirtualhomeTask};
 use serde_json::json;
 
@@ -71,7 +71,7 @@ pub fn load_task(benchmark: &str, task: &str, task_dir: Option<&std::path::Path>
     let dir = task_dir.map_or_else(|| benchmark_data::fixtures_dir().join(default), std::path::Path::to_path_buf);
     let path = dir.join(format!("{task}.json.gz"));
     if !path.is_file() {
-        bail!("no task {task} in {} (task files there are `<id>.json.gz`)", dir.display());
+        bail!(crate::input::InputError(format!("no task {task} in {} (task files there are `<id>.json.gz`)", dir.display())));
     }
     Ok(VirtualhomeTask::load(&path)?)
 }
@@ -83,7 +83,8 @@ pub fn run(args: &VirtualhomeEnvArgs) -> anyhow::Result<ExitCode> {
     let mut env = VirtualhomeEnv::new(task, &args.benchmark);
     let commands: Option<Vec<String>> = match &args.commands {
         Some(file) => {
-            let text = std::fs::read_to_string(file).with_context(|| format!("{}: cannot read commands", file.display()))?;
+            let text = std::fs::read_to_string(file)
+                .map_err(|e| crate::input::InputError(format!("{}: cannot read commands: {e}", file.display())))?;
             Some(text.lines().map(str::trim).filter(|l| !l.is_empty() && !l.starts_with('#')).map(str::to_string).collect())
         }
         None => None,

@@ -100,8 +100,11 @@ pub fn run(args: EvalArgs) -> anyhow::Result<ExitCode> {
     } else {
         args.benchmark
             .split(',')
-            .map(|name| Benchmark::from_name(name.trim()).with_context(|| format!("unknown benchmark `{name}`")))
-            .collect::<anyhow::Result<_>>()?
+            .map(|name| {
+                Benchmark::from_name(name.trim())
+                    .ok_or_else(|| crate::input::unknown("benchmark", name, Benchmark::ALL.iter().map(|b| b.name())))
+            })
+            .collect::<Result<_, _>>()?
     };
     std::fs::create_dir_all(&args.out).with_context(|| format!("cannot create {}", args.out.display()))?;
     let mut summaries = serde_json::Map::new();

@@ -95,11 +95,63 @@ pub fn alfworld_game(files: &TaskFiles) -> Option<&AlfworldGame> {
     }
 }
 
+/// Bad input: a `what` named `name` that is not one of `known`.
+pub fn unknown<'a>(what: &str, name: &str, known: impl IntoIterator<Item = &'a str>) -> InputError {
+    InputError(format!("unknown {what} `{}` (known: {})", name.trim(), known.into_iter().collect::<Vec<_>>().join(", ")))
+}
+
+/// `seconds` as a duration; bad input (exit 2) when it is not a positive number of seconds.
+pub fn seconds(seconds: f64) -> Result<std::time::Duration, InputError> {
+    positive_seconds(&seconds.to_string()).map(std::time::Duration::from_secs_f64).map_err(InputError)
+}
+
 /// A clap parser for durations in seconds: finite, positive and below a billion, so that
 /// `Duration::from_secs_f64` can never panic on what a user typed (`-1`, `inf`, `nan`).
 pub fn positive_seconds(text: &str) -> Result<f64, String> {
     match text.parse::<f64>() {
         Ok(s) if s.is_finite() && s > 0.0 && s < 1e9 => Ok(s),
         _ => Err(format!("`{text}` is not a positive number of seconds")),
+    }
+}
+
+/// A clap parser for a library enum whose names its variants give (`strum`): the names are
+/// the option's possible values (listed in `--help`, anything else refused with exit 2), and
+/// the value comes back typed. One list per enum: the enum itself.
+pub fn choice<T>() -> impl clap::builder::TypedValueParser<Value = T>
+where
+    T: strum::VariantNames + std::str::FromStr + Clone + Send + Sync + 'static,
+    T::Err: std::error::Error + Send + Sync + 'static,
+{
+    use clap::builder::TypedValueParser;
+    clap::builder::PossibleValuesParser::new(T::VARIANTS).try_map(|name| name.parse::<T>())
+}
+
+/// Serialises an enum field by its command-line name, as the `String` fields it replaced did
+/// (record configurations hash these names, so a typed field keeps the record file's name).
+pub fn serialize_name<T, S>(value: &T, serializer: S) -> Result<S::Ok, S::Error>
+where
+    T: Copy + Into<&'static str>,
+    S: serde::Serializer,
+{
+    serializer.serialize_str((*value).into())
+}
+
+/// A clap parser for a finite number in `[min, max]` (`min_open`: excluding `min`).
+pub fn number_in(min: f64, min_open: bool, max: f64) -> impl Fn(&str) -> Result<f64, String> + Clone + Send + Sync + 'static {
+    move |text: &str| match text.trim().parse::<f64>() {
+        Ok(value) if value.is_finite() && value <= max && (value > min || (!min_open && value == min)) => Ok(value),
+        Ok(_) => {
+            let low = if min_open { "(" } else { "[" };
+            Err(format!("`{text}` is not a finite number in {low}{min}, {max}]"))
+        }
+        Err(e) => Err(format!("`{text}`: {e}")),
+    }
+}
+
+/// A clap parser for a whole number of at least 1.
+pub fn at_least_one(text: &str) -> Result<usize, String> {
+    match text.trim().parse::<usize>() {
+        Ok(value) if value >= 1 => Ok(value),
+        _ => Err(format!("`{text}` is not a whole number of at least 1")),
     }
 }

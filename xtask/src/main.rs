@@ -1,7 +1,9 @@
 //! `cargo xtask`: the project's command line.
 //!
-//! Exit codes: 0 success; 1 a negative verdict (an invalid plan); 2 bad input (unreadable
-//! or malformed files, named with file, line and column) or usage errors.
+//! Exit codes: 0 success; 1 a negative verdict (an invalid plan, a task not solved, an
+//! episode not won); 2 bad input (usage errors, out-of-range options, unreadable or malformed
+//! files, named with file, line and column: [`input::InputError`]); 3 a failure outside the
+//! input (a tool, a server or the network failed, or an internal error).
 
 mod agent;
 mod bench;
@@ -24,7 +26,6 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 use std::time::Instant;
 
-use anyhow::Context;
 use clap::{Parser, Subcommand};
 use serde_json::json;
 use transition_model::{Spelling, SurfaceLanguage, TransitionModel};
@@ -56,8 +57,8 @@ enum Command {
         #[arg(long)]
         plan: PathBuf,
         /// Surface language of the plan [default: alfworld with --game, else pddl].
-        #[arg(long, value_parser = ["pddl", "alfworld", "virtualhome"])]
-        spelling: Option<String>,
+        #[arg(long, value_parser = input::choice::<SurfaceLanguage>())]
+        spelling: Option<SurfaceLanguage>,
     },
     /// Find a plan: a classical planner (A*, eager or lazy GBFS), or Phase II (`--planner mcts`:
     /// a language model under the PDDL constraint, with MCTS or greedy / sampled decoding).
@@ -107,10 +108,11 @@ fn main() -> ExitCode {
         Err(error) => {
             if let Some(input) = error.downcast_ref::<InputError>() {
                 eprintln!("error: {input}");
+                ExitCode::from(2)
             } else {
                 eprintln!("error: {error:#}");
+                ExitCode::from(3)
             }
-            ExitCode::from(2)
         }
     }
 }
@@ -152,8 +154,8 @@ fn run(command: Command) -> anyhow::Result<ExitCode> {
             let text = std::fs::read_to_string(&plan).map_err(|e| InputError(format!("{}: cannot read: {e}", plan.display())))?;
             let steps: Vec<&str> = text.lines().map(str::trim).filter(|l| !l.is_empty() && !l.starts_with(';')).collect();
             let model = TransitionModel::new(input::ground(&files)?);
-            let language = match spelling.as_deref() {
-                Some(name) => SurfaceLanguage::from_name(name).context("unknown spelling")?,
+            let language = match spelling {
+                Some(language) => language,
                 None if task.is_game() => SurfaceLanguage::Alfworld,
                 None => SurfaceLanguage::Pddl,
             };

@@ -7,13 +7,15 @@ use std::io::{BufRead, Write};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use std::sync::Arc;
-use std::time::{Duration, Instant};
+use std::time::Instant;
 
 use anyhow::Context;
 use benchmark_data::{Benchmark, Extra, TaskFiles};
 use lm::{LanguageModel, OpenAiConfig, OpenAiModel, ServerDialect, Tokenizer, UniformModel};
 use mcts::prompt::{PromptOptions, Relevance, planning_prompt};
-use mcts::{Backup, DecodeConfig, Decoder, MctsConfig, Mode, Normalization, Outcome, SamplingConfig, Strategy, Tokenization, ValueConfig};
+use mcts::{
+    Backup, DecodeConfig, Decoder, MctsConfig, ModeName, Normalization, Outcome, SamplingConfig, Strategy, Tokenization, ValueConfig,
+};
 use serde::{Deserialize, Serialize};
 use token_constraint::EndPolicy;
 use transition_model::{Spelling, TransitionModel};
@@ -38,16 +40,18 @@ pub struct LmArgs {
     /// What an `openai:` server understands: `vllm` (server-side `allowed_token_ids`, tokens
     /// named by id) or `generic` (llama.cpp's `llama-server`, Ollama: top-k logprobs only,
     /// renormalised here).
-    #[arg(long, default_value = "vllm", value_parser = ["vllm", "generic"])]
-    pub server_dialect: String,
+    #[arg(long, default_value = "vllm", value_parser = input::choice::<ServerDialect>())]
+    #[serde(serialize_with = "input::serialize_name")]
+    pub server_dialect: ServerDialect,
 }
 
 /// How the plan is decoded (defaults: the paper's, Appendix A.4 and Table 6).
 #[derive(Debug, Clone, clap::Args, Serialize)]
 pub struct DecodeArgs {
     /// The Phase II condition.
-    #[arg(long, default_value = "constrained-mcts", value_parser = Mode::NAMES)]
-    pub mode: String,
+    #[arg(long, default_value = "constrained-mcts", value_parser = input::choice::<ModeName>())]
+    #[serde(serialize_with = "input::serialize_name")]
+    pub mode: ModeName,
     /// MCTS simulations at most.
     #[arg(long)]
     pub simulations: Option<u64>,
@@ -61,27 +65,29 @@ pub struct DecodeArgs {
     #[arg(long, default_value_t = 64)]
     pub max_actions: usize,
     /// MCTS: children per node.
-    #[arg(long, default_value_t = 16)]
+    #[arg(long, default_value_t = 16, value_parser = input::at_least_one)]
     pub width: usize,
-    /// MCTS: exploration constant.
-    #[arg(long, default_value_t = 2.5)]
+    /// MCTS: exploration constant (finite, at least 0).
+    #[arg(long, default_value_t = 2.5, value_parser = input::number_in(0.0, false, 1e9))]
     pub exploration: f64,
-    /// MCTS: base constant.
-    #[arg(long, default_value_t = 10.0)]
+    /// MCTS: base constant (finite, above 0).
+    #[arg(long, default_value_t = 10.0, value_parser = input::number_in(0.0, true, 1e12))]
     pub base: f64,
     /// MCTS: a node's value is the best of the values backed up through it, or their mean.
-    #[arg(long, default_value = "max", value_parser = ["max", "mean"])]
-    pub backup: String,
+    #[arg(long, default_value = "max", value_parser = input::choice::<Backup>())]
+    #[serde(serialize_with = "input::serialize_name")]
+    pub backup: Backup,
     /// MCTS: normalise Q over the children of each node (`siblings`) or over the whole tree.
-    #[arg(long, default_value = "siblings", value_parser = ["siblings", "tree"])]
-    pub normalization: String,
+    #[arg(long, default_value = "siblings", value_parser = input::choice::<Normalization>())]
+    #[serde(serialize_with = "input::serialize_name")]
+    pub normalization: Normalization,
     /// MCTS: keep prefixes whose state another prefix reached first with no more actions
     /// (by default they are closed; cycles are closed either way).
     #[arg(long)]
     pub keep_transpositions: bool,
     /// MCTS: mix the prior with the uniform over each node's kept children by this weight,
     /// `(1 − ε)·p + ε/k` (0: the model's prior alone, as the paper).
-    #[arg(long, default_value_t = 0.0, value_parser = parse_unit)]
+    #[arg(long, default_value_t = 0.0, value_parser = input::number_in(0.0, false, 1.0))]
     pub prior_mix: f64,
     /// Value: weights of h_FF, LM-cut and the remaining plan cost in h (paper Appendix A.4;
     /// the remaining plan cost is off by default, see `mcts::value`).
@@ -90,14 +96,14 @@ pub struct DecodeArgs {
     /// Value: expansions of each remaining-plan-cost search.
     #[arg(long, default_value_t = 200)]
     pub remaining_expansions: u64,
-    /// Value: penalty λ per action.
-    #[arg(long, default_value_t = 0.1)]
+    /// Value: penalty λ per action (finite, at least 0).
+    #[arg(long, default_value_t = 0.1, value_parser = input::number_in(0.0, false, 1e9))]
     pub lambda: f64,
     /// Sampling: temperature (0 is greedy).
-    #[arg(long, default_value_t = 1.0)]
+    #[arg(long, default_value_t = 1.0, value_parser = input::number_in(0.0, false, 1e6))]
     pub temperature: f64,
-    /// Sampling: nucleus mass.
-    #[arg(long, default_value_t = 0.95)]
+    /// Sampling: nucleus mass, in (0, 1].
+    #[arg(long, default_value_t = 0.95, value_parser = input::number_in(0.0, true, 1.0))]
     pub top_p: f64,
     /// Sampling: keep the k most likely tokens (0: no cut-off).
     #[arg(long, default_value_t = 20)]
@@ -107,21 +113,23 @@ pub struct DecodeArgs {
     pub seed: u64,
     /// Constrained modes: `canonical` (the tokenizer's encoding of each action, one token path
     /// per action) or `any` (every tokenization of an allowed text).
-    #[arg(long, default_value = "canonical", value_parser = ["canonical", "any"])]
-    pub tokenization: String,
+    #[arg(long, default_value = "canonical", value_parser = input::choice::<Tokenization>())]
+    #[serde(serialize_with = "input::serialize_name")]
+    pub tokenization: Tokenization,
     /// Prompt: show every true fact instead of those relevant to the goal.
     #[arg(long)]
     pub all_facts: bool,
     /// Constrained modes: where the plan may end: `anywhere` (at every action boundary; the
     /// plan is judged afterwards) or `at-goal` (only where the goal holds or no action applies).
-    #[arg(long, default_value = "anywhere", value_parser = ["anywhere", "at-goal"])]
-    pub end: String,
+    #[arg(long, default_value = "anywhere", value_parser = input::choice::<EndPolicy>())]
+    #[serde(serialize_with = "input::serialize_name")]
+    pub end: EndPolicy,
 }
 
 impl DecodeArgs {
     /// The decoding settings, with `time_limit` seconds per task.
     pub fn config(&self, time_limit: f64) -> anyhow::Result<DecodeConfig> {
-        let mut mode = Mode::from_name(&self.mode).with_context(|| format!("unknown mode `{}`", self.mode))?;
+        let mut mode = self.mode.mode();
         match &mut mode.strategy {
             Strategy::Mcts(mcts) => {
                 *mcts = MctsConfig {
@@ -129,8 +137,8 @@ impl DecodeArgs {
                     exploration: self.exploration,
                     base: self.base,
                     prune_transpositions: !self.keep_transpositions,
-                    backup: if self.backup == "mean" { Backup::Mean } else { Backup::Max },
-                    normalization: if self.normalization == "tree" { Normalization::Tree } else { Normalization::Siblings },
+                    backup: self.backup,
+                    normalization: self.normalization,
                     prior_mix: self.prior_mix,
                     ..MctsConfig::default()
                 };
@@ -147,16 +155,16 @@ impl DecodeArgs {
         }
         let mut config = DecodeConfig::new(mode);
         config.budget.simulations = self.simulations;
-        config.budget.wall_clock = Some(Duration::from_secs_f64(time_limit.max(0.0)));
+        config.budget.wall_clock = Some(input::seconds(time_limit)?);
         config.budget.model_calls = self.model_calls;
         config.budget.max_tokens = self.max_tokens;
         config.budget.max_actions = self.max_actions;
-        config.tokenization = if self.tokenization == "any" { Tokenization::Any } else { Tokenization::Canonical };
+        config.tokenization = self.tokenization;
         Ok(config)
     }
 
     pub fn end_policy(&self) -> EndPolicy {
-        if self.end == "at-goal" { EndPolicy::AtGoal } else { EndPolicy::Anywhere }
+        self.end
     }
 
     pub fn value(&self) -> ValueConfig {
@@ -176,8 +184,8 @@ impl DecodeArgs {
     /// different settings go to different files, so a run never resumes another's.
     pub fn variant(&self) -> String {
         let mut parts = Vec::new();
-        if self.end != "anywhere" {
-            parts.push(format!("end-{}", self.end));
+        if self.end != EndPolicy::Anywhere {
+            parts.push(format!("end-{}", <&str>::from(self.end)));
         }
         if self.prior_mix != MctsConfig::default().prior_mix {
             parts.push(format!("mix-{}", self.prior_mix));
@@ -208,15 +216,6 @@ fn parse_weights(text: &str) -> Result<(f64, f64, f64), String> {
     }
 }
 
-/// A number in `[0, 1]`.
-fn parse_unit(text: &str) -> Result<f64, String> {
-    match text.trim().parse::<f64>() {
-        Ok(value) if (0.0..=1.0).contains(&value) => Ok(value),
-        Ok(_) => Err(format!("{text:?}: give a number from 0 to 1")),
-        Err(e) => Err(format!("{text:?}: {e}")),
-    }
-}
-
 fn default_tokenizer() -> PathBuf {
     benchmark_data::fixtures_dir().join("tokenizers/qwen3/tokenizer.json")
 }
@@ -236,7 +235,7 @@ pub fn load_lm(args: &LmArgs) -> anyhow::Result<Box<dyn LanguageModel>> {
     if let Some(url) = args.lm.strip_prefix("openai:") {
         let tokenizer = Arc::new(tokenizer_at(&tokenizer_path)?);
         let mut config = OpenAiConfig::new(url, &args.served_model);
-        config.dialect = if args.server_dialect == "generic" { ServerDialect::Generic } else { ServerDialect::Vllm };
+        config.dialect = args.server_dialect;
         let model = OpenAiModel::new(config, tokenizer).map_err(|e| InputError(format!("{url}: {e}")))?;
         return Ok(Box::new(model));
     }
@@ -426,8 +425,8 @@ pub fn plan_one(
 #[derive(Debug, clap::Args)]
 pub struct Phase2Args {
     /// The benchmark set.
-    #[arg(long, value_parser = ["alfworld-seen", "alfworld-train", "virtualhome-eai", "ipc"])]
-    benchmark: String,
+    #[arg(long, value_parser = input::choice::<Benchmark>())]
+    benchmark: Benchmark,
     /// Run only the tasks of a subset file (`fixtures/subsets/<NAME>.txt`, or a path), e.g.
     /// `alfworld-seen-50`.
     #[arg(long)]
@@ -479,7 +478,7 @@ fn file_safe(name: &str) -> String {
 
 /// `cargo xtask phase2`.
 pub fn run(args: Phase2Args) -> anyhow::Result<ExitCode> {
-    let benchmark = Benchmark::from_name(&args.benchmark).context("unknown benchmark")?;
+    let benchmark = args.benchmark;
     let mut tasks = match &args.subset {
         Some(subset) => benchmark_data::load_subset(benchmark, subset).map_err(|e| InputError(e.to_string()))?,
         None => benchmark_data::load(benchmark)?,
@@ -499,11 +498,11 @@ pub fn run(args: Phase2Args) -> anyhow::Result<ExitCode> {
             Path::new(subset).file_stem().map_or_else(|| subset.clone(), |s| s.to_string_lossy().into_owned())
         }
         Some(subset) => subset.clone(),
-        None => args.benchmark.clone(),
+        None => args.benchmark.name().to_string(),
     };
     std::fs::create_dir_all(&args.out).with_context(|| format!("cannot create {}", args.out.display()))?;
     let variant = args.decode.variant();
-    let config = RunConfig { benchmark: &args.benchmark, set: &set, lm: &args.lm, decode: &args.decode, time_limit: args.time_limit };
+    let config = RunConfig { benchmark: args.benchmark.name(), set: &set, lm: &args.lm, decode: &args.decode, time_limit: args.time_limit };
     let hash = config.hash();
     let stem = file_safe(&format!("{set}-{}{variant}-{lm_name}-{hash}", args.decode.mode));
     let path = args.out.join(format!("{stem}.jsonl"));
@@ -590,7 +589,7 @@ fn summarize(records: &[Record], set: &str, decode: &DecodeArgs, lm: &str, path:
     }
     let solved_lengths: Vec<f64> = records.iter().filter(|r| r.solved).map(|r| r.length as f64).collect();
     serde_json::json!({
-        "set": set, "mode": decode.mode, "end": decode.end, "prior_mix": decode.prior_mix,
+        "set": set, "mode": decode.mode, "end": decode.end.to_string(), "prior_mix": decode.prior_mix,
         "weights": [decode.weights.0, decode.weights.1, decode.weights.2], "lm": lm, "tasks": records.len(),
         "solved": solved, "success_rate": solved as f64 / n,
         "solvable": solvable, "success_rate_solvable": solved as f64 / solvable.max(1) as f64, "valid": valid, "valid_rate": valid as f64 / n,

@@ -6,6 +6,8 @@ use std::process::ExitCode;
 use std::time::{Duration, Instant};
 
 use anyhow::Context;
+use clap::ValueEnum;
+use heuristics::HeuristicName;
 use heuristics::search::{Algorithm, SearchConfig, SearchStatus, search};
 use serde_json::json;
 use transition_model::TransitionModel;
@@ -17,11 +19,11 @@ pub struct PlanArgs {
     #[command(flatten)]
     task: TaskArgs,
     /// The planner: a classical search, or `mcts` (Phase II: see --mode and --lm).
-    #[arg(long, default_value = "lazy-gbfs", value_parser = ["astar", "gbfs", "lazy-gbfs", "mcts"])]
-    planner: String,
+    #[arg(long, value_enum, default_value_t = Planner::LazyGbfs)]
+    planner: Planner,
     /// The heuristic.
-    #[arg(long, default_value = "ff", value_parser = heuristics::NAMES)]
-    heuristic: String,
+    #[arg(long, default_value = "ff", value_parser = crate::input::choice::<HeuristicName>())]
+    heuristic: HeuristicName,
     /// Use the heuristic's preferred operators (GBFS).
     #[arg(long)]
     preferred: bool,
@@ -43,11 +45,24 @@ pub struct PlanArgs {
     decode: crate::phase2::DecodeArgs,
 }
 
-pub fn algorithm(name: &str) -> Algorithm {
-    match name {
-        "astar" => Algorithm::AStar,
-        "gbfs" => Algorithm::Gbfs,
-        _ => Algorithm::LazyGbfs,
+/// `plan --planner`: a classical search, or Phase II.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum Planner {
+    Astar,
+    Gbfs,
+    LazyGbfs,
+    Mcts,
+}
+
+impl Planner {
+    /// The classical search, `None` for `mcts`.
+    fn algorithm(self) -> Option<Algorithm> {
+        match self {
+            Planner::Astar => Some(Algorithm::AStar),
+            Planner::Gbfs => Some(Algorithm::Gbfs),
+            Planner::LazyGbfs => Some(Algorithm::LazyGbfs),
+            Planner::Mcts => None,
+        }
     }
 }
 
@@ -65,13 +80,13 @@ pub fn plan_text(model: &TransitionModel, plan: &[grounding::ActionId], cost: u6
 
 pub fn plan(args: PlanArgs) -> anyhow::Result<ExitCode> {
     let files = args.task.load()?;
-    if args.planner == "mcts" {
+    let Some(algorithm) = args.planner.algorithm() else {
         let limit = args.time_limit.unwrap_or(crate::phase2::DEFAULT_TIME_LIMIT);
         return crate::phase2::plan_one(&files, &args.lm, &args.decode, limit, args.out.as_deref(), args.json);
-    }
+    };
     let model = TransitionModel::new(input::ground(&files)?);
-    let mut heuristic = heuristics::by_name(&args.heuristic, &model).context("unknown heuristic")?;
-    let mut config = SearchConfig::new(algorithm(&args.planner));
+    let mut heuristic = args.heuristic.build(&model);
+    let mut config = SearchConfig::new(algorithm);
     config.preferred_operators = args.preferred;
     config.max_expansions = args.max_expansions;
     config.time_limit = args.time_limit.map(Duration::from_secs_f64);
@@ -96,7 +111,8 @@ pub fn plan(args: PlanArgs) -> anyhow::Result<ExitCode> {
         println!(
             "{}",
             json!({
-                "task": files.id, "planner": args.planner, "heuristic": args.heuristic, "preferred": args.preferred,
+                "task": files.id, "planner": args.planner.to_possible_value().map(|v| v.get_name().to_string()),
+                "heuristic": args.heuristic.name(), "preferred": args.preferred,
                 "solved": solved, "status": status, "cost": solved.then_some(result.cost), "length": solved.then_some(result.plan.len()),
                 "expanded": result.expanded, "evaluated": result.evaluated, "generated": result.generated, "millis": millis,
             })
@@ -124,9 +140,8 @@ pub fn heuristic(args: HeuristicArgs) -> anyhow::Result<ExitCode> {
     let model = TransitionModel::new(input::ground(&files)?);
     let state = model.initial_state();
     let mut values = serde_json::Map::new();
-    for name in heuristics::NAMES {
-        let mut heuristic = heuristics::by_name(name, &model).context("known heuristic")?;
-        values.insert(name.to_string(), json!(heuristic.evaluate(&state)));
+    for &name in <HeuristicName as strum::VariantArray>::VARIANTS {
+        values.insert(name.name().to_string(), json!(name.build(&model).evaluate(&state)));
     }
     if args.json {
         println!("{}", serde_json::Value::Object(values));

@@ -47,11 +47,12 @@ pub fn sha256_of(path: &Path) -> anyhow::Result<String> {
 
 /// Runs `work` with a Python that has pip and a scratch folder inside `dir` (created, and
 /// removed afterwards). When pip is missing (`hint` says what else the user can do) or `work`
-/// fails, prints why and gives exit status 2 (the registry or the input is at fault).
+/// fails, prints why and gives exit status 3 (a failure outside the input: the registry, pip,
+/// the network).
 pub fn with_pip<T>(dir: &Path, hint: &str, work: impl FnOnce(&str, &Path) -> anyhow::Result<T>) -> anyhow::Result<Result<T, ExitCode>> {
     let Some(python) = python_with_pip() else {
         eprintln!("error: pip is not available (`python3 -m pip` failed); {hint}");
-        return Ok(Err(ExitCode::from(2)));
+        return Ok(Err(ExitCode::from(3)));
     };
     std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
     let scratch = dir.join(format!(".download-{}", std::process::id()));
@@ -60,6 +61,6 @@ pub fn with_pip<T>(dir: &Path, hint: &str, work: impl FnOnce(&str, &Path) -> any
     std::fs::remove_dir_all(&scratch).ok();
     Ok(result.map_err(|error| {
         eprintln!("error: {error:#}");
-        ExitCode::from(2)
+        ExitCode::from(3)
     }))
 }

@@ -11,7 +11,21 @@
 use std::path::{Path, PathBuf};
 
 /// The benchmark sets in `fixtures/`.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
+#[derive(
+    Debug,
+    Clone,
+    Copy,
+    PartialEq,
+    Eq,
+    Hash,
+    PartialOrd,
+    Ord,
+    strum::EnumString,
+    strum::IntoStaticStr,
+    strum::VariantNames,
+    strum::VariantArray,
+)]
+#[strum(serialize_all = "kebab-case")]
 pub enum Benchmark {
     AlfworldSeen,
     AlfworldTrain,
@@ -20,19 +34,15 @@ pub enum Benchmark {
 }
 
 impl Benchmark {
-    pub const ALL: [Benchmark; 4] = [Benchmark::AlfworldSeen, Benchmark::AlfworldTrain, Benchmark::VirtualhomeEai, Benchmark::Ipc];
+    pub const ALL: &[Benchmark] = <Benchmark as strum::VariantArray>::VARIANTS;
 
+    /// The command-line name: `alfworld-seen`, `alfworld-train`, `virtualhome-eai`, `ipc`.
     pub fn name(self) -> &'static str {
-        match self {
-            Benchmark::AlfworldSeen => "alfworld-seen",
-            Benchmark::AlfworldTrain => "alfworld-train",
-            Benchmark::VirtualhomeEai => "virtualhome-eai",
-            Benchmark::Ipc => "ipc",
-        }
+        self.into()
     }
 
     pub fn from_name(name: &str) -> Option<Benchmark> {
-        Benchmark::ALL.into_iter().find(|b| b.name() == name)
+        name.parse().ok()
     }
 }
 

@@ -26,7 +26,7 @@ fn assert_well_formed(task: &Task, id: &str) {
 
 #[test]
 fn every_fixture_grounds() {
-    for benchmark in Benchmark::ALL {
+    for &benchmark in Benchmark::ALL {
         let mut facts = 0;
         let mut actions = 0;
         let mut unreachable_goals = Vec::new();

@@ -74,18 +74,41 @@ impl<H: Heuristic + ?Sized> Heuristic for Box<H> {
     }
 }
 
-/// The heuristics by command-line name.
-pub const NAMES: [&str; 6] = ["blind", "goalcount", "hmax", "hadd", "ff", "lmcut"];
+/// The heuristics by command-line name (`blind`, `goalcount`, `hmax`, `hadd`, `ff`,
+/// `lmcut`): the names are the variants' (`FromStr`, `Into<&str>`, [`strum::VariantNames`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, strum::EnumString, strum::IntoStaticStr, strum::VariantNames, strum::VariantArray)]
+#[strum(serialize_all = "lowercase")]
+pub enum HeuristicName {
+    Blind,
+    Goalcount,
+    Hmax,
+    Hadd,
+    Ff,
+    Lmcut,
+}
+
+impl HeuristicName {
+    pub fn name(self) -> &'static str {
+        self.into()
+    }
+
+    /// The heuristic on `model`.
+    pub fn build<'m>(self, model: &'m transition_model::TransitionModel) -> Box<dyn Heuristic + 'm> {
+        match self {
+            HeuristicName::Blind => Box::new(Blind::new(model)),
+            HeuristicName::Goalcount => Box::new(GoalCount::new(model)),
+            HeuristicName::Hmax => Box::new(HMax::new(model)),
+            HeuristicName::Hadd => Box::new(HAdd::new(model)),
+            HeuristicName::Ff => Box::new(HFF::new(model)),
+            HeuristicName::Lmcut => Box::new(LmCut::new(model)),
+        }
+    }
+}
+
+/// The heuristics' command-line names, in [`HeuristicName`]'s order.
+pub const NAMES: &[&str] = <HeuristicName as strum::VariantNames>::VARIANTS;
 
 /// A heuristic by its command-line name.
 pub fn by_name<'m>(name: &str, model: &'m transition_model::TransitionModel) -> Option<Box<dyn Heuristic + 'm>> {
-    Some(match name {
-        "blind" => Box::new(Blind::new(model)),
-        "goalcount" => Box::new(GoalCount::new(model)),
-        "hmax" => Box::new(HMax::new(model)),
-        "hadd" => Box::new(HAdd::new(model)),
-        "ff" => Box::new(HFF::new(model)),
-        "lmcut" => Box::new(LmCut::new(model)),
-        _ => return None,
-    })
+    name.parse::<HeuristicName>().ok().map(|h| h.build(model))
 }

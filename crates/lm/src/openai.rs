@@ -35,8 +35,10 @@ use crate::model::{LanguageModel, Logprobs, Prior, Usage};
 use crate::tokenizer::Tokenizer;
 use crate::vocabulary::TokenId;
 
-/// Which extensions of the completions API the server has.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+/// Which extensions of the completions API the server has (command-line names `vllm`,
+/// `generic`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, strum::EnumString, strum::IntoStaticStr, strum::VariantNames)]
+#[strum(serialize_all = "lowercase")]
 pub enum ServerDialect {
     /// vLLM: `allowed_token_ids` and `return_tokens_as_token_ids` are sent.
     Vllm,

@@ -31,35 +31,72 @@ pub struct Mode {
     pub strategy: Strategy,
 }
 
+/// The Phase II conditions by command-line name: the variants' names, kebab-case
+/// (`constrained-mcts`, ..., `sample` for unconstrained sampling).
+#[derive(
+    Debug,
+    Clone,
+    Copy,
+    PartialEq,
+    Eq,
+    Hash,
+    Serialize,
+    strum::Display,
+    strum::EnumString,
+    strum::IntoStaticStr,
+    strum::VariantNames,
+    strum::VariantArray,
+)]
+#[serde(rename_all = "kebab-case")]
+#[strum(serialize_all = "kebab-case")]
+pub enum ModeName {
+    ConstrainedMcts,
+    ConstrainedGreedy,
+    UnconstrainedMcts,
+    UnconstrainedGreedy,
+    Sample,
+    ConstrainedSample,
+}
+
+impl ModeName {
+    /// The mode, with default MCTS and sampling settings.
+    pub fn mode(self) -> Mode {
+        let (constrained, strategy) = match self {
+            ModeName::ConstrainedMcts => (true, Strategy::Mcts(MctsConfig::default())),
+            ModeName::ConstrainedGreedy => (true, Strategy::Greedy),
+            ModeName::UnconstrainedMcts => (false, Strategy::Mcts(MctsConfig::default())),
+            ModeName::UnconstrainedGreedy => (false, Strategy::Greedy),
+            ModeName::Sample => (false, Strategy::Sample(SamplingConfig::default())),
+            ModeName::ConstrainedSample => (true, Strategy::Sample(SamplingConfig::default())),
+        };
+        Mode { constrained, strategy }
+    }
+}
+
 impl Mode {
-    /// The command-line names.
-    pub const NAMES: [&'static str; 6] =
-        ["constrained-mcts", "constrained-greedy", "unconstrained-mcts", "unconstrained-greedy", "sample", "constrained-sample"];
+    /// The command-line names, in [`ModeName`]'s order.
+    pub const NAMES: &'static [&'static str] = <ModeName as strum::VariantNames>::VARIANTS;
 
     /// A mode by command-line name, with default MCTS and sampling settings.
     pub fn from_name(name: &str) -> Option<Mode> {
-        let (constrained, strategy) = match name {
-            "constrained-mcts" => (true, Strategy::Mcts(MctsConfig::default())),
-            "constrained-greedy" => (true, Strategy::Greedy),
-            "unconstrained-mcts" => (false, Strategy::Mcts(MctsConfig::default())),
-            "unconstrained-greedy" => (false, Strategy::Greedy),
-            "sample" => (false, Strategy::Sample(SamplingConfig::default())),
-            "constrained-sample" => (true, Strategy::Sample(SamplingConfig::default())),
-            _ => return None,
-        };
-        Some(Mode { constrained, strategy })
+        name.parse::<ModeName>().ok().map(ModeName::mode)
+    }
+
+    /// Which condition this is.
+    pub fn kind(&self) -> ModeName {
+        match (self.constrained, &self.strategy) {
+            (true, Strategy::Mcts(_)) => ModeName::ConstrainedMcts,
+            (true, Strategy::Greedy) => ModeName::ConstrainedGreedy,
+            (false, Strategy::Mcts(_)) => ModeName::UnconstrainedMcts,
+            (false, Strategy::Greedy) => ModeName::UnconstrainedGreedy,
+            (false, Strategy::Sample(_)) => ModeName::Sample,
+            (true, Strategy::Sample(_)) => ModeName::ConstrainedSample,
+        }
     }
 
     /// The command-line name.
     pub fn name(&self) -> &'static str {
-        match (self.constrained, &self.strategy) {
-            (true, Strategy::Mcts(_)) => "constrained-mcts",
-            (true, Strategy::Greedy) => "constrained-greedy",
-            (false, Strategy::Mcts(_)) => "unconstrained-mcts",
-            (false, Strategy::Greedy) => "unconstrained-greedy",
-            (false, Strategy::Sample(_)) => "sample",
-            (true, Strategy::Sample(_)) => "constrained-sample",
-        }
+        self.kind().into()
     }
 }
 
@@ -85,8 +122,9 @@ impl Default for Budget {
 }
 
 /// Which token sequences spell an action under the constraint.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, strum::EnumString, strum::IntoStaticStr, strum::VariantNames)]
 #[serde(rename_all = "kebab-case")]
+#[strum(serialize_all = "kebab-case")]
 pub enum Tokenization {
     /// The tokenizer's own encoding of each action's line (paper Eq. 5): one token path per
     /// action. See [`crate::canonical`].
@@ -199,6 +237,8 @@ pub enum DecodeError {
     VocabularyMismatch { model: usize, constraint: usize },
     #[error("the prompt is empty")]
     EmptyPrompt,
+    #[error("bad setting: {0}")]
+    Config(String),
 }
 
 /// The search's settings (paper Appendix A.4).
@@ -232,8 +272,9 @@ pub struct MctsConfig {
 }
 
 /// The range `Q` is min-max normalised over, so that it and the prior term are on one scale.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, strum::EnumString, strum::IntoStaticStr, strum::VariantNames)]
 #[serde(rename_all = "kebab-case")]
+#[strum(serialize_all = "kebab-case")]
 pub enum Normalization {
     /// Every value the tree has backed up (MuZero).
     Tree,
@@ -243,14 +284,37 @@ pub enum Normalization {
 }
 
 /// The statistic a node keeps of the values backed up through it.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, strum::EnumString, strum::IntoStaticStr, strum::VariantNames)]
 #[serde(rename_all = "kebab-case")]
+#[strum(serialize_all = "kebab-case")]
 pub enum Backup {
     /// The mean (Monte-Carlo backup, as AlphaZero).
     Mean,
     /// The best value seen below the node (a Bellman backup for a deterministic model: the
     /// value of a prefix is the value of its best continuation found so far).
     Max,
+}
+
+impl MctsConfig {
+    /// Checks the settings PUCB needs to give finite scores: `exploration` finite and at
+    /// least 0, `base` finite and above 0 (at 0 the coefficient is infinite and every score
+    /// NaN), `prior_mix` in `[0, 1]`, `width` at least 1.
+    pub fn check(&self) -> Result<(), DecodeError> {
+        let bad = |what: String| Err(DecodeError::Config(what));
+        if !(self.exploration.is_finite() && self.exploration >= 0.0) {
+            return bad(format!("exploration {} is not a finite number at least 0", self.exploration));
+        }
+        if !(self.base.is_finite() && self.base > 0.0) {
+            return bad(format!("base {} is not a finite number above 0", self.base));
+        }
+        if !(0.0..=1.0).contains(&self.prior_mix) {
+            return bad(format!("prior mix {} is not in [0, 1]", self.prior_mix));
+        }
+        if self.width == 0 {
+            return bad("width 0 keeps no child".into());
+        }
+        Ok(())
+    }
 }
 
 impl Default for MctsConfig {

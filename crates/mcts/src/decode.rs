@@ -92,6 +92,9 @@ impl<'m> Decoder<'m> {
         if prompt.is_empty() {
             return Err(DecodeError::EmptyPrompt);
         }
+        if let Strategy::Mcts(mcts) = &config.mode.strategy {
+            mcts.check()?;
+        }
         let started = Instant::now();
         let usage_before = lm.usage();
         let (evaluations_before, lookups_before) = self.stepper.evaluator.counts();

@@ -135,7 +135,7 @@ fn every_mode_runs_and_constrained_modes_stay_valid() {
     let mut lm = tiny_model(&dir);
     let Setup { model, spelling, vocab, prompt } = setup(&lm, ROADS_DOMAIN, ROADS_PROBLEM);
     let mut decoder = Decoder::new(&model, &spelling, vocab, ValueConfig::default());
-    for name in Mode::NAMES {
+    for &name in Mode::NAMES {
         let mut config = DecodeConfig::new(mode(name));
         config.budget.simulations = Some(200);
         config.budget.max_tokens = 64;

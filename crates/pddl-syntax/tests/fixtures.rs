@@ -6,7 +6,7 @@ use pddl_syntax::{check, parse_domain, parse_problem};
 #[test]
 fn every_fixture_parses_checks_and_round_trips() {
     let mut count = 0;
-    for benchmark in Benchmark::ALL {
+    for &benchmark in Benchmark::ALL {
         let tasks = load(benchmark).expect("fixtures load");
         assert!(!tasks.is_empty(), "{benchmark:?} has tasks");
         for task in tasks {

@@ -13,8 +13,9 @@ use crate::mask::TokenMask;
 use crate::vocab::Vocabulary;
 use crate::{ChoiceId, TokenId};
 
-/// When the plan may end.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+/// When the plan may end (command-line names `anywhere`, `at-goal`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, strum::Display, strum::EnumString, strum::IntoStaticStr, strum::VariantNames)]
+#[strum(serialize_all = "kebab-case")]
 pub enum EndPolicy {
     /// At every action boundary: the decoder may stop anywhere and the plan is judged by
     /// validation afterwards.

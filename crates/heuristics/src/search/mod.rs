@@ -22,9 +22,11 @@ use transition_model::{State, TransitionModel};
 use crate::Heuristic;
 pub use registry::{StateId, StateRegistry, relevant_facts};
 
-/// Which search.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+/// Which search (command-line names `astar`, `gbfs`, `lazy-gbfs`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, strum::EnumString, strum::IntoStaticStr, strum::VariantNames, strum::VariantArray)]
+#[strum(serialize_all = "kebab-case")]
 pub enum Algorithm {
+    #[strum(serialize = "astar")]
     AStar,
     /// Eager greedy best-first search: successors are evaluated when generated.
     Gbfs,

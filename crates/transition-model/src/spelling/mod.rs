@@ -20,8 +20,11 @@ pub use names::{ObjectNames, natural_order};
 use grounding::{ActionId, Task};
 use rustc_hash::FxHashMap;
 
-/// Which surface language a [`Spelling`] writes.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+/// Which surface language a [`Spelling`] writes (command-line names `pddl`, `alfworld`,
+/// `virtualhome`: the variants', through `FromStr`, `Into<&str>` and
+/// [`strum::VariantNames`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, strum::EnumString, strum::IntoStaticStr, strum::VariantNames, strum::VariantArray)]
+#[strum(serialize_all = "lowercase")]
 pub enum SurfaceLanguage {
     Pddl,
     Alfworld,
@@ -30,15 +33,11 @@ pub enum SurfaceLanguage {
 
 impl SurfaceLanguage {
     pub fn name(self) -> &'static str {
-        match self {
-            SurfaceLanguage::Pddl => "pddl",
-            SurfaceLanguage::Alfworld => "alfworld",
-            SurfaceLanguage::Virtualhome => "virtualhome",
-        }
+        self.into()
     }
 
     pub fn from_name(name: &str) -> Option<SurfaceLanguage> {
-        [SurfaceLanguage::Pddl, SurfaceLanguage::Alfworld, SurfaceLanguage::Virtualhome].into_iter().find(|l| l.name() == name)
+        name.parse().ok()
     }
 }
 
