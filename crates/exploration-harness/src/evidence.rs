@@ -229,7 +229,7 @@ mod tests {
     use super::*;
 
     proptest::proptest! {
-        #![proptest_config(proptest::prelude::ProptestConfig { rng_seed: proptest::test_runner::RngSeed::Fixed(3), failure_persistence: None, ..proptest::prelude::ProptestConfig::default() })]
+        #![proptest_config(proptest::prelude::ProptestConfig { rng_seed: proptest::test_runner::RngSeed::Fixed(3), failure_persistence: Some(Box::new(proptest::test_runner::FileFailurePersistence::WithSource("proptest-regressions"))), ..proptest::prelude::ProptestConfig::default() })]
         /// Facts read back as written (names with spaces and parentheses included).
         #[test]
         fn facts_read_back_as_written(predicate in "[A-Za-z_]{1,12}", args in proptest::collection::vec("[a-z_]{1,8}( [0-9]{1,3}| \\([0-9]{1,4}\\))?", 0..3), holds: bool) {
