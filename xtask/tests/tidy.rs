@@ -194,3 +194,35 @@ fn dependencies_are_declared_once_and_crates_build_alone() {
     assert_eq!(data.matches("env!(\"CARGO_MANIFEST_DIR\")").count(), 1, "benchmark-data: only Fixtures::checkout may use the build path");
     assert!(data.contains("pub fn at(root: impl Into<PathBuf>) -> Fixtures"));
 }
+
+/// Property tests are reproducible and remember their failures: every `proptest!` block
+/// fixes its seed and keeps regressions beside its source (committed when one is found).
+#[test]
+fn property_tests_are_seeded_and_keep_their_regressions() {
+    let mut files = Vec::new();
+    for dir in crates() {
+        rust_files(&dir, &mut files);
+    }
+    let mut blocks = 0;
+    for file in files {
+        let text = std::fs::read_to_string(&file).expect("readable");
+        if file.ends_with("tidy.rs") {
+            continue;
+        }
+        let count = text.matches(concat!("proptest", "! {")).count();
+        if count == 0 {
+            continue;
+        }
+        blocks += count;
+        // Each block sets its config; the file fixes the seed and keeps regressions (inline,
+        // or in a helper the blocks call).
+        assert_eq!(text.matches("#![proptest_config(").count(), count, "{}: a proptest! block without its config", file.display());
+        assert!(text.contains("RngSeed::Fixed("), "{}: property tests without a fixed rng_seed", file.display());
+        assert!(
+            text.contains("FileFailurePersistence::WithSource(\"proptest-regressions\")"),
+            "{}: property tests that do not keep their regressions",
+            file.display()
+        );
+    }
+    assert!(blocks >= 10, "{blocks} proptest! blocks found");
+}
