@@ -1,6 +1,9 @@
 //! The evaluation harness: batch runs of the agent and its baselines over the benchmarks, and
-//! the statistics the paper reports about them (Appendix B). Only the statistics exist yet.
+//! the statistics the paper reports about them (Appendix B).
 //!
+//! - [`records`]: per-task JSON-line records in a file named by the run's configuration,
+//!   appended whole (a killed run resumes to exactly what an uninterrupted run writes),
+//!   sharded and merged.
 //! - [`stats`]: mean and sample standard deviation over repeated runs (Table 7's
 //!   "accuracy ± sd"), the 95% percentile task-cluster bootstrap interval (Table 7's intervals),
 //!   the exact two-sided McNemar test on paired task outcomes and Holm's step-down correction
@@ -19,4 +22,5 @@
 //! # Ok::<(), eval_harness::stats::StatsError>(())
 //! ```
 
+pub mod records;
 pub mod stats;

@@ -1,0 +1,268 @@
+//! Records are data: one JSON line per finished task, in a file named by the run's
+//! configuration, appended so that a killed run loses no finished task and resumes to
+//! exactly what an uninterrupted run writes.
+//!
+//! - **Named by the configuration.** A run's configuration (any `Serialize` value: agent,
+//!   model, every setting, seed, benchmark, subset) is written canonically (keys sorted) and
+//!   hashed ([`config_hash`], the first 12 hex digits of its sha256). Records go to
+//!   `<stem>-<hash>.jsonl`, the configuration beside them in `<stem>-<hash>.config.json`, and
+//!   every record carries the hash in its `config` field. Runs that differ in any setting never
+//!   share a file; a file whose configuration differs from the run's is refused
+//!   ([`RecordError::ConfigMismatch`]).
+//! - **Whole or absent.** [`RecordFile::append`] writes a record and its newline in one
+//!   `write` on a file opened for appending, then `sync_data`: after a crash or `kill -9` the
+//!   file ends with whole records, or with one record cut short — which [`RecordFile::open`]
+//!   cuts off (its task runs again). A complete line that is not a record of this
+//!   configuration is never dropped silently: it is an error naming `file:line`.
+//! - **Resume.** [`RecordFile::done`] lists the tasks already recorded; a run skips them. Each
+//!   record carries its task's `index` in the run's task list, so shards and resumed runs can
+//!   be put back in order.
+//! - **Shards.** `--shard i/n` ([`Shard`]) runs the tasks whose index is `i-1` modulo `n`, into
+//!   `<stem>-<hash>.shard-i-of-n.jsonl` (the configuration, and so the hash, is the same for
+//!   every shard). [`merge`] joins shard files of one configuration into the file an unsharded
+//!   run writes, in index order, and refuses mixed configurations and repeated tasks.
+
+use std::collections::BTreeSet;
+use std::fs::{File, OpenOptions};
+use std::io::{Read, Seek, SeekFrom, Write};
+use std::path::{Path, PathBuf};
+
+use serde::Serialize;
+use serde_json::{Map, Value};
+
+/// Why records cannot be read or written.
+#[derive(Debug, thiserror::Error)]
+pub enum RecordError {
+    #[error("{path}: {source}")]
+    Io { path: PathBuf, source: std::io::Error },
+    #[error("{path}:{line}: {message}")]
+    Bad { path: PathBuf, line: usize, message: String },
+    #[error(
+        "{path}: these records were made with another configuration ({found}) than this run's ({expected}); \
+         use another --out folder, or delete the file to start over"
+    )]
+    ConfigMismatch { path: PathBuf, expected: String, found: String },
+    #[error("{0}")]
+    Merge(String),
+    #[error("a record must be a JSON object with a string `task`: {0}")]
+    NotARecord(String),
+}
+
+fn io(path: &Path) -> impl FnOnce(std::io::Error) -> RecordError + '_ {
+    move |source| RecordError::Io { path: path.to_path_buf(), source }
+}
+
+/// `value` as canonical JSON: object keys sorted (serde_json's map is ordered), no spaces.
+pub fn canonical_json(value: &impl Serialize) -> String {
+    let value = serde_json::to_value(value).unwrap_or(Value::Null);
+    value.to_string()
+}
+
+/// The first 12 hex digits of the sha256 of [`canonical_json`]`(config)`.
+pub fn config_hash(config: &impl Serialize) -> String {
+    use sha2::{Digest, Sha256};
+    Sha256::digest(canonical_json(config).as_bytes()).iter().take(6).map(|b| format!("{b:02x}")).collect()
+}
+
+/// One of `count` shards (1-based `index`): the tasks whose position is `index - 1` modulo
+/// `count`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Shard {
+    pub index: usize,
+    pub count: usize,
+}
+
+impl Shard {
+    /// Whether the task at `position` (0-based, in the run's task list) is this shard's.
+    pub fn selects(&self, position: usize) -> bool {
+        position % self.count == self.index - 1
+    }
+
+    fn suffix(&self) -> String {
+        format!(".shard-{}-of-{}", self.index, self.count)
+    }
+}
+
+impl std::str::FromStr for Shard {
+    type Err = String;
+
+    /// `i/n` with `1 <= i <= n`.
+    fn from_str(text: &str) -> Result<Shard, String> {
+        let bad = || format!("`{text}`: give the shard as i/n with 1 <= i <= n");
+        let (i, n) = text.split_once('/').ok_or_else(bad)?;
+        let (index, count) = (i.trim().parse::<usize>().map_err(|_| bad())?, n.trim().parse::<usize>().map_err(|_| bad())?);
+        if index == 0 || count == 0 || index > count {
+            return Err(bad());
+        }
+        Ok(Shard { index, count })
+    }
+}
+
+/// The records of one configuration (and shard), open for appending.
+#[derive(Debug)]
+pub struct RecordFile {
+    path: PathBuf,
+    hash: String,
+    records: Vec<Map<String, Value>>,
+    done: BTreeSet<String>,
+    file: File,
+}
+
+impl RecordFile {
+    /// Opens (creating) `<dir>/<stem>-<hash>[.shard-i-of-n].jsonl` for `config`: checks or
+    /// writes the configuration file beside it, cuts off a last record cut short, and reads
+    /// the records already there. `fresh` deletes earlier records of this configuration first.
+    pub fn open(dir: &Path, stem: &str, config: &impl Serialize, shard: Option<Shard>, fresh: bool) -> Result<RecordFile, RecordError> {
+        std::fs::create_dir_all(dir).map_err(io(dir))?;
+        let hash = config_hash(config);
+        let name = format!("{stem}-{hash}");
+        let config_path = dir.join(format!("{name}.config.json"));
+        let config_text = serde_json::to_string_pretty(&serde_json::to_value(config).unwrap_or(Value::Null)).unwrap_or_default() + "\n";
+        match std::fs::read_to_string(&config_path) {
+            Ok(existing) if existing != config_text => {
+                let found = serde_json::from_str::<Value>(&existing).map(|v| config_hash(&v)).unwrap_or_else(|_| "unreadable".into());
+                return Err(RecordError::ConfigMismatch { path: config_path, expected: hash, found });
+            }
+            Ok(_) => {}
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound => std::fs::write(&config_path, &config_text).map_err(io(&config_path))?,
+            Err(e) => return Err(io(&config_path)(e)),
+        }
+        let path = dir.join(format!("{name}{}.jsonl", shard.map(|s| s.suffix()).unwrap_or_default()));
+        if fresh && path.exists() {
+            std::fs::remove_file(&path).map_err(io(&path))?;
+        }
+        let mut file = OpenOptions::new().create(true).read(true).append(true).open(&path).map_err(io(&path))?;
+        let mut text = String::new();
+        file.read_to_string(&mut text).map_err(io(&path))?;
+        // A last line without its newline is a record cut short by a crash: cut it off.
+        let whole = text.rfind('\n').map_or(0, |i| i + 1);
+        if whole < text.len() {
+            file.set_len(whole as u64).map_err(io(&path))?;
+            file.seek(SeekFrom::End(0)).map_err(io(&path))?;
+            eprintln!("{}: cut off a record cut short (a killed run); its task runs again", path.display());
+        }
+        let records = parse_records(&path, &text[..whole], Some(&hash))?;
+        let done = records.iter().filter_map(|r| r.get("task").and_then(Value::as_str).map(str::to_string)).collect();
+        Ok(RecordFile { path, hash, records, done, file })
+    }
+
+    pub fn path(&self) -> &Path {
+        &self.path
+    }
+
+    /// The configuration's hash, stored in every record.
+    pub fn hash(&self) -> &str {
+        &self.hash
+    }
+
+    /// The tasks recorded so far.
+    pub fn done(&self) -> &BTreeSet<String> {
+        &self.done
+    }
+
+    /// Every record, in the file's order.
+    pub fn records(&self) -> &[Map<String, Value>] {
+        &self.records
+    }
+
+    /// Appends `record` (a JSON object with a string `task`), adding `index` (the task's
+    /// position in the run's task list) and `config` (the hash), in one write, synced.
+    pub fn append(&mut self, index: usize, record: &impl Serialize) -> Result<(), RecordError> {
+        let Value::Object(mut object) = serde_json::to_value(record).map_err(|e| RecordError::NotARecord(e.to_string()))? else {
+            return Err(RecordError::NotARecord("not an object".into()));
+        };
+        let task = object.get("task").and_then(Value::as_str).ok_or_else(|| RecordError::NotARecord("no `task`".into()))?.to_string();
+        object.insert("index".into(), Value::from(index));
+        object.insert("config".into(), Value::from(self.hash.clone()));
+        let mut line = Value::Object(object.clone()).to_string();
+        line.push('\n');
+        self.file.write_all(line.as_bytes()).map_err(io(&self.path))?;
+        self.file.sync_data().map_err(io(&self.path))?;
+        self.done.insert(task);
+        self.records.push(object);
+        Ok(())
+    }
+}
+
+/// The records of a JSONL file: every non-empty line an object with a `task`, and, with
+/// `hash`, that configuration.
+fn parse_records(path: &Path, text: &str, hash: Option<&str>) -> Result<Vec<Map<String, Value>>, RecordError> {
+    let mut records = Vec::new();
+    let mut seen = BTreeSet::new();
+    for (number, line) in text.lines().enumerate() {
+        if line.trim().is_empty() {
+            continue;
+        }
+        let bad = |message: String| RecordError::Bad { path: path.to_path_buf(), line: number + 1, message };
+        let record: Map<String, Value> = serde_json::from_str(line).map_err(|e| bad(format!("not a JSON object: {e}")))?;
+        let task = record.get("task").and_then(Value::as_str).ok_or_else(|| bad("no `task` field".into()))?;
+        if let Some(hash) = hash {
+            let found = record.get("config").and_then(Value::as_str).unwrap_or("none");
+            if found != hash {
+                return Err(bad(format!("a record of configuration {found}, in the file of {hash}")));
+            }
+        }
+        if !seen.insert(task.to_string()) {
+            return Err(bad(format!("task {task} is recorded twice")));
+        }
+        records.push(record);
+    }
+    Ok(records)
+}
+
+/// What [`merge`] wrote.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Merged {
+    pub path: PathBuf,
+    pub records: usize,
+    pub config: String,
+}
+
+/// Joins shard files (`<stem>-<hash>.shard-i-of-n.jsonl`) of one configuration into
+/// `<stem>-<hash>.jsonl` beside them, records in `index` order. Refused: files of different
+/// configurations, a task in two files, a target file that already holds records.
+pub fn merge(shards: &[PathBuf]) -> Result<Merged, RecordError> {
+    let first = shards.first().ok_or_else(|| RecordError::Merge("no shard files given".into()))?;
+    let name = first.file_name().and_then(|n| n.to_str()).unwrap_or_default();
+    let base = name.split(".shard-").next().unwrap_or(name).trim_end_matches(".jsonl");
+    let mut all: Vec<Map<String, Value>> = Vec::new();
+    let mut config: Option<String> = None;
+    for path in shards {
+        let text = std::fs::read_to_string(path).map_err(io(path))?;
+        if !text.is_empty() && !text.ends_with('\n') {
+            return Err(RecordError::Merge(format!("{}: its last record is cut short; resume that shard first", path.display())));
+        }
+        for record in parse_records(path, &text, None)? {
+            let hash = record.get("config").and_then(Value::as_str).unwrap_or("none").to_string();
+            match &config {
+                None => config = Some(hash),
+                Some(expected) if *expected != hash => {
+                    return Err(RecordError::Merge(format!(
+                        "{}: records of configuration {hash}, others of {expected}: shards of different runs do not merge",
+                        path.display()
+                    )));
+                }
+                Some(_) => {}
+            }
+            all.push(record);
+        }
+    }
+    let config = config.ok_or_else(|| RecordError::Merge("the shard files hold no records".into()))?;
+    let mut seen = BTreeSet::new();
+    for record in &all {
+        let task = record.get("task").and_then(Value::as_str).unwrap_or_default();
+        if !seen.insert(task.to_string()) {
+            return Err(RecordError::Merge(format!("task {task} is in two shard files")));
+        }
+    }
+    all.sort_by_key(|r| r.get("index").and_then(Value::as_u64).unwrap_or(u64::MAX));
+    let target = first.with_file_name(format!("{base}.jsonl"));
+    if std::fs::metadata(&target).is_ok_and(|m| m.len() > 0) {
+        return Err(RecordError::Merge(format!("{}: already holds records; move it away to merge into it", target.display())));
+    }
+    let text: String = all.iter().map(|r| Value::Object(r.clone()).to_string() + "\n").collect();
+    let partial = target.with_extension("jsonl.partial");
+    std::fs::write(&partial, text).map_err(io(&partial))?;
+    std::fs::rename(&partial, &target).map_err(io(&target))?;
+    Ok(Merged { path: target, records: all.len(), config })
+}

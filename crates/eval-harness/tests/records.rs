@@ -1,0 +1,123 @@
+//! Records: named by their configuration, resumed, cut back to whole records after a crash,
+//! never mixed, sharded and merged back to what one run writes.
+
+use std::path::PathBuf;
+
+use eval_harness::records::{RecordError, RecordFile, Shard, config_hash, merge};
+use serde_json::{Value, json};
+
+fn scratch(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("eval-records-{name}-{}", std::process::id()));
+    std::fs::remove_dir_all(&dir).ok();
+    dir
+}
+
+fn tasks(file: &RecordFile) -> Vec<String> {
+    file.records().iter().map(|r| r["task"].as_str().unwrap_or_default().to_string()).collect()
+}
+
+#[test]
+fn records_resume_and_carry_their_configuration() {
+    let dir = scratch("resume");
+    let config = json!({"agent": "expert", "benchmark": "alfworld-seen", "seed": 0});
+    let mut file = RecordFile::open(&dir, "alfworld-seen-expert", &config, None, false).expect("opens");
+    assert!(file.path().ends_with(format!("alfworld-seen-expert-{}.jsonl", config_hash(&config))));
+    file.append(0, &json!({"task": "a", "success": true})).expect("appends");
+    file.append(1, &json!({"task": "b", "success": false})).expect("appends");
+    drop(file);
+    let reopened = RecordFile::open(&dir, "alfworld-seen-expert", &config, None, false).expect("reopens");
+    assert_eq!(tasks(&reopened), ["a", "b"]);
+    assert!(reopened.done().contains("b"));
+    assert_eq!(reopened.records()[1]["index"], 1);
+    assert_eq!(reopened.records()[1]["config"], Value::from(config_hash(&config)));
+    // Keys are sorted before hashing: the same configuration written in another order is the same run.
+    let reordered: Value = serde_json::from_str(r#"{"seed": 0, "benchmark": "alfworld-seen", "agent": "expert"}"#).expect("json");
+    assert_eq!(config_hash(&reordered), config_hash(&config));
+    // Another setting is another file.
+    let other = json!({"agent": "expert", "benchmark": "alfworld-seen", "seed": 42});
+    assert_ne!(config_hash(&other), config_hash(&config));
+    assert!(RecordFile::open(&dir, "alfworld-seen-expert", &other, None, false).expect("opens").records().is_empty());
+    // --fresh starts this configuration over.
+    assert!(RecordFile::open(&dir, "alfworld-seen-expert", &config, None, true).expect("opens").records().is_empty());
+}
+
+#[test]
+fn a_record_cut_short_is_cut_off_and_its_task_runs_again() {
+    let dir = scratch("torn");
+    let config = json!({"agent": "expert"});
+    let mut file = RecordFile::open(&dir, "run", &config, None, false).expect("opens");
+    file.append(0, &json!({"task": "a"})).expect("appends");
+    let path = file.path().to_path_buf();
+    drop(file);
+    // A crash in the middle of the second record.
+    let mut text = std::fs::read_to_string(&path).expect("reads");
+    text.push_str(r#"{"task":"b","succ"#);
+    std::fs::write(&path, &text).expect("writes");
+    let mut file = RecordFile::open(&dir, "run", &config, None, false).expect("recovers");
+    assert_eq!(tasks(&file), ["a"]);
+    file.append(1, &json!({"task": "b"})).expect("appends");
+    let lines: Vec<Value> =
+        std::fs::read_to_string(&path).expect("reads").lines().map(|l| serde_json::from_str(l).expect("whole records")).collect();
+    assert_eq!(lines.len(), 2);
+}
+
+#[test]
+fn damage_other_than_a_cut_is_an_error_naming_the_line() {
+    let dir = scratch("damage");
+    let config = json!({"agent": "expert"});
+    let path = RecordFile::open(&dir, "run", &config, None, false).expect("opens").path().to_path_buf();
+    let hash = config_hash(&config);
+    std::fs::write(&path, format!("{{\"task\":\"a\",\"config\":\"{hash}\"}}\nnot json\n")).expect("writes");
+    let error = RecordFile::open(&dir, "run", &config, None, false).expect_err("damaged");
+    assert!(matches!(error, RecordError::Bad { line: 2, .. }), "{error}");
+    std::fs::write(&path, "{\"task\":\"a\",\"config\":\"0123456789ab\"}\n").expect("writes");
+    let error = RecordFile::open(&dir, "run", &config, None, false).expect_err("another configuration's record");
+    assert!(error.to_string().contains(":1:"), "{error}");
+    std::fs::write(&path, format!("{{\"task\":\"a\",\"config\":\"{hash}\"}}\n{{\"task\":\"a\",\"config\":\"{hash}\"}}\n")).expect("writes");
+    assert!(RecordFile::open(&dir, "run", &config, None, false).expect_err("twice").to_string().contains("twice"));
+    // An edited configuration file is refused rather than silently resumed.
+    std::fs::write(&path, "").expect("writes");
+    std::fs::write(dir.join(format!("run-{hash}.config.json")), "{\"agent\": \"direct\"}\n").expect("writes");
+    assert!(matches!(RecordFile::open(&dir, "run", &config, None, false), Err(RecordError::ConfigMismatch { .. })));
+}
+
+#[test]
+fn shards_merge_into_what_one_run_writes() {
+    let dir = scratch("shards");
+    let config = json!({"agent": "expert", "benchmark": "ipc"});
+    let names = ["t0", "t1", "t2", "t3", "t4", "t5", "t6"];
+    let mut whole = RecordFile::open(&dir.join("whole"), "run", &config, None, false).expect("opens");
+    for (i, name) in names.iter().enumerate() {
+        whole.append(i, &json!({"task": name, "steps": i})).expect("appends");
+    }
+    let mut shard_paths = Vec::new();
+    for index in 1..=3 {
+        let shard = Shard { index, count: 3 };
+        let mut file = RecordFile::open(&dir.join("sharded"), "run", &config, Some(shard), false).expect("opens");
+        for (i, name) in names.iter().enumerate().filter(|(i, _)| shard.selects(*i)) {
+            file.append(i, &json!({"task": name, "steps": i})).expect("appends");
+        }
+        shard_paths.push(file.path().to_path_buf());
+    }
+    let merged = merge(&shard_paths).expect("merges");
+    assert_eq!(merged.records, names.len());
+    assert_eq!(std::fs::read_to_string(&merged.path).expect("reads"), std::fs::read_to_string(whole.path()).expect("reads"));
+    assert!(merge(&shard_paths).is_err(), "merging again over the result is refused");
+    // Shards of another configuration do not merge.
+    let other = RecordFile::open(&dir.join("sharded"), "run", &json!({"agent": "planner"}), Some(Shard { index: 1, count: 2 }), false);
+    let mut other = other.expect("opens");
+    other.append(0, &json!({"task": "x"})).expect("appends");
+    std::fs::remove_file(&merged.path).expect("removes");
+    let error = merge(&[shard_paths[0].clone(), other.path().to_path_buf()]).expect_err("mixed");
+    assert!(error.to_string().contains("different runs"), "{error}");
+}
+
+#[test]
+fn shards_are_given_as_i_of_n() {
+    assert_eq!("2/5".parse::<Shard>(), Ok(Shard { index: 2, count: 5 }));
+    for bad in ["0/3", "4/3", "1/0", "a/b", "3", ""] {
+        assert!(bad.parse::<Shard>().is_err(), "{bad}");
+    }
+    let shard = Shard { index: 2, count: 3 };
+    assert_eq!((0..9).filter(|&i| shard.selects(i)).collect::<Vec<_>>(), [1, 4, 7]);
+}
