@@ -1,39 +1,124 @@
-//! `cargo xtask eval`: runs an agent on benchmark tasks, one JSONL record per task, and a
-//! summary per benchmark.
+//! `cargo xtask eval`: runs an agent on benchmark tasks, one JSON-line record per task, and a
+//! summary per benchmark; `cargo xtask merge` joins the records of `--shard` runs.
 //!
-//! Agents so far: `expert`, which executes the benchmark's own expert plan (ALFWorld's
-//! walkthrough as TextWorld commands, EAI's gold PDDL plan) through the project's symbolic
-//! pipeline: parse, ground, spell, validate. It is the oracle row of the paper's tables and
-//! checks the whole symbolic core on every task. Records are appended and flushed as each
-//! task finishes, so a killed run loses nothing; a rerun skips the tasks already recorded
-//! (`--fresh` starts over).
+//! Agents:
+//! - `expert` (the default): the benchmark's own expert plan (ALFWorld's walkthrough as
+//!   TextWorld commands, EAI's gold PDDL plan) through the symbolic pipeline: parse, ground,
+//!   spell, validate. The oracle row of the paper's tables; it checks the symbolic core on
+//!   every task.
+//! - `ours`: the paper's agent in the environment (Phase I with `--explorer`, the hand-over,
+//!   Phase II with `--lm` and every decoding option, open-loop execution), judged by the
+//!   environment; records carry the episode, the terminal mechanism and the failure response.
+//! - `planner`: the same Phase I, then A* with LM-cut on the grounded problem (the symbolic
+//!   control).
+//!
+//! Records go to `<out>/<benchmark>-<agent>-<hash>.jsonl`, named by the run's configuration
+//! ([`eval_harness::records`]): a rerun resumes, a killed run loses no finished task, another
+//! configuration never shares a file.
 
-use std::collections::BTreeSet;
-use std::io::{BufRead, Write};
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use std::time::Instant;
 
-use anyhow::Context;
 use benchmark_data::{Benchmark, Extra, TaskFiles};
-use serde::{Deserialize, Serialize};
+use eval_harness::behaviour::{failure_response, terminal};
+use eval_harness::records::{RecordFile, Shard};
+use exploration_harness::EpisodeConfig;
+use serde::Serialize;
+use serde_json::{Value, json};
 use transition_model::{Spelling, TransitionModel};
+
+use crate::agent::{PhaseTwoRunner, alfworld, episode, explorer, virtualhome};
+use crate::input::InputError;
+use crate::phase2::{DecodeArgs, LmArgs};
+
+/// Who acts.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum, Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum AgentName {
+    Expert,
+    Ours,
+    Planner,
+}
+
+/// What an agent is evaluated on.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "kebab-case")]
+enum Suite {
+    AlfworldSeen,
+    AlfworldTrain,
+    VirtualhomeEai,
+    VirtualhomeRearrange,
+}
+
+impl Suite {
+    const ALL: [Suite; 4] = [Suite::AlfworldSeen, Suite::AlfworldTrain, Suite::VirtualhomeEai, Suite::VirtualhomeRearrange];
+
+    fn name(self) -> &'static str {
+        match self {
+            Suite::AlfworldSeen => "alfworld-seen",
+            Suite::AlfworldTrain => "alfworld-train",
+            Suite::VirtualhomeEai => "virtualhome-eai",
+            Suite::VirtualhomeRearrange => "virtualhome-rearrange",
+        }
+    }
+
+    /// The suites an agent runs on by default (`--benchmark all`).
+    fn defaults(agent: AgentName) -> Vec<Suite> {
+        match agent {
+            // The expert plans are the benchmarks' own: the rearrangement set's reference
+            // programs are checked by `cargo xtask rearrange` and its tests instead.
+            AgentName::Expert => vec![Suite::AlfworldSeen, Suite::AlfworldTrain, Suite::VirtualhomeEai],
+            AgentName::Ours | AgentName::Planner => vec![Suite::AlfworldSeen, Suite::VirtualhomeRearrange],
+        }
+    }
+}
 
 #[derive(Debug, clap::Args)]
 pub struct EvalArgs {
-    /// Benchmarks to run: alfworld-seen, alfworld-train, virtualhome-eai, or all.
+    /// Benchmarks: alfworld-seen, alfworld-train, virtualhome-eai, virtualhome-rearrange
+    /// (comma-separated), or all [expert: the first three; ours, planner: alfworld-seen and
+    /// virtualhome-rearrange].
     #[arg(long, default_value = "all")]
     benchmark: String,
     /// The agent.
-    #[arg(long, default_value = "expert", value_parser = ["expert"])]
-    agent: String,
-    /// Run at most this many tasks per benchmark.
+    #[arg(long, value_enum, default_value_t = AgentName::Expert)]
+    agent: AgentName,
+    /// Run only the tasks a subset file lists (`fixtures/subsets/<NAME>.txt`, or a path).
+    #[arg(long)]
+    subset: Option<String>,
+    /// Run at most this many tasks per benchmark (the first ones; records stay valid for a
+    /// longer run of the same configuration).
     #[arg(long)]
     limit: Option<usize>,
-    /// Folder for `<benchmark>-<agent>.jsonl` records.
+    /// Run every n-th task only, `i/n` (1 <= i <= n), into its own shard file; `cargo xtask
+    /// merge` joins the shards.
+    #[arg(long)]
+    shard: Option<Shard>,
+    /// Folder of EAI task files for `virtualhome-eai` with `ours`/`planner` [default: the 33
+    /// in fixtures/virtualhome-eai/graphs; `cargo xtask fetch-data` prints the folder of all 342].
+    #[arg(long)]
+    task_dir: Option<PathBuf>,
+    /// Phase I's policy (ours, planner): `systematic`, `smollm2`, a GGUF path, `openai:URL`.
+    #[arg(long, default_value = "systematic")]
+    explorer: String,
+    #[command(flatten)]
+    lm: LmArgs,
+    #[command(flatten)]
+    decode: DecodeArgs,
+    /// Environment steps per episode [default: the paper's, 55 ALFWorld, 20 VirtualHome].
+    #[arg(long)]
+    budget: Option<usize>,
+    /// Seconds of search for Phase II per episode.
+    #[arg(long, default_value = "60", value_parser = crate::input::positive_seconds)]
+    time_limit: f64,
+    /// Beyond the paper: replan after a refused step.
+    #[arg(long)]
+    closed_loop: bool,
+    /// Folder for the records.
     #[arg(long, default_value = "target/eval")]
     out: PathBuf,
-    /// Discard earlier records instead of resuming.
+    /// Discard earlier records of this configuration instead of resuming.
     #[arg(long)]
     fresh: bool,
     /// Print the summary as one JSON object.
@@ -41,23 +126,68 @@ pub struct EvalArgs {
     json: bool,
 }
 
-#[derive(Debug, Serialize, Deserialize)]
-struct Record {
-    benchmark: String,
-    task: String,
-    agent: String,
-    /// `success`, `failure` (the plan is invalid), or `no-plan` (the benchmark has no expert plan).
-    outcome: String,
-    steps: usize,
-    cost: u64,
-    /// Why a plan failed, as the validator says it.
-    detail: Option<String>,
-    facts: usize,
-    actions: usize,
-    millis: f64,
+/// One task of a suite: its id and what loads it.
+enum EvalTask {
+    Files(TaskFiles),
+    Game { id: String, path: PathBuf },
+    Virtualhome { id: String },
 }
 
-fn run_task(files: &TaskFiles, agent: &str) -> anyhow::Result<Record> {
+impl EvalTask {
+    fn id(&self) -> &str {
+        match self {
+            EvalTask::Files(files) => &files.id,
+            EvalTask::Game { id, .. } | EvalTask::Virtualhome { id } => id,
+        }
+    }
+}
+
+fn tasks(suite: Suite, agent: AgentName, task_dir: Option<&Path>, subset: Option<&str>) -> anyhow::Result<Vec<EvalTask>> {
+    let bad = |e: benchmark_data::DataError| InputError(e.to_string());
+    let benchmark = match suite {
+        Suite::AlfworldSeen => Some(Benchmark::AlfworldSeen),
+        Suite::AlfworldTrain => Some(Benchmark::AlfworldTrain),
+        Suite::VirtualhomeEai if agent == AgentName::Expert => Some(Benchmark::VirtualhomeEai),
+        _ => None,
+    };
+    if let Some(benchmark) = benchmark {
+        let files = match subset {
+            Some(subset) => benchmark_data::load_subset(benchmark, subset).map_err(bad)?,
+            None => benchmark_data::load(benchmark).map_err(bad)?,
+        };
+        return Ok(files
+            .into_iter()
+            .map(|f| match (agent, &f.extra) {
+                (AgentName::Expert, _) | (_, Extra::None | Extra::Virtualhome { .. }) => EvalTask::Files(f),
+                (_, Extra::Alfworld(_)) => EvalTask::Game { id: f.id.clone(), path: f.problem_path.clone() },
+            })
+            .collect());
+    }
+    let fixtures = benchmark_data::fixtures_dir();
+    let dir = match (suite, task_dir) {
+        (Suite::VirtualhomeEai, Some(dir)) => dir.to_path_buf(),
+        (Suite::VirtualhomeEai, None) => fixtures.join("virtualhome-eai/graphs"),
+        _ => fixtures.join("virtualhome-rearrange"),
+    };
+    let entries = std::fs::read_dir(&dir).map_err(|e| InputError(format!("{}: cannot read: {e}", dir.display())))?;
+    let mut ids: Vec<String> =
+        entries.flatten().filter_map(|e| e.file_name().to_str().and_then(|n| n.strip_suffix(".json.gz")).map(str::to_string)).collect();
+    ids.sort();
+    if let Some(subset) = subset {
+        let path = benchmark_data::subset_path(subset);
+        let listed = benchmark_data::subset_ids(&path).map_err(bad)?;
+        for (line, id) in &listed {
+            if !ids.contains(id) {
+                return Err(InputError(format!("{}:{line}: no task {id} in {}", path.display(), dir.display())).into());
+            }
+        }
+        ids = listed.into_iter().map(|(_, id)| id).collect();
+    }
+    Ok(ids.into_iter().map(|id| EvalTask::Virtualhome { id }).collect())
+}
+
+/// The expert's record: the benchmark's plan validated through the symbolic pipeline.
+fn expert(files: &TaskFiles) -> anyhow::Result<Value> {
     let start = Instant::now();
     let model = TransitionModel::new(crate::input::ground(files)?);
     let (spelling, plan) = match &files.extra {
@@ -65,133 +195,184 @@ fn run_task(files: &TaskFiles, agent: &str) -> anyhow::Result<Record> {
         Extra::Virtualhome { gold_plan, .. } => (Spelling::pddl(model.task()), gold_plan.clone()),
         Extra::None => (Spelling::pddl(model.task()), None),
     };
-    let mut record = Record {
-        benchmark: files.benchmark.name().to_string(),
-        task: files.id.clone(),
-        agent: agent.to_string(),
-        outcome: "no-plan".to_string(),
-        steps: 0,
-        cost: 0,
-        detail: None,
-        facts: model.task().facts.len(),
-        actions: model.task().actions.len(),
-        millis: 0.0,
-    };
+    let (mut outcome, mut steps, mut cost, mut detail) = ("no-plan", 0, 0, None);
     if let Some(plan) = plan {
-        record.steps = plan.len();
+        steps = plan.len();
         match model.validate_text(&spelling, &plan) {
-            Ok(valid) => {
-                record.outcome = "success".to_string();
-                record.cost = valid.cost;
-            }
-            Err(error) => {
-                record.outcome = "failure".to_string();
-                record.detail = Some(error.describe(model.task()));
-            }
+            Ok(valid) => (outcome, cost) = ("success", valid.cost),
+            Err(error) => (outcome, detail) = ("failure", Some(error.describe(model.task()))),
         }
     }
-    record.millis = start.elapsed().as_secs_f64() * 1e3;
-    Ok(record)
+    Ok(json!({
+        "task": files.id, "agent": "expert", "outcome": outcome, "success": outcome == "success", "steps": steps, "cost": cost,
+        "detail": detail, "facts": model.task().facts.len(), "actions": model.task().actions.len(),
+        "millis": start.elapsed().as_secs_f64() * 1e3,
+    }))
+}
+
+/// Runs agents in environments, reusing the models across tasks.
+struct Embodied<'a> {
+    args: &'a EvalArgs,
+    policy: Box<dyn exploration_harness::Policy>,
+    phase2: PhaseTwoRunner,
+}
+
+impl Embodied<'_> {
+    fn run(&mut self, suite: Suite, task: &EvalTask) -> anyhow::Result<Value> {
+        let start = Instant::now();
+        let args = self.args;
+        let (ep, budget) = match task {
+            EvalTask::Game { path, .. } => {
+                let (mut env, mut adapter, goal) = alfworld(path)?;
+                let budget = args.budget.unwrap_or(55);
+                let config = EpisodeConfig { budget, closed_loop: args.closed_loop };
+                (episode(&mut env, &mut adapter, self.policy.as_mut(), &goal, config, &mut self.phase2), budget)
+            }
+            EvalTask::Virtualhome { id } => {
+                let dir = if suite == Suite::VirtualhomeEai { args.task_dir.as_deref() } else { None };
+                let (mut env, mut adapter, goal) = virtualhome(suite.name(), id, dir)?;
+                let budget = args.budget.unwrap_or(20);
+                let config = EpisodeConfig { budget, closed_loop: args.closed_loop };
+                (episode(&mut env, &mut adapter, self.policy.as_mut(), &goal, config, &mut self.phase2), budget)
+            }
+            EvalTask::Files(files) => anyhow::bail!("{}: not an environment task", files.id),
+        };
+        let requests: Vec<(&str, bool)> = ep.steps.iter().map(|s| (s.command.as_str(), s.executed)).collect();
+        let response = failure_response(&requests, ep.success);
+        let model_done = ep.phase1_stop == "done" && ep.plan.is_empty();
+        Ok(json!({
+            "task": task.id(), "agent": args.agent, "success": ep.success, "steps": ep.steps.len(),
+            "phase1_steps": ep.phase1_steps, "plan_length": ep.plan.len(),
+            "terminal": terminal(ep.success, model_done, ep.steps.len(), budget), "failure_response": response,
+            "attribution": ep.attribution, "precision": ep.precision, "recall": ep.recall,
+            "phase1_calls": ep.phase1_usage.calls, "phase1_tokens": ep.phase1_usage.generated_tokens,
+            "phase2_calls": ep.phase2_calls, "phase2_tokens": ep.phase2_tokens,
+            "millis": start.elapsed().as_secs_f64() * 1e3, "episode": ep,
+        }))
+    }
+}
+
+/// The configuration that names a run's records: everything that changes what it finds.
+fn config(args: &EvalArgs, suite: Suite) -> Value {
+    let mut config = json!({"agent": args.agent, "benchmark": suite.name(), "subset": args.subset});
+    if args.agent != AgentName::Expert {
+        let more = json!({
+            "explorer": args.explorer, "planner": if args.agent == AgentName::Ours { "mcts" } else { "astar" },
+            "budget": args.budget, "time_limit": args.time_limit, "closed_loop": args.closed_loop,
+            "task_dir": if suite == Suite::VirtualhomeEai { args.task_dir.as_ref().map(|p| p.display().to_string()) } else { None },
+        });
+        config.as_object_mut().expect("object").extend(more.as_object().expect("object").clone());
+        if args.agent == AgentName::Ours {
+            let phase2 = json!({"lm": &args.lm, "decode": &args.decode});
+            config.as_object_mut().expect("object").extend(phase2.as_object().expect("object").clone());
+        }
+    }
+    config
 }
 
 pub fn run(args: EvalArgs) -> anyhow::Result<ExitCode> {
-    let benchmarks: Vec<Benchmark> = if args.benchmark == "all" {
-        vec![Benchmark::AlfworldSeen, Benchmark::AlfworldTrain, Benchmark::VirtualhomeEai]
+    let suites: Vec<Suite> = if args.benchmark == "all" {
+        Suite::defaults(args.agent)
     } else {
         args.benchmark
             .split(',')
             .map(|name| {
-                Benchmark::from_name(name.trim())
-                    .ok_or_else(|| crate::input::unknown("benchmark", name, Benchmark::ALL.iter().map(|b| b.name())))
+                Suite::ALL
+                    .into_iter()
+                    .find(|s| s.name() == name.trim())
+                    .ok_or_else(|| crate::input::unknown("benchmark", name, Suite::ALL.iter().map(|s| s.name())))
             })
             .collect::<Result<_, _>>()?
     };
-    std::fs::create_dir_all(&args.out).with_context(|| format!("cannot create {}", args.out.display()))?;
+    if args.agent == AgentName::Expert && suites.contains(&Suite::VirtualhomeRearrange) {
+        return Err(InputError("--agent expert: the rearrangement set has no expert plans in the benchmark's own form".into()).into());
+    }
+    let mut embodied = match args.agent {
+        AgentName::Expert => None,
+        agent => {
+            let planner = if agent == AgentName::Ours { "mcts" } else { "astar" };
+            let policy = explorer(&args.explorer, &args.lm.served_model)?;
+            let phase2 = PhaseTwoRunner::new(planner, &args.lm, &args.decode, args.time_limit)?;
+            Some(Embodied { args: &args, policy, phase2 })
+        }
+    };
+    let agent_name = serde_json::to_value(args.agent)?.as_str().unwrap_or_default().to_string();
     let mut summaries = serde_json::Map::new();
-    for benchmark in benchmarks {
-        let path = args.out.join(format!("{}-{}.jsonl", benchmark.name(), args.agent));
-        if args.fresh && path.exists() {
-            std::fs::remove_file(&path).with_context(|| format!("cannot remove {}", path.display()))?;
-        }
-        let mut records: Vec<Record> = Vec::new();
-        if path.exists() {
-            let file = std::fs::File::open(&path).with_context(|| format!("cannot read {}", path.display()))?;
-            for (number, line) in std::io::BufReader::new(file).lines().enumerate() {
-                let line = line?;
-                if line.trim().is_empty() {
-                    continue;
-                }
-                // A line cut short by a killed run is dropped; its task runs again.
-                if let Ok(record) = serde_json::from_str::<Record>(&line) {
-                    records.push(record);
-                } else {
-                    eprintln!(
-                        "{}:{}: unreadable record (a run was killed while writing?); its task will run again",
-                        path.display(),
-                        number + 1
-                    );
-                }
-            }
-        }
-        let done: BTreeSet<String> = records.iter().map(|r| r.task.clone()).collect();
-        let tasks = benchmark_data::load(benchmark)?;
-        let tasks: Vec<&TaskFiles> = tasks.iter().take(args.limit.unwrap_or(usize::MAX)).collect();
-        let mut out = std::fs::OpenOptions::new()
-            .create(true)
-            .append(true)
-            .open(&path)
-            .with_context(|| format!("cannot write {}", path.display()))?;
-        let total = tasks.len();
-        for (i, files) in tasks.into_iter().enumerate() {
-            if done.contains(&files.id) {
+    for suite in suites {
+        let stem = format!("{}-{agent_name}", suite.name());
+        let mut records =
+            RecordFile::open(&args.out, &stem, &config(&args, suite), args.shard, args.fresh).map_err(|e| InputError(e.to_string()))?;
+        let tasks = tasks(suite, args.agent, args.task_dir.as_deref(), args.subset.as_deref())?;
+        let total = tasks.len().min(args.limit.unwrap_or(usize::MAX));
+        let mut ids = Vec::new();
+        for (index, task) in tasks.iter().enumerate().take(total) {
+            if args.shard.is_some_and(|s| !s.selects(index)) {
                 continue;
             }
-            let record = run_task(files, &args.agent).with_context(|| format!("task {}", files.id))?;
-            writeln!(out, "{}", serde_json::to_string(&record)?)?;
-            out.flush()?;
-            records.push(record);
-            if (i + 1) % 50 == 0 || i + 1 == total {
-                eprintln!("{}: {}/{total}", benchmark.name(), i + 1);
+            ids.push(task.id().to_string());
+            if records.done().contains(task.id()) {
+                continue;
+            }
+            let record = match (&mut embodied, task) {
+                (None, EvalTask::Files(files)) => expert(files),
+                (Some(embodied), task) => embodied.run(suite, task),
+                (None, _) => anyhow::bail!("{}: the expert needs the benchmark's files", task.id()),
+            }
+            .map_err(|e| e.context(format!("task {}", task.id())))?;
+            records.append(index, &record)?;
+            if (index + 1) % 50 == 0 || index + 1 == total {
+                eprintln!("{}: {}/{total}", suite.name(), index + 1);
             }
         }
-        let keep: BTreeSet<String> =
-            benchmark_data::load(benchmark)?.iter().take(args.limit.unwrap_or(usize::MAX)).map(|t| t.id.clone()).collect();
-        records.retain(|r| keep.contains(&r.task));
-        let with_plan: Vec<&Record> = records.iter().filter(|r| r.outcome != "no-plan").collect();
-        let successes = with_plan.iter().filter(|r| r.outcome == "success").count();
-        let rate = if with_plan.is_empty() { 0.0 } else { successes as f64 / with_plan.len() as f64 };
-        let mean_steps =
-            if with_plan.is_empty() { 0.0 } else { with_plan.iter().map(|r| r.steps as f64).sum::<f64>() / with_plan.len() as f64 };
-        let mean_millis = if records.is_empty() { 0.0 } else { records.iter().map(|r| r.millis).sum::<f64>() / records.len() as f64 };
+        let kept: Vec<&serde_json::Map<String, Value>> = records
+            .records()
+            .iter()
+            .filter(|r| r.get("task").and_then(Value::as_str).is_some_and(|t| ids.iter().any(|i| i == t)))
+            .collect();
+        let judged: Vec<&&serde_json::Map<String, Value>> =
+            kept.iter().filter(|r| r.get("outcome").and_then(Value::as_str) != Some("no-plan")).collect();
+        let successes = judged.iter().filter(|r| r.get("success").and_then(Value::as_bool) == Some(true)).count();
+        let mean = |key: &str, of: &[&&serde_json::Map<String, Value>]| {
+            if of.is_empty() { 0.0 } else { of.iter().filter_map(|r| r.get(key).and_then(Value::as_f64)).sum::<f64>() / of.len() as f64 }
+        };
+        let rate = if judged.is_empty() { 0.0 } else { successes as f64 / judged.len() as f64 };
+        let (mean_steps, mean_millis) = (mean("steps", &judged), mean("millis", &judged));
         if !args.json {
             println!(
-                "{:<16} agent={} tasks={} with-plan={} success={}/{} ({:.1}%) mean-steps={mean_steps:.1} mean-ms={mean_millis:.1}  records: {}",
-                benchmark.name(),
-                args.agent,
-                records.len(),
-                with_plan.len(),
-                successes,
-                with_plan.len(),
+                "{:<22} agent={agent_name} tasks={} judged={} success={successes}/{} ({:.1}%) mean-steps={mean_steps:.1} mean-ms={mean_millis:.1}  records: {}",
+                suite.name(),
+                kept.len(),
+                judged.len(),
+                judged.len(),
                 rate * 100.0,
-                path.display()
+                records.path().display()
             );
         }
         summaries.insert(
-            benchmark.name().to_string(),
-            serde_json::json!({
-                "agent": args.agent,
-                "tasks": records.len(),
-                "with_plan": with_plan.len(),
-                "successes": successes,
-                "success_rate": rate,
-                "mean_steps": mean_steps,
-                "mean_millis": mean_millis,
-                "records": path.display().to_string(),
+            suite.name().to_string(),
+            json!({
+                "agent": agent_name, "tasks": kept.len(), "judged": judged.len(), "successes": successes, "success_rate": rate,
+                "mean_steps": mean_steps, "mean_millis": mean_millis, "records": records.path().display().to_string(),
+                "config": records.hash(),
             }),
         );
     }
     if args.json {
-        println!("{}", serde_json::Value::Object(summaries));
+        println!("{}", Value::Object(summaries));
     }
+    Ok(ExitCode::SUCCESS)
+}
+
+#[derive(Debug, clap::Args)]
+pub struct MergeArgs {
+    /// The shard files of one run (`<stem>-<hash>.shard-i-of-n.jsonl`).
+    #[arg(required = true)]
+    shards: Vec<PathBuf>,
+}
+
+/// `cargo xtask merge`: the shards' records, in task order, into the file one run writes.
+pub fn merge(args: MergeArgs) -> anyhow::Result<ExitCode> {
+    let merged = eval_harness::records::merge(&args.shards).map_err(|e| InputError(e.to_string()))?;
+    println!("{} records of configuration {} -> {}", merged.records, merged.config, merged.path.display());
     Ok(ExitCode::SUCCESS)
 }

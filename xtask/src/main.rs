@@ -67,8 +67,11 @@ enum Command {
     Phase2(phase2::Phase2Args),
     /// The initial state's value under every heuristic.
     Heuristic(planning::HeuristicArgs),
-    /// Evaluate an agent on the benchmarks in fixtures/ (the project's main job).
+    /// Evaluate an agent on the benchmarks in fixtures/ (the project's main job): JSON-line
+    /// records named by the run's configuration, resumable, shardable.
     Eval(eval::EvalArgs),
+    /// Join the records of `eval --shard i/n` runs into the file one run writes.
+    Merge(eval::MergeArgs),
     /// The agent on one task (an ALFWorld game or a VirtualHome task): Phase I (systematic or a
     /// chat model), the grounded problem, Phase II (constrained MCTS by default, or A*), the plan
     /// executed open-loop; exit 0 won, 1 not won.
@@ -184,6 +187,7 @@ fn run(command: Command) -> anyhow::Result<ExitCode> {
         Command::Phase2(args) => phase2::run(args),
         Command::Heuristic(args) => planning::heuristic(args),
         Command::Eval(args) => eval::run(args),
+        Command::Merge(args) => eval::merge(args),
         Command::Agent(args) => agent::run(args),
         Command::Env(args) => env::run(args),
         Command::Soundness(args) => soundness::run(args),

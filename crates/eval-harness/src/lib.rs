@@ -1,6 +1,7 @@
 //! The evaluation harness: batch runs of the agent and its baselines over the benchmarks, and
 //! the statistics the paper reports about them (Appendix B).
 //!
+//! - [`behaviour`]: how an episode ended and how the agent met failure (Tables 11-12).
 //! - [`records`]: per-task JSON-line records in a file named by the run's configuration,
 //!   appended whole (a killed run resumes to exactly what an uninterrupted run writes),
 //!   sharded and merged.
@@ -22,5 +23,6 @@
 //! # Ok::<(), eval_harness::stats::StatsError>(())
 //! ```
 
+pub mod behaviour;
 pub mod records;
 pub mod stats;

@@ -1,0 +1,70 @@
+//! How an episode ended and how the agent met failure (the paper's Tables 11 and 12),
+//! computed from the requests it sent and whether the environment executed each.
+//!
+//! - **Terminal mechanism** ([`Terminal`]): success; the grounding layer refused a request
+//!   (the step could not be executed, and the episode ended there or ran out of plan); the
+//!   interaction limit (the step budget); the model's own `DONE`.
+//! - **Failure response** ([`FailureResponse`]), over the sequence of requests:
+//!   *encounters failure* — some request was not executed; *recovers* — after the first
+//!   failure, the episode still succeeded; *repeats the failed request* — some failed request
+//!   is sent again immediately after; *persistent loop* — at least five identical consecutive
+//!   requests, or a six-step two-action oscillation (`a b a b a b` with `a ≠ b`).
+
+use serde::Serialize;
+
+/// Why an episode ended (Table 11).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Terminal {
+    Success,
+    /// A request the environment refused ended the episode (or left the plan unfinished).
+    Grounding,
+    /// The step budget ran out.
+    InteractionLimit,
+    /// The model said it was done short of the goal.
+    ModelDone,
+}
+
+/// The failure response of one episode (Table 12).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize)]
+pub struct FailureResponse {
+    pub encounters_failure: bool,
+    pub recovers: bool,
+    pub repeats_failed_request: bool,
+    pub persistent_loop: bool,
+}
+
+/// The failure response of `requests` (each: the command, whether it was executed) in an
+/// episode that ended in `success`.
+pub fn failure_response(requests: &[(&str, bool)], success: bool) -> FailureResponse {
+    let first_failure = requests.iter().position(|(_, ok)| !ok);
+    let repeats = requests.windows(2).any(|w| !w[0].1 && w[0].0 == w[1].0);
+    FailureResponse {
+        encounters_failure: first_failure.is_some(),
+        recovers: first_failure.is_some() && success,
+        repeats_failed_request: repeats,
+        persistent_loop: persistent_loop(requests.iter().map(|(c, _)| *c).collect::<Vec<_>>().as_slice()),
+    }
+}
+
+/// At least five identical consecutive requests, or six consecutive requests alternating
+/// between two different actions.
+pub fn persistent_loop(commands: &[&str]) -> bool {
+    let same_five = commands.windows(5).any(|w| w.iter().all(|c| *c == w[0]));
+    let oscillation = commands.windows(6).any(|w| w[0] != w[1] && w.iter().enumerate().all(|(i, c)| *c == w[i % 2]));
+    same_five || oscillation
+}
+
+/// The terminal mechanism: `success`, else `model_done` when the model ended the episode,
+/// else the interaction limit when `steps_used` reached `budget`, else grounding.
+pub fn terminal(success: bool, model_done: bool, steps_used: usize, budget: usize) -> Terminal {
+    if success {
+        Terminal::Success
+    } else if model_done {
+        Terminal::ModelDone
+    } else if steps_used >= budget {
+        Terminal::InteractionLimit
+    } else {
+        Terminal::Grounding
+    }
+}

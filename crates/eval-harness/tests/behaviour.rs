@@ -1,0 +1,35 @@
+//! The terminal mechanism and failure response (Tables 11-12) on hand-made request lists.
+
+use eval_harness::behaviour::{FailureResponse, Terminal, failure_response, persistent_loop, terminal};
+
+#[test]
+fn failure_responses() {
+    let clean = [("go to desk 1", true), ("take pen 1 from desk 1", true)];
+    assert_eq!(failure_response(&clean, true), FailureResponse::default());
+    let recovered = [("open drawer 1", false), ("go to drawer 1", true), ("open drawer 1", true)];
+    let r = failure_response(&recovered, true);
+    assert!(r.encounters_failure && r.recovers && !r.repeats_failed_request && !r.persistent_loop);
+    let repeated = [("open drawer 1", false), ("open drawer 1", false)];
+    let r = failure_response(&repeated, false);
+    assert!(r.encounters_failure && !r.recovers && r.repeats_failed_request);
+    // A success that never failed is no recovery.
+    assert!(!failure_response(&clean, true).recovers);
+}
+
+#[test]
+fn loops_are_five_identical_requests_or_a_six_step_oscillation() {
+    assert!(persistent_loop(&["look"; 5]));
+    assert!(!persistent_loop(&["look"; 4]));
+    assert!(persistent_loop(&["a", "b", "a", "b", "a", "b"]));
+    assert!(!persistent_loop(&["a", "b", "a", "b", "a"]));
+    assert!(!persistent_loop(&["a", "b", "a", "b", "a", "c"]));
+    assert!(persistent_loop(&["x", "y", "a", "a", "a", "a", "a", "z"]));
+}
+
+#[test]
+fn terminal_mechanisms() {
+    assert_eq!(terminal(true, false, 20, 20), Terminal::Success);
+    assert_eq!(terminal(false, true, 3, 20), Terminal::ModelDone);
+    assert_eq!(terminal(false, false, 20, 20), Terminal::InteractionLimit);
+    assert_eq!(terminal(false, false, 7, 20), Terminal::Grounding);
+}
