@@ -3,7 +3,6 @@
 //! observability: the problem's own initial state is ŝ0.
 
 use std::collections::BTreeSet;
-use std::io::{BufRead, Write};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use std::sync::Arc;
@@ -19,6 +18,8 @@ use mcts::{
 use serde::{Deserialize, Serialize};
 use token_constraint::EndPolicy;
 use transition_model::{Spelling, TransitionModel};
+
+use eval_harness::records::RecordFile;
 
 use crate::input::{self, InputError};
 
@@ -289,7 +290,8 @@ pub struct Record {
     pub millis: f64,
     /// Everything for this task: grounding, prompt, decoding.
     pub total_millis: f64,
-    /// The run configuration's hash ([`RunConfig::hash`]): which settings made this record.
+    /// The run configuration's hash (`eval_harness::records::config_hash` of [`RunConfig`]):
+    /// which settings made this record.
     #[serde(default)]
     pub config: String,
 }
@@ -304,19 +306,6 @@ pub struct RunConfig<'a> {
     pub lm: &'a LmArgs,
     pub decode: &'a DecodeArgs,
     pub time_limit: f64,
-}
-
-impl RunConfig<'_> {
-    /// The configuration as JSON (fields in declaration order, whatever serde_json's features).
-    pub fn json(&self) -> String {
-        serde_json::to_string(self).unwrap_or_default()
-    }
-
-    /// The first 12 hex digits of the sha256 of [`RunConfig::json`].
-    pub fn hash(&self) -> String {
-        use sha2::{Digest, Sha256};
-        Sha256::digest(self.json().as_bytes()).iter().take(6).map(|b| format!("{b:02x}")).collect()
-    }
 }
 
 fn yes() -> bool {
@@ -388,7 +377,10 @@ pub fn plan_one(
 ) -> anyhow::Result<ExitCode> {
     let mut lm = load_lm(lm_args)?;
     let vocab = Arc::new(mcts::constraint_vocabulary(lm.vocabulary()).context("the model's vocabulary")?);
-    let (record, outcome, model) = solve(files, lm.as_mut(), &lm_args.lm, &vocab, args, time_limit)?;
+    let (mut record, outcome, model) = solve(files, lm.as_mut(), &lm_args.lm, &vocab, args, time_limit)?;
+    // The settings that made this plan, hashed as a run's records are (the task is the set).
+    let config = RunConfig { benchmark: files.benchmark.name(), set: &files.id, lm: lm_args, decode: args, time_limit };
+    record.config = eval_harness::records::config_hash(&config);
     // The plan is checked once more by the validator, from the text as written.
     let spelling = spelling_for(files, &model)?;
     let verdict = model.validate_text(&spelling, &outcome.lines);
@@ -452,26 +444,6 @@ pub struct Phase2Args {
     json: bool,
 }
 
-fn read_records(path: &Path) -> anyhow::Result<Vec<Record>> {
-    let mut records = Vec::new();
-    if !path.exists() {
-        return Ok(records);
-    }
-    let file = std::fs::File::open(path).with_context(|| format!("cannot read {}", path.display()))?;
-    for (number, line) in std::io::BufReader::new(file).lines().enumerate() {
-        let line = line?;
-        if line.trim().is_empty() {
-            continue;
-        }
-        match serde_json::from_str::<Record>(&line) {
-            Ok(record) => records.push(record),
-            // A line cut short by a killed run: its task runs again.
-            Err(e) => eprintln!("{}:{}: unreadable record ({e}); its task will run again", path.display(), number + 1),
-        }
-    }
-    Ok(records)
-}
-
 fn file_safe(name: &str) -> String {
     name.chars().map(|c| if c.is_ascii_alphanumeric() || c == '-' || c == '.' { c } else { '_' }).collect()
 }
@@ -500,34 +472,25 @@ pub fn run(args: Phase2Args) -> anyhow::Result<ExitCode> {
         Some(subset) => subset.clone(),
         None => args.benchmark.name().to_string(),
     };
-    std::fs::create_dir_all(&args.out).with_context(|| format!("cannot create {}", args.out.display()))?;
     let variant = args.decode.variant();
     let config = RunConfig { benchmark: args.benchmark.name(), set: &set, lm: &args.lm, decode: &args.decode, time_limit: args.time_limit };
-    let hash = config.hash();
-    let stem = file_safe(&format!("{set}-{}{variant}-{lm_name}-{hash}", args.decode.mode));
-    let path = args.out.join(format!("{stem}.jsonl"));
-    if args.fresh && path.exists() {
-        std::fs::remove_file(&path).with_context(|| format!("cannot remove {}", path.display()))?;
-    }
-    // The configuration beside its records, for people; records carry its hash.
-    let config_path = args.out.join(format!("{stem}.config.json"));
-    std::fs::write(&config_path, config.json() + "\n").with_context(|| format!("cannot write {}", config_path.display()))?;
-    let mut records = read_records(&path)?;
-    if let Some(other) = records.iter().find(|r| r.config != hash) {
-        anyhow::bail!(InputError(format!(
-            "{}: holds a record of task {} made under configuration {:?}, not this run's {hash}; refusing to resume it (use --fresh or another --out)",
-            path.display(),
-            other.task,
-            other.config
-        )));
-    }
+    // Records in `<stem>-<hash>.jsonl`, the configuration beside them, appended whole and
+    // resumed (eval_harness::records); a file of another configuration's records is refused.
+    let stem = file_safe(&format!("{set}-{}{variant}-{lm_name}", args.decode.mode));
+    let mut file = RecordFile::open(&args.out, &stem, &config, None, args.fresh).map_err(|e| InputError(e.to_string()))?;
+    let path = file.path().to_path_buf();
+    let hash = file.hash().to_string();
+    let mut records: Vec<Record> = file
+        .records()
+        .iter()
+        .map(|r| serde_json::from_value(serde_json::Value::Object(r.clone())))
+        .collect::<Result<_, _>>()
+        .map_err(|e| InputError(format!("{}: a record that is not a Phase II record: {e}", path.display())))?;
     let done: BTreeSet<String> = records.iter().map(|r| r.task.clone()).collect();
-    let todo: Vec<&TaskFiles> = tasks.iter().filter(|t| !done.contains(&t.id)).collect();
+    let todo: Vec<(usize, &TaskFiles)> = tasks.iter().enumerate().filter(|(_, t)| !done.contains(&t.id)).collect();
 
     let mut lm = load_lm(&args.lm)?;
     let vocab = Arc::new(mcts::constraint_vocabulary(lm.vocabulary()).context("the model's vocabulary")?);
-    let mut out =
-        std::fs::OpenOptions::new().create(true).append(true).open(&path).with_context(|| format!("cannot write {}", path.display()))?;
     let bar = indicatif::ProgressBar::new(tasks.len() as u64);
     bar.set_style(
         indicatif::ProgressStyle::with_template("{prefix} [{bar:30}] {pos}/{len} {msg} ({elapsed}, eta {eta})")
@@ -537,12 +500,11 @@ pub fn run(args: Phase2Args) -> anyhow::Result<ExitCode> {
     bar.set_prefix(format!("{set} {}", args.decode.mode));
     bar.set_position((tasks.len() - todo.len()) as u64);
     let mut solved = records.iter().filter(|r| r.solved).count();
-    for files in todo {
+    for (index, files) in todo {
         let (mut record, _, _) =
             solve(files, lm.as_mut(), &lm_name, &vocab, &args.decode, args.time_limit).with_context(|| format!("task {}", files.id))?;
         record.config.clone_from(&hash);
-        writeln!(out, "{}", serde_json::to_string(&record)?)?;
-        out.flush()?;
+        file.append(index, &record)?;
         solved += usize::from(record.solved);
         records.push(record);
         bar.set_message(format!("solved {solved}"));
@@ -553,7 +515,7 @@ pub fn run(args: Phase2Args) -> anyhow::Result<ExitCode> {
     let keep: BTreeSet<&str> = tasks.iter().map(|t| t.id.as_str()).collect();
     records.retain(|r| keep.contains(r.task.as_str()));
     let summary = summarize(&records, &set, &args.decode, &lm_name, &path);
-    std::fs::write(args.out.join(format!("{stem}.summary.json")), serde_json::to_string_pretty(&summary)? + "\n")?;
+    std::fs::write(path.with_extension("summary.json"), serde_json::to_string_pretty(&summary)? + "\n")?;
     if args.json {
         println!("{summary}");
     } else {

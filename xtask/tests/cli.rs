@@ -238,7 +238,7 @@ fn phase2_writes_records_resumes_and_plan_mcts_prints_json() {
     std::fs::copy(&path, other["records"].as_str().unwrap()).unwrap();
     let refused = xtask(&longer);
     assert_eq!(refused.status.code(), Some(2), "{}", String::from_utf8_lossy(&refused.stderr));
-    assert!(String::from_utf8_lossy(&refused.stderr).contains("refusing to resume"));
+    assert!(String::from_utf8_lossy(&refused.stderr).contains("in the file of"), "{}", String::from_utf8_lossy(&refused.stderr));
 
     // Non-default settings are recorded and name their own records (no resuming another's).
     let greedy_args: Vec<&str> = args
