@@ -28,6 +28,7 @@
 //! masks every decoding step to it, so even a 135M model replies with schema-valid JSON.
 //!
 //! ```
+//! # #[cfg(feature = "local")] {
 //! use lm::{LanguageModel, LocalModel, tiny};
 //! let path = std::env::temp_dir().join(format!("lm-doc-{}.gguf", std::process::id()));
 //! tiny::write_tiny_gguf(&path, &tiny::TinySpec::default())?;
@@ -42,6 +43,7 @@
 //! assert_eq!(model.usage().tokens_prefilled as usize, prompt.len() + 1);
 //! # let _ = after_prompt;
 //! # std::fs::remove_file(&path).ok();
+//! # }
 //! # Ok::<(), lm::LmError>(())
 //! ```
 
