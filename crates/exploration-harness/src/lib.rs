@@ -16,6 +16,7 @@
 //! - [`alfworld`], [`virtualhome`]: the two benchmarks' adapters.
 
 pub mod alfworld;
+pub mod chat_planner;
 pub mod chat_policy;
 pub mod episode;
 pub mod evidence;

@@ -1,0 +1,109 @@
+//! Phase II by a chat model (the unconstrained thinking / greedy conditions): the request it
+//! sends, and how the reply's plan text is read, on a real ALFWorld episode whose Phase I is the
+//! systematic sweep. The chat model is scripted: it answers with A*'s plan spelled as the game
+//! spells commands, wrapped in the decorations real models add.
+
+use std::path::{Path, PathBuf};
+use std::time::Duration;
+
+use exploration_harness::alfworld::AlfworldAdapter;
+use exploration_harness::chat_planner::{ChatPlannerConfig, plan_by_chat, strip_thinking};
+use exploration_harness::{EpisodeConfig, Grounded, Ontology, Systematic, parse_goal, run_episode};
+use household_sim::{AlfworldEnv, Environment};
+use vlm_client::{ChatError, ChatModel, ChatReply, ChatRequest, Usage};
+
+fn fixtures() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../fixtures")
+}
+
+/// Answers with `answer(plan lines)`, where the plan is A*'s on the grounded problem.
+struct Scripted<'a> {
+    answer: &'a dyn Fn(&[String]) -> String,
+    plan: Vec<String>,
+    requests: Vec<ChatRequest>,
+}
+
+impl ChatModel for Scripted<'_> {
+    fn chat(&mut self, request: &ChatRequest) -> Result<ChatReply, ChatError> {
+        self.requests.push(request.clone());
+        let usage = Usage { requests: 1, prompt_tokens: 300, completion_tokens: 42, reasoning_tokens: None, images: 0 };
+        Ok(ChatReply {
+            text: (self.answer)(&self.plan),
+            reasoning: None,
+            finish_reason: Some("stop".into()),
+            usage,
+            json_mode: None,
+            attempts: 1,
+            waited: Duration::ZERO,
+        })
+    }
+
+    fn endpoint(&self) -> String {
+        "scripted".into()
+    }
+
+    fn usage(&self) -> Usage {
+        Usage::default()
+    }
+}
+
+/// One episode on a pick-and-place game with the chat planner answering `answer`.
+fn episode(answer: &dyn Fn(&[String]) -> String, config: &ChatPlannerConfig) -> (exploration_harness::Episode, Vec<ChatRequest>) {
+    let game = fixtures().join("alfworld/valid_seen/pick_and_place_simple-Book-None-Sofa-229/trial_T20190907_042856_259139/game.tw-pddl");
+    let ontology =
+        Ontology::from_text(&std::fs::read_to_string(fixtures().join("ontology/alfworld.txt")).unwrap(), "alfworld.txt").unwrap();
+    let domain = pddl_syntax::parse_domain(&std::fs::read_to_string(fixtures().join("alfworld/alfred.pddl")).unwrap()).unwrap();
+    let grammar = std::fs::read_to_string(fixtures().join("alfworld/alfred.twl2")).unwrap();
+    let mut env = AlfworldEnv::from_game_file(&game).unwrap();
+    let goal = parse_goal(env.goal()).unwrap();
+    let mut adapter = AlfworldAdapter::new(ontology, domain, grammar, env.goal());
+    let mut requests = Vec::new();
+    let mut planner = |g: &Grounded| {
+        let actions = heuristics::search::optimal_plan_expanding(&g.model, 1_000_000).map_err(|s| format!("{s:?}"))?;
+        let plan = actions.iter().map(|&a| g.spelling.spell(a).expect("spelled").to_string()).collect();
+        let mut chat = Scripted { answer, plan, requests: Vec::new() };
+        let result = plan_by_chat(&mut chat, g, config);
+        requests = chat.requests;
+        result
+    };
+    let ep = run_episode(&mut env, &mut adapter, &mut Systematic, &goal, EpisodeConfig { budget: 55, closed_loop: false }, &mut planner);
+    (ep, requests)
+}
+
+#[test]
+fn a_thinking_reply_with_a_numbered_plan_wins_the_episode() {
+    let answer = |plan: &[String]| {
+        let numbered: Vec<String> = plan.iter().enumerate().map(|(i, line)| format!("{}. {line}", i + 1)).collect();
+        format!("<think>\nThe book is on the bed; go to desk 1? No.\n</think>\n\n{}\nDONE\n", numbered.join("\n"))
+    };
+    let (ep, requests) = episode(&answer, &ChatPlannerConfig::thinking(42));
+    assert!(ep.success, "{:?}", ep.failure);
+    assert_eq!((ep.phase2_calls, ep.phase2_tokens), (1, 42));
+    assert_eq!(ep.phase2_detail["valid"], true);
+    assert!(!ep.phase2_detail["plan_text"].as_str().unwrap().contains("think"), "the thinking is not the plan");
+    // The request: the planning prompt as system + user, thinking on, Qwen3's thinking sampling.
+    let request = &requests[0];
+    assert_eq!(request.messages.len(), 2);
+    assert!(request.messages[1].joined_text().contains("Plan:"));
+    assert_eq!(request.chat_template_kwargs.as_ref().unwrap()["enable_thinking"], true);
+    assert_eq!((request.sampling.temperature, request.sampling.top_k, request.sampling.max_tokens), (Some(0.6), Some(20), Some(32_768)));
+    assert_eq!(request.sampling.seed, Some(42));
+}
+
+#[test]
+fn a_line_naming_no_applicable_action_ends_the_plan_at_its_valid_prefix() {
+    let answer = |plan: &[String]| format!("{}\nteleport to the book\n{}\n", plan[0], plan[1..].join("\n"));
+    let (ep, requests) = episode(&answer, &ChatPlannerConfig::greedy());
+    assert!(!ep.success);
+    assert_eq!(ep.plan.len(), 1, "the valid prefix: {:?}", ep.plan);
+    assert_eq!(ep.phase2_detail["invalid"], "line 2: \"teleport to the book\"");
+    let request = &requests[0];
+    assert_eq!(request.chat_template_kwargs.as_ref().unwrap()["enable_thinking"], false);
+    assert_eq!((request.sampling.temperature, request.sampling.max_tokens), (Some(0.0), Some(512)));
+}
+
+#[test]
+fn thinking_is_cut_at_the_last_closing_tag() {
+    assert_eq!(strip_thinking("<think>a</think>b</think>\nplan"), "\nplan");
+    assert_eq!(strip_thinking("plan only"), "plan only");
+}
