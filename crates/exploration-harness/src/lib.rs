@@ -13,11 +13,14 @@
 //! - [`episode`]: the hand-over (Eq. 4), Phase II through the caller's planner, open-loop (or
 //!   closed-loop) execution, and the per-episode record with precision, recall and failure
 //!   attribution from the judge;
-//! - [`alfworld`], [`virtualhome`]: the two benchmarks' adapters.
+//! - [`alfworld`], [`virtualhome`]: the two benchmarks' adapters;
+//! - [`direct`]: the direct interactive policy baseline (one class-level action per turn from a
+//!   chat model, the environment's feedback, no harness), with its own episode record.
 
 pub mod alfworld;
 pub mod chat_planner;
 pub mod chat_policy;
+pub mod direct;
 pub mod episode;
 pub mod evidence;
 pub mod goal;
@@ -25,6 +28,7 @@ pub mod ontology;
 pub mod phase1;
 pub mod virtualhome;
 
+pub use direct::{DirectConfig, DirectEnd, DirectEpisode, DirectError, DirectStep, DirectUsage, run_direct};
 pub use episode::{Attribution, Episode, EpisodeConfig, Grounded, Handing, Handover, PhaseTwo, run_episode};
 pub use evidence::{Belief, Fact, Percept, perceive_alfworld};
 pub use goal::{ClassGoal, ClassLiteral, GoalError, Symbol, parse_goal};
