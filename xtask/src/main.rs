@@ -20,6 +20,7 @@ mod phase2;
 mod planning;
 mod pypi;
 mod rearrange;
+mod report;
 mod soundness;
 
 use std::path::PathBuf;
@@ -72,6 +73,9 @@ enum Command {
     Eval(eval::EvalArgs),
     /// Join the records of `eval --shard i/n` runs into the file one run writes.
     Merge(eval::MergeArgs),
+    /// The paper's tables (Markdown), figures (SVG) and a page per episode (HTML, from one
+    /// index.html) from `eval` records.
+    Report(report::ReportArgs),
     /// The agent on one task (an ALFWorld game or a VirtualHome task): Phase I (systematic or a
     /// chat model), the grounded problem, Phase II (constrained MCTS by default, or A*), the plan
     /// executed open-loop; exit 0 won, 1 not won.
@@ -188,6 +192,7 @@ fn run(command: Command) -> anyhow::Result<ExitCode> {
         Command::Heuristic(args) => planning::heuristic(args),
         Command::Eval(args) => eval::run(args),
         Command::Merge(args) => eval::merge(args),
+        Command::Report(args) => report::run(args),
         Command::Agent(args) => agent::run(args),
         Command::Env(args) => env::run(args),
         Command::Soundness(args) => soundness::run(args),

@@ -2,6 +2,8 @@
 //! the statistics the paper reports about them (Appendix B).
 //!
 //! - [`behaviour`]: how an episode ended and how the agent met failure (Tables 11-12).
+//! - [`report`]: the paper's tables (Markdown), figures (SVG) and a page per episode (HTML)
+//!   from record files, every number through [`stats`].
 //! - [`records`]: per-task JSON-line records in a file named by the run's configuration,
 //!   appended whole (a killed run resumes to exactly what an uninterrupted run writes),
 //!   sharded and merged.
@@ -25,4 +27,5 @@
 
 pub mod behaviour;
 pub mod records;
+pub mod report;
 pub mod stats;

@@ -186,7 +186,7 @@ impl RecordFile {
 
 /// The records of a JSONL file: every non-empty line an object with a `task`, and, with
 /// `hash`, that configuration.
-fn parse_records(path: &Path, text: &str, hash: Option<&str>) -> Result<Vec<Map<String, Value>>, RecordError> {
+pub(crate) fn parse_records(path: &Path, text: &str, hash: Option<&str>) -> Result<Vec<Map<String, Value>>, RecordError> {
     let mut records = Vec::new();
     let mut seen = BTreeSet::new();
     for (number, line) in text.lines().enumerate() {

@@ -1,0 +1,129 @@
+//! Reading record files for a report: each `<stem>-<hash>[.shard-i-of-n].jsonl` with the
+//! `<stem>-<hash>.config.json` beside it, every line checked (a record of that configuration,
+//! a string `task`, a boolean `success`, a known `terminal` and `attribution` where present),
+//! any fault an error naming the file and line.
+
+use std::path::{Path, PathBuf};
+
+use serde_json::{Map, Value};
+
+use super::ReportError;
+use crate::records::{RecordError, config_hash, parse_records};
+
+/// One record and the line it was read from (1-based).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Record {
+    pub line: usize,
+    pub fields: Map<String, Value>,
+}
+
+/// The records of one file and the configuration they were made with.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RecordSet {
+    /// The file, as given.
+    pub path: PathBuf,
+    /// The configuration (`.config.json`): agent, benchmark, model, mode, seed, ...
+    pub config: Map<String, Value>,
+    /// Its hash, the `config` field of every record.
+    pub hash: String,
+    pub records: Vec<Record>,
+    /// What was left out, and why (a last line cut short by a run in progress or killed).
+    pub warnings: Vec<String>,
+}
+
+impl RecordSet {
+    /// The file name without `.jsonl` and without a shard suffix: `<stem>-<hash>`.
+    pub fn stem(&self) -> String {
+        record_stem(&self.path)
+    }
+
+    /// A string field of the configuration.
+    pub fn config_str(&self, key: &str) -> Option<&str> {
+        self.config.get(key).and_then(Value::as_str)
+    }
+}
+
+/// The terminal mechanisms a record may name (`behaviour::Terminal`, kebab-case).
+pub const TERMINALS: [&str; 4] = ["success", "grounding", "interaction-limit", "model-done"];
+/// The failure classes a record may name (`attribution`; null for a success).
+pub const ATTRIBUTIONS: [&str; 4] = ["representation", "search", "grounding", "goal"];
+
+fn record_stem(path: &Path) -> String {
+    let name = path.file_name().and_then(|n| n.to_str()).unwrap_or_default();
+    let name = name.strip_suffix(".jsonl").unwrap_or(name);
+    name.split(".shard-").next().unwrap_or(name).to_string()
+}
+
+/// The record files named by `arguments`: a file as itself, a folder as the `*.jsonl` files
+/// directly inside it (sorted).
+pub fn record_paths(arguments: &[PathBuf]) -> Result<Vec<PathBuf>, ReportError> {
+    let mut paths = Vec::new();
+    for argument in arguments {
+        if argument.is_dir() {
+            let entries = std::fs::read_dir(argument).map_err(|source| RecordError::Io { path: argument.clone(), source })?;
+            let mut found: Vec<PathBuf> =
+                entries.flatten().map(|e| e.path()).filter(|p| p.is_file() && p.extension().is_some_and(|e| e == "jsonl")).collect();
+            if found.is_empty() {
+                return Err(ReportError::NoRecords(format!("{}: no `*.jsonl` record files in this folder", argument.display())));
+            }
+            found.sort();
+            paths.extend(found);
+        } else {
+            paths.push(argument.clone());
+        }
+    }
+    if paths.is_empty() {
+        return Err(ReportError::NoRecords("no record files given".into()));
+    }
+    Ok(paths)
+}
+
+/// Reads the record file at `path` and the configuration beside it.
+pub fn load(path: &Path) -> Result<RecordSet, ReportError> {
+    let config_path = path.with_file_name(format!("{}.config.json", record_stem(path)));
+    let config_fault = |reason: String| ReportError::Config { path: path.to_path_buf(), config: config_path.clone(), reason };
+    let config_text = std::fs::read_to_string(&config_path).map_err(|e| config_fault(format!("cannot read it: {e}")))?;
+    let config: Map<String, Value> =
+        serde_json::from_str(&config_text).map_err(|e| config_fault(format!("not a JSON object: {e} (line {})", e.line())))?;
+    for key in ["agent", "benchmark"] {
+        if !config.get(key).is_some_and(Value::is_string) {
+            return Err(config_fault(format!("no string `{key}`")));
+        }
+    }
+    let hash = config_hash(&Value::Object(config.clone()));
+    let text = std::fs::read_to_string(path).map_err(|source| RecordError::Io { path: path.to_path_buf(), source })?;
+    let whole = text.rfind('\n').map_or(0, |i| i + 1);
+    let mut warnings = Vec::new();
+    if whole < text.len() {
+        let line = text[..whole].lines().count() + 1;
+        warnings.push(format!("{}:{line}: a record cut short (a run in progress, or killed) is left out", path.display()));
+    }
+    let text = &text[..whole];
+    let lines: Vec<usize> = text.lines().enumerate().filter(|(_, l)| !l.trim().is_empty()).map(|(n, _)| n + 1).collect();
+    let fields = parse_records(path, text, Some(&hash))?;
+    let mut records = Vec::with_capacity(fields.len());
+    for (line, fields) in lines.into_iter().zip(fields) {
+        check(path, line, &fields)?;
+        records.push(Record { line, fields });
+    }
+    Ok(RecordSet { path: path.to_path_buf(), config, hash, records, warnings })
+}
+
+/// The fields a report reads from every record.
+fn check(path: &Path, line: usize, fields: &Map<String, Value>) -> Result<(), RecordError> {
+    let bad = |message: String| RecordError::Bad { path: path.to_path_buf(), line, message };
+    if !fields.get("success").is_some_and(Value::is_boolean) {
+        return Err(bad("no boolean `success`: every record says whether its task succeeded".into()));
+    }
+    if let Some(terminal) = fields.get("terminal")
+        && !terminal.as_str().is_some_and(|t| TERMINALS.contains(&t))
+    {
+        return Err(bad(format!("`terminal` is {terminal}, not one of {}", TERMINALS.join(", "))));
+    }
+    if let Some(attribution) = fields.get("attribution")
+        && !(attribution.is_null() || attribution.as_str().is_some_and(|a| ATTRIBUTIONS.contains(&a)))
+    {
+        return Err(bad(format!("`attribution` is {attribution}, not null or one of {}", ATTRIBUTIONS.join(", "))));
+    }
+    Ok(())
+}
