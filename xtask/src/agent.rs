@@ -65,19 +65,23 @@ pub struct AgentArgs {
     json: bool,
 }
 
-/// Phase I's chat model, named as `--explorer` names it.
+/// Phase I's policy, named as `--explorer` names it: `systematic` or a chat model.
 pub fn explorer(name: &str, served_model: &str) -> anyhow::Result<Box<dyn Policy>> {
     if name == "systematic" {
         return Ok(Box::new(Systematic));
     }
-    let model: Box<dyn ChatModel> = if let Some(url) = name.strip_prefix("openai:") {
-        Box::new(ChatClient::new(ClientConfig::new(url, served_model)).map_err(|e| InputError(format!("{url}: {e}")))?)
-    } else {
-        let path = crate::lm::resolve_model(name)?;
-        let model = LocalModel::load(&path).map_err(|e| InputError(format!("{}: {e}", path.display())))?;
-        Box::new(LocalChat::new(model, name).map_err(|e| InputError(format!("{}: {e}", path.display())))?)
-    };
-    Ok(Box::new(ChatPolicy::new(model, name)))
+    Ok(Box::new(ChatPolicy::new(chat_model(name, served_model)?, name)))
+}
+
+/// A chat model by name: `openai:URL` (a served model, `served_model` names it), `smollm2` (the
+/// local default model) or a GGUF path, through `LocalChat`. An unknown name is bad input.
+pub fn chat_model(name: &str, served_model: &str) -> anyhow::Result<Box<dyn ChatModel>> {
+    if let Some(url) = name.strip_prefix("openai:") {
+        return Ok(Box::new(ChatClient::new(ClientConfig::new(url, served_model)).map_err(|e| InputError(format!("{url}: {e}")))?));
+    }
+    let path = crate::lm::resolve_model(name)?;
+    let model = LocalModel::load(&path).map_err(|e| InputError(format!("{}: {e}", path.display())))?;
+    Ok(Box::new(LocalChat::new(model, name).map_err(|e| InputError(format!("{}: {e}", path.display())))?))
 }
 
 /// Phase II as `--planner`, `--lm` and the decoding options say.
@@ -143,11 +147,17 @@ pub fn ontology(benchmark: &str) -> anyhow::Result<Ontology> {
     Ok(Ontology::from_text(&text, &path.display().to_string()).map_err(|e| InputError(e.to_string()))?)
 }
 
-/// An ALFWorld game and its adapter.
-pub fn alfworld(game: &std::path::Path) -> anyhow::Result<(AlfworldEnv, AlfworldAdapter, ClassGoal)> {
+/// An ALFWorld game (`game.tw-pddl` or its folder) and its goal at class level.
+pub fn alfworld_env(game: &std::path::Path) -> anyhow::Result<(AlfworldEnv, ClassGoal)> {
     let game = if game.is_dir() { game.join("game.tw-pddl") } else { game.to_path_buf() };
     let env = AlfworldEnv::from_game_file(&game).map_err(|e| InputError(e.to_string()))?;
     let goal = parse_goal(env.goal()).map_err(|e| InputError(e.to_string()))?;
+    Ok((env, goal))
+}
+
+/// An ALFWorld game and its adapter.
+pub fn alfworld(game: &std::path::Path) -> anyhow::Result<(AlfworldEnv, AlfworldAdapter, ClassGoal)> {
+    let (env, goal) = alfworld_env(game)?;
     let fixtures = benchmark_data::fixtures_dir();
     let domain_text = std::fs::read_to_string(fixtures.join("alfworld/alfred.pddl")).context("ALFWorld's domain")?;
     let domain = pddl_syntax::parse_domain(&domain_text).map_err(|e| anyhow::anyhow!("alfred.pddl: {e:?}"))?;
@@ -156,15 +166,21 @@ pub fn alfworld(game: &std::path::Path) -> anyhow::Result<(AlfworldEnv, Alfworld
     Ok((env, adapter, goal))
 }
 
+/// A VirtualHome task and its goal at class level.
+pub fn virtualhome_env(benchmark: &str, task: &str, task_dir: Option<&std::path::Path>) -> anyhow::Result<(VirtualhomeEnv, ClassGoal)> {
+    let loaded = crate::env_virtualhome::load_task(benchmark, task, task_dir).map_err(|e| InputError(e.to_string()))?;
+    let env = VirtualhomeEnv::new(loaded, benchmark);
+    let goal = parse_goal(env.goal()).map_err(|e| InputError(e.to_string()))?;
+    Ok((env, goal))
+}
+
 /// A VirtualHome task and its adapter.
 pub fn virtualhome(
     benchmark: &str,
     task: &str,
     task_dir: Option<&std::path::Path>,
 ) -> anyhow::Result<(VirtualhomeEnv, VirtualhomeAdapter, ClassGoal)> {
-    let loaded = crate::env_virtualhome::load_task(benchmark, task, task_dir).map_err(|e| InputError(e.to_string()))?;
-    let env = VirtualhomeEnv::new(loaded, benchmark);
-    let goal = parse_goal(env.goal()).map_err(|e| InputError(e.to_string()))?;
+    let (env, goal) = virtualhome_env(benchmark, task, task_dir)?;
     let adapter = VirtualhomeAdapter::new(ontology("virtualhome")?).map_err(anyhow::Error::msg)?;
     Ok((env, adapter, goal))
 }

@@ -11,6 +11,10 @@
 //!   environment; records carry the episode, the terminal mechanism and the failure response.
 //! - `planner`: the same Phase I, then A* with LM-cut on the grounded problem (the symbolic
 //!   control).
+//! - `direct`: the direct interactive policy baseline ([`exploration_harness::direct`]): the chat
+//!   model `--explorer` names chooses one class-level action per turn from the goal, the
+//!   observation, the history and the last action's feedback; records carry the episode, the
+//!   terminal mechanism, the failure response and the §5.3 attribution (grounding or goal).
 //!
 //! Records go to `<out>/<benchmark>-<agent>-<hash>.jsonl`, named by the run's configuration
 //! ([`eval_harness::records`]): a rerun resumes, a killed run loses no finished task, another
@@ -24,11 +28,12 @@ use benchmark_data::{Benchmark, Extra, TaskFiles};
 use eval_harness::behaviour::{failure_response, terminal};
 use eval_harness::records::{RecordFile, Shard};
 use exploration_harness::EpisodeConfig;
+use exploration_harness::direct::{DirectConfig, MAX_REPLY_TOKENS, run_direct};
 use serde::Serialize;
 use serde_json::{Value, json};
 use transition_model::{Spelling, TransitionModel};
 
-use crate::agent::{PhaseTwoRunner, alfworld, episode, explorer, virtualhome};
+use crate::agent::{PhaseTwoRunner, alfworld, alfworld_env, chat_model, episode, explorer, virtualhome, virtualhome_env};
 use crate::input::InputError;
 use crate::phase2::{DecodeArgs, LmArgs};
 
@@ -39,6 +44,7 @@ pub enum AgentName {
     Expert,
     Ours,
     Planner,
+    Direct,
 }
 
 /// What an agent is evaluated on.
@@ -69,7 +75,7 @@ impl Suite {
             // The expert plans are the benchmarks' own: the rearrangement set's reference
             // programs are checked by `cargo xtask rearrange` and its tests instead.
             AgentName::Expert => vec![Suite::AlfworldSeen, Suite::AlfworldTrain, Suite::VirtualhomeEai],
-            AgentName::Ours | AgentName::Planner => vec![Suite::AlfworldSeen, Suite::VirtualhomeRearrange],
+            AgentName::Ours | AgentName::Planner | AgentName::Direct => vec![Suite::AlfworldSeen, Suite::VirtualhomeRearrange],
         }
     }
 }
@@ -77,8 +83,8 @@ impl Suite {
 #[derive(Debug, clap::Args)]
 pub struct EvalArgs {
     /// Benchmarks: alfworld-seen, alfworld-train, virtualhome-eai, virtualhome-rearrange
-    /// (comma-separated), or all [expert: the first three; ours, planner: alfworld-seen and
-    /// virtualhome-rearrange].
+    /// (comma-separated), or all [expert: the first three; ours, planner, direct: alfworld-seen
+    /// and virtualhome-rearrange].
     #[arg(long, default_value = "all")]
     benchmark: String,
     /// The agent.
@@ -95,11 +101,13 @@ pub struct EvalArgs {
     /// merge` joins the shards.
     #[arg(long)]
     shard: Option<Shard>,
-    /// Folder of EAI task files for `virtualhome-eai` with `ours`/`planner` [default: the 33
+    /// Folder of EAI task files for `virtualhome-eai` with `ours`/`planner`/`direct` [default: the 33
     /// in fixtures/virtualhome-eai/graphs; `cargo xtask fetch-data` prints the folder of all 342].
     #[arg(long)]
     task_dir: Option<PathBuf>,
     /// Phase I's policy (ours, planner): `systematic`, `smollm2`, a GGUF path, `openai:URL`.
+    /// The direct agent's chat model (direct): `smollm2`, a GGUF path, or `openai:URL` with
+    /// `--served-model` naming the served model.
     #[arg(long, default_value = "systematic")]
     explorer: String,
     #[command(flatten)]
@@ -115,6 +123,10 @@ pub struct EvalArgs {
     /// Beyond the paper: replan after a refused step.
     #[arg(long)]
     closed_loop: bool,
+    /// The direct agent's threshold: failed turns in a row that end an episode (the paper's
+    /// "ungroundable threshold", whose value it does not give).
+    #[arg(long, default_value_t = exploration_harness::direct::FAILURE_LIMIT, value_parser = crate::input::at_least_one)]
+    failure_limit: usize,
     /// Folder for the records.
     #[arg(long, default_value = "target/eval")]
     out: PathBuf,
@@ -252,16 +264,81 @@ impl Embodied<'_> {
     }
 }
 
+/// The direct agent: one chat model across tasks.
+struct Direct<'a> {
+    args: &'a EvalArgs,
+    model: Box<dyn vlm_client::ChatModel>,
+}
+
+impl Direct<'_> {
+    fn run(&mut self, suite: Suite, task: &EvalTask) -> anyhow::Result<Value> {
+        let start = Instant::now();
+        let args = self.args;
+        let config = |benchmark: &str| DirectConfig {
+            budget: args.budget.unwrap_or(DirectConfig::paper(benchmark).budget),
+            failure_limit: args.failure_limit,
+            max_reply_tokens: MAX_REPLY_TOKENS,
+        };
+        let (ep, budget) = match task {
+            EvalTask::Game { path, .. } => {
+                let (mut env, goal) = alfworld_env(path)?;
+                let config = config("alfworld");
+                (run_direct(&mut env, self.model.as_mut(), &goal, &config)?, config.budget)
+            }
+            EvalTask::Virtualhome { id } => {
+                let dir = if suite == Suite::VirtualhomeEai { args.task_dir.as_deref() } else { None };
+                let (mut env, goal) = virtualhome_env(suite.name(), id, dir)?;
+                let config = config(suite.name());
+                (run_direct(&mut env, self.model.as_mut(), &goal, &config)?, config.budget)
+            }
+            EvalTask::Files(files) => anyhow::bail!("{}: not an environment task", files.id),
+        };
+        let response = failure_response(&ep.requests(), ep.success);
+        Ok(json!({
+            "task": task.id(), "agent": args.agent, "success": ep.success, "steps": ep.steps.len(), "end": ep.end,
+            "terminal": terminal(ep.success, ep.model_done(), ep.steps.len(), budget), "failure_response": response,
+            "attribution": ep.attribution, "model_calls": ep.usage.model_calls, "generated_tokens": ep.usage.generated_tokens,
+            "prompt_tokens": ep.usage.prompt_tokens, "images": ep.usage.images, "observations": ep.usage.observations,
+            "millis": start.elapsed().as_secs_f64() * 1e3, "episode": ep,
+        }))
+    }
+}
+
+/// Who runs the tasks of an evaluation.
+enum Runner<'a> {
+    Expert,
+    Embodied(Box<Embodied<'a>>),
+    Direct(Direct<'a>),
+}
+
+/// The served model's name where `model` is `openai:URL` (it changes what the run finds).
+fn served_model(args: &EvalArgs) -> Option<&str> {
+    args.explorer.starts_with("openai:").then_some(args.lm.served_model.as_str())
+}
+
 /// The configuration that names a run's records: everything that changes what it finds.
 fn config(args: &EvalArgs, suite: Suite) -> Value {
     let mut config = json!({"agent": args.agent, "benchmark": suite.name(), "subset": args.subset});
+    let task_dir = if suite == Suite::VirtualhomeEai { args.task_dir.as_ref().map(|p| p.display().to_string()) } else { None };
+    if args.agent == AgentName::Direct {
+        let more = json!({
+            "model": args.explorer, "served_model": served_model(args), "budget": args.budget, "failure_limit": args.failure_limit,
+            "max_reply_tokens": MAX_REPLY_TOKENS, "task_dir": task_dir,
+        });
+        config.as_object_mut().expect("object").extend(more.as_object().expect("object").clone());
+        return config;
+    }
     if args.agent != AgentName::Expert {
         let more = json!({
             "explorer": args.explorer, "planner": if args.agent == AgentName::Ours { "mcts" } else { "astar" },
             "budget": args.budget, "time_limit": args.time_limit, "closed_loop": args.closed_loop,
-            "task_dir": if suite == Suite::VirtualhomeEai { args.task_dir.as_ref().map(|p| p.display().to_string()) } else { None },
+            "task_dir": task_dir,
         });
         config.as_object_mut().expect("object").extend(more.as_object().expect("object").clone());
+        // Only where the explorer is served: the hashes of other runs stay as they were.
+        if let Some(served) = served_model(args) {
+            config.as_object_mut().expect("object").insert("served_model".into(), json!(served));
+        }
         if args.agent == AgentName::Ours {
             let phase2 = json!({"lm": &args.lm, "decode": &args.decode});
             config.as_object_mut().expect("object").extend(phase2.as_object().expect("object").clone());
@@ -287,13 +364,19 @@ pub fn run(args: EvalArgs) -> anyhow::Result<ExitCode> {
     if args.agent == AgentName::Expert && suites.contains(&Suite::VirtualhomeRearrange) {
         return Err(InputError("--agent expert: the rearrangement set has no expert plans in the benchmark's own form".into()).into());
     }
-    let mut embodied = match args.agent {
-        AgentName::Expert => None,
+    let mut runner = match args.agent {
+        AgentName::Expert => Runner::Expert,
+        AgentName::Direct => {
+            if args.explorer == "systematic" {
+                return Err(InputError("--agent direct needs a chat model: --explorer smollm2, a GGUF path, or openai:URL".into()).into());
+            }
+            Runner::Direct(Direct { args: &args, model: chat_model(&args.explorer, &args.lm.served_model)? })
+        }
         agent => {
             let planner = if agent == AgentName::Ours { "mcts" } else { "astar" };
             let policy = explorer(&args.explorer, &args.lm.served_model)?;
             let phase2 = PhaseTwoRunner::new(planner, &args.lm, &args.decode, args.time_limit)?;
-            Some(Embodied { args: &args, policy, phase2 })
+            Runner::Embodied(Box::new(Embodied { args: &args, policy, phase2 }))
         }
     };
     let agent_name = serde_json::to_value(args.agent)?.as_str().unwrap_or_default().to_string();
@@ -313,10 +396,11 @@ pub fn run(args: EvalArgs) -> anyhow::Result<ExitCode> {
             if records.done().contains(task.id()) {
                 continue;
             }
-            let record = match (&mut embodied, task) {
-                (None, EvalTask::Files(files)) => expert(files),
-                (Some(embodied), task) => embodied.run(suite, task),
-                (None, _) => anyhow::bail!("{}: the expert needs the benchmark's files", task.id()),
+            let record = match (&mut runner, task) {
+                (Runner::Expert, EvalTask::Files(files)) => expert(files),
+                (Runner::Embodied(embodied), task) => embodied.run(suite, task),
+                (Runner::Direct(direct), task) => direct.run(suite, task),
+                (Runner::Expert, _) => anyhow::bail!("{}: the expert needs the benchmark's files", task.id()),
             }
             .map_err(|e| e.context(format!("task {}", task.id())))?;
             records.append(index, &record)?;

@@ -304,7 +304,7 @@ pub fn user_prompt(input: &DirectInput<'_>) -> String {
          Previous actions:\n{history}\n\n\
          Feedback:\n{feedback}\n\n\
          Observation:\n{observation}\n\n\
-         Reply with {{\"action\": \"<one action line>\", \"done\": false}}, or {{\"action\": \"DONE\", \"done\": true}} once the goal is achieved.",
+         Reply with JSON only: {{\"action\": \"<one action line>\", \"done\": false}}. Set \"done\" to true only once the goal is achieved.",
         goal = input.goal.trim(),
         world = world(input.benchmark),
         objects = input.objects.join(", "),

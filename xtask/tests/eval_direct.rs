@@ -1,0 +1,47 @@
+//! `cargo xtask eval --agent direct`: a model that is not there, or no chat model at all, is
+//! bad input (exit 2) before any record file is made. Needs no model file.
+
+mod common;
+
+use common::xtask;
+
+fn out(name: &str) -> std::path::PathBuf {
+    let dir = std::path::PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(format!("eval-direct-{name}-{}", std::process::id()));
+    std::fs::remove_dir_all(&dir).ok();
+    dir
+}
+
+#[test]
+fn an_unknown_model_is_bad_input() {
+    let dir = out("unknown");
+    let output = xtask(&[
+        "eval",
+        "--agent",
+        "direct",
+        "--explorer",
+        "no-such-model.gguf",
+        "--benchmark",
+        "alfworld-seen",
+        "--limit",
+        "1",
+        "--out",
+        dir.to_str().unwrap(),
+    ]);
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert_eq!(output.status.code(), Some(2), "{stderr}");
+    assert!(stderr.contains("no-such-model.gguf"), "{stderr}");
+    assert!(!dir.exists(), "no records for a run that never started");
+}
+
+#[test]
+fn the_direct_agent_needs_a_chat_model() {
+    let dir = out("systematic");
+    let output = xtask(&["eval", "--agent", "direct", "--benchmark", "alfworld-seen", "--out", dir.to_str().unwrap()]);
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert_eq!(output.status.code(), Some(2), "{stderr}");
+    assert!(stderr.contains("--agent direct needs a chat model"), "{stderr}");
+
+    let output = xtask(&["eval", "--agent", "direct", "--explorer", "smollm2", "--failure-limit", "0", "--out", dir.to_str().unwrap()]);
+    assert_eq!(output.status.code(), Some(2), "{}", String::from_utf8_lossy(&output.stderr));
+    assert!(!dir.exists());
+}
