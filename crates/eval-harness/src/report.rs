@@ -30,7 +30,7 @@
 //!     warnings: vec![],
 //! };
 //! let report = build(&[set], &ReportOptions::default())?;
-//! assert!(report.markdown.contains("| Planner (A*) | — | 50.0 (n=2) |"));
+//! assert!(report.markdown.contains("| Planner (A*) | — | **50.0 (n=2)** |"));
 //! assert_eq!(report.episodes.len(), 2);
 //! # Ok::<(), eval_harness::report::ReportError>(())
 //! ```

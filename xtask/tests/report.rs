@@ -1,0 +1,69 @@
+//! `cargo xtask report`: what it writes from eval-harness's hand-written record files, and
+//! exit 2 with the file and line for input that is not records.
+
+mod common;
+
+use std::path::{Path, PathBuf};
+
+use common::xtask;
+
+fn fixtures() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../crates/eval-harness/tests/fixtures/report")
+}
+
+fn scratch(name: &str) -> PathBuf {
+    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(format!("xtask-report-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).expect("scratch folder");
+    dir
+}
+
+#[test]
+fn report_writes_tables_figures_and_a_page_per_episode() {
+    let out = scratch("out");
+    let output = xtask(&["report", &fixtures().display().to_string(), "--out", &out.display().to_string(), "--replicates", "200"]);
+    assert!(output.status.success(), "{}", String::from_utf8_lossy(&output.stderr));
+    assert!(String::from_utf8_lossy(&output.stdout).contains("11 record file(s), 60 record(s)"));
+    let markdown = std::fs::read_to_string(out.join("report.md")).expect("report.md");
+    assert!(markdown.contains("## Task success (%) (Table 1)") && markdown.contains("200 replicates"));
+    let index = std::fs::read_to_string(out.join("index.html")).expect("index.html");
+    for figure in ["tokens.svg", "images.svg", "observations.svg", "calls.svg", "attribution.svg"] {
+        let svg = std::fs::read_to_string(out.join(figure)).expect(figure);
+        assert!(svg.starts_with("<svg xmlns=\"http://www.w3.org/2000/svg\""), "{figure}");
+        assert!(index.contains(&format!("href=\"{figure}\"")));
+    }
+    let mut pages = 0;
+    for run in std::fs::read_dir(out.join("episodes")).expect("episodes/").flatten() {
+        for page in std::fs::read_dir(run.path()).expect("a run's pages").flatten() {
+            let relative = page.path().strip_prefix(&out).expect("under out").display().to_string();
+            assert!(index.contains(&format!("href=\"{relative}\"")), "{relative} is not linked");
+            pages += 1;
+        }
+    }
+    assert_eq!(pages, 60);
+}
+
+#[test]
+fn input_that_is_not_records_exits_2_naming_file_and_line() {
+    let dir = scratch("bad");
+    let stem = "alfworld-seen-expert-8ab1a4359acc";
+    std::fs::copy(fixtures().join(format!("{stem}.config.json")), dir.join(format!("{stem}.config.json"))).expect("copy");
+    let records = std::fs::read_to_string(fixtures().join(format!("{stem}.jsonl"))).expect("records");
+    let path = dir.join(format!("{stem}.jsonl"));
+    std::fs::write(&path, format!("{}\n<html>not a record</html>\n", records.lines().next().unwrap())).expect("write");
+    let out = dir.join("out").display().to_string();
+
+    let output = xtask(&["report", &path.display().to_string(), "--out", &out]);
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert_eq!(output.status.code(), Some(2), "{stderr}");
+    assert!(stderr.starts_with(&format!("error: {}:2: not a JSON object", path.display())), "{stderr}");
+    assert!(!stderr.contains("panicked"));
+
+    let missing = dir.join("missing.jsonl").display().to_string();
+    let output = xtask(&["report", &missing, "--out", &out]);
+    assert_eq!(output.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&output.stderr).contains("missing.jsonl"));
+
+    let output = xtask(&["report", &fixtures().display().to_string(), "--replicates", "0", "--out", &out]);
+    assert_eq!(output.status.code(), Some(2));
+}
