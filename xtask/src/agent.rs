@@ -12,6 +12,7 @@ use std::time::Duration;
 
 use anyhow::Context;
 use exploration_harness::alfworld::AlfworldAdapter;
+use exploration_harness::chat_planner::{ChatPlannerConfig, plan_by_chat};
 use exploration_harness::chat_policy::ChatPolicy;
 use exploration_harness::virtualhome::VirtualhomeAdapter;
 use exploration_harness::{
@@ -44,6 +45,8 @@ pub struct AgentArgs {
     lm: LmArgs,
     #[command(flatten)]
     decode: DecodeArgs,
+    #[command(flatten)]
+    chat: ChatPlannerArgs,
     /// Environment steps for the whole episode [default: the paper's, 55 ALFWorld, 20 VirtualHome].
     #[arg(long)]
     budget: Option<usize>,
@@ -84,9 +87,26 @@ pub fn chat_model(name: &str, served_model: &str) -> anyhow::Result<Box<dyn Chat
     Ok(Box::new(LocalChat::new(model, name).map_err(|e| InputError(format!("{}: {e}", path.display())))?))
 }
 
-/// Phase II as `--planner`, `--lm` and the decoding options say.
+/// Phase II by a chat model without the constraint (`exploration_harness::chat_planner`): the
+/// paper's unconstrained thinking condition, or unconstrained greedy through a chat endpoint.
+#[derive(Debug, Clone, Default, clap::Args, serde::Serialize)]
+pub struct ChatPlannerArgs {
+    /// Phase II by this chat model, writing the plan as free text from the same planning prompt,
+    /// instead of `--lm`'s decoder: `smollm2`, a GGUF path, or `openai:URL` (`--served-model`
+    /// names it).
+    #[arg(long)]
+    pub chat_planner: Option<String>,
+    /// With `--chat-planner`: thinking on, Qwen3's recommended sampling (temperature 0.6, top-p
+    /// 0.95, top-k 20, seed `--seed`), 32K tokens: the paper's unconstrained thinking. Without
+    /// it: greedy, 512 tokens, thinking off.
+    #[arg(long, requires = "chat_planner")]
+    pub thinking: bool,
+}
+
+/// Phase II as `--planner`, `--lm`, `--chat-planner` and the decoding options say.
 pub struct PhaseTwoRunner {
     planner: String,
+    chat: Option<(Box<dyn ChatModel>, ChatPlannerConfig)>,
     lm: Option<Box<dyn LanguageModel>>,
     vocab: Option<Arc<token_constraint::Vocabulary>>,
     decode: DecodeArgs,
@@ -94,7 +114,12 @@ pub struct PhaseTwoRunner {
 }
 
 impl PhaseTwoRunner {
-    pub fn new(planner: &str, lm: &LmArgs, decode: &DecodeArgs, time_limit: f64) -> anyhow::Result<PhaseTwoRunner> {
+    pub fn new(planner: &str, lm: &LmArgs, decode: &DecodeArgs, chat: &ChatPlannerArgs, time_limit: f64) -> anyhow::Result<PhaseTwoRunner> {
+        if let Some(name) = &chat.chat_planner {
+            let config = if chat.thinking { ChatPlannerConfig::thinking(decode.seed) } else { ChatPlannerConfig::greedy() };
+            let chat = Some((chat_model(name, &lm.served_model)?, config));
+            return Ok(PhaseTwoRunner { planner: "chat".into(), chat, lm: None, vocab: None, decode: decode.clone(), time_limit });
+        }
         let (model, vocab) = if planner == "mcts" {
             decode.config(time_limit)?;
             let model = load_lm(lm)?;
@@ -103,11 +128,14 @@ impl PhaseTwoRunner {
         } else {
             (None, None)
         };
-        Ok(PhaseTwoRunner { planner: planner.to_string(), lm: model, vocab, decode: decode.clone(), time_limit })
+        Ok(PhaseTwoRunner { planner: planner.to_string(), chat: None, lm: model, vocab, decode: decode.clone(), time_limit })
     }
 
     pub fn plan(&mut self, grounded: &Grounded) -> Result<PhaseTwo, String> {
         let model = &grounded.model;
+        if let Some((chat, config)) = self.chat.as_mut() {
+            return plan_by_chat(chat.as_mut(), grounded, config);
+        }
         if self.planner == "astar" {
             let actions =
                 heuristics::search::optimal_plan(model, Duration::from_secs_f64(self.time_limit)).map_err(|s| format!("{s:?}"))?;
@@ -200,7 +228,7 @@ pub fn episode<E: Environment + Judge>(
 
 pub fn run(args: AgentArgs) -> anyhow::Result<ExitCode> {
     let mut policy = explorer(&args.explorer, &args.lm.served_model)?;
-    let mut phase2 = PhaseTwoRunner::new(&args.planner, &args.lm, &args.decode, args.time_limit)?;
+    let mut phase2 = PhaseTwoRunner::new(&args.planner, &args.lm, &args.decode, &args.chat, args.time_limit)?;
     let (ep, name) = if let Some(game) = &args.which.game {
         let (mut env, mut adapter, goal) = alfworld(game)?;
         let config = EpisodeConfig { budget: args.budget.unwrap_or(55), closed_loop: args.closed_loop };

@@ -33,7 +33,7 @@ use serde::Serialize;
 use serde_json::{Value, json};
 use transition_model::{Spelling, TransitionModel};
 
-use crate::agent::{PhaseTwoRunner, alfworld, alfworld_env, chat_model, episode, explorer, virtualhome, virtualhome_env};
+use crate::agent::{ChatPlannerArgs, PhaseTwoRunner, alfworld, alfworld_env, chat_model, episode, explorer, virtualhome, virtualhome_env};
 use crate::input::InputError;
 use crate::phase2::{DecodeArgs, LmArgs};
 
@@ -114,6 +114,8 @@ pub struct EvalArgs {
     lm: LmArgs,
     #[command(flatten)]
     decode: DecodeArgs,
+    #[command(flatten)]
+    chat: ChatPlannerArgs,
     /// Environment steps per episode [default: the paper's, 55 ALFWorld, 20 VirtualHome].
     #[arg(long)]
     budget: Option<usize>,
@@ -342,6 +344,10 @@ fn config(args: &EvalArgs, suite: Suite) -> Value {
         if args.agent == AgentName::Ours {
             let phase2 = json!({"lm": &args.lm, "decode": &args.decode});
             config.as_object_mut().expect("object").extend(phase2.as_object().expect("object").clone());
+            // Only with a chat planner: the hashes of other runs stay as they were.
+            if args.chat.chat_planner.is_some() {
+                config.as_object_mut().expect("object").insert("chat_planner".into(), json!(&args.chat));
+            }
         }
     }
     config
@@ -375,7 +381,7 @@ pub fn run(args: EvalArgs) -> anyhow::Result<ExitCode> {
         agent => {
             let planner = if agent == AgentName::Ours { "mcts" } else { "astar" };
             let policy = explorer(&args.explorer, &args.lm.served_model)?;
-            let phase2 = PhaseTwoRunner::new(planner, &args.lm, &args.decode, args.time_limit)?;
+            let phase2 = PhaseTwoRunner::new(planner, &args.lm, &args.decode, &args.chat, args.time_limit)?;
             Runner::Embodied(Box::new(Embodied { args: &args, policy, phase2 }))
         }
     };

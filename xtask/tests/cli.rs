@@ -421,3 +421,14 @@ fn time_limits_that_are_not_positive_seconds_are_bad_input() {
         assert_eq!(output.status.code(), Some(2), "phase2 --time-limit {limit}");
     }
 }
+
+/// The chat planner (unconstrained thinking / greedy through a chat model): `--thinking` needs
+/// it, and an unknown model is bad input before any episode runs.
+#[test]
+fn chat_planner_options_are_checked() {
+    let thinking = xtask(&["agent", "--benchmark", "virtualhome-rearrange", "--task", "fridge-003", "--thinking"]);
+    assert_eq!(thinking.status.code(), Some(2), "{}", String::from_utf8_lossy(&thinking.stderr));
+    let unknown = xtask(&["agent", "--benchmark", "virtualhome-rearrange", "--task", "fridge-003", "--chat-planner", "no-such-model"]);
+    assert_eq!(unknown.status.code(), Some(2), "{}", String::from_utf8_lossy(&unknown.stderr));
+    assert!(String::from_utf8_lossy(&unknown.stderr).contains("no-such-model"));
+}
