@@ -32,30 +32,12 @@ use crate::phase2::{DecodeArgs, LmArgs, load_lm};
 pub struct AgentArgs {
     #[command(flatten)]
     which: crate::env::TaskArgs,
-    /// Phase I's policy: `systematic` (the fixed sweep, no model), `smollm2` (the local default
-    /// model, decoding under the reply's schema), a GGUF path, or `openai:URL` (a served chat
-    /// model; `--served-model` names it).
-    #[arg(long, default_value = "systematic")]
-    explorer: String,
     /// Phase II's planner: `mcts` (the `--mode` of `--lm`, constrained MCTS by default) or
     /// `astar` (A* with LM-cut, the symbolic control).
     #[arg(long, default_value = "mcts", value_parser = ["mcts", "astar"])]
     planner: String,
     #[command(flatten)]
-    lm: LmArgs,
-    #[command(flatten)]
-    decode: DecodeArgs,
-    #[command(flatten)]
-    chat: ChatPlannerArgs,
-    /// Environment steps for the whole episode [default: the paper's, 55 ALFWorld, 20 VirtualHome].
-    #[arg(long)]
-    budget: Option<usize>,
-    /// Seconds of search for Phase II.
-    #[arg(long, default_value = "60", value_parser = crate::input::positive_seconds)]
-    time_limit: f64,
-    /// Beyond the paper: when a plan step is not executed, hand over again and replan.
-    #[arg(long)]
-    closed_loop: bool,
+    episode: EpisodeArgs,
     /// Write every command sent to the environment, one a line (an ALFWorld episode replays in
     /// the real engine with `../shared/anchors/alfworld_replay.py GAME FILE`).
     #[arg(long)]
@@ -66,6 +48,33 @@ pub struct AgentArgs {
     /// Print the episode record as one JSON object instead of text.
     #[arg(long)]
     json: bool,
+}
+
+/// How an episode runs, for `agent` and `eval`: Phase I's policy, Phase II's model and
+/// decoding, the step budget, the search time, open or closed loop.
+#[derive(Debug, clap::Args)]
+pub struct EpisodeArgs {
+    /// Phase I's policy: `systematic` (the fixed sweep, no model), `smollm2` (the local default
+    /// model, decoding under the reply's schema), a GGUF path, or `openai:URL` (a served chat
+    /// model; `--served-model` names it). For `eval --agent direct`: the direct agent's chat
+    /// model.
+    #[arg(long, default_value = "systematic")]
+    pub explorer: String,
+    #[command(flatten)]
+    pub lm: LmArgs,
+    #[command(flatten)]
+    pub decode: DecodeArgs,
+    #[command(flatten)]
+    pub chat: ChatPlannerArgs,
+    /// Environment steps for the whole episode [default: the paper's, 55 ALFWorld, 20 VirtualHome].
+    #[arg(long)]
+    pub budget: Option<usize>,
+    /// Seconds of search for Phase II.
+    #[arg(long, default_value = "60", value_parser = crate::input::positive_seconds)]
+    pub time_limit: f64,
+    /// Beyond the paper: when a plan step is not executed, hand over again and replan.
+    #[arg(long)]
+    pub closed_loop: bool,
 }
 
 /// Phase I's policy, named as `--explorer` names it: `systematic` or a chat model.
@@ -227,23 +236,24 @@ pub fn episode<E: Environment + Judge>(
 }
 
 pub fn run(args: AgentArgs) -> anyhow::Result<ExitCode> {
-    let mut policy = explorer(&args.explorer, &args.lm.served_model)?;
-    let mut phase2 = PhaseTwoRunner::new(&args.planner, &args.lm, &args.decode, &args.chat, args.time_limit)?;
+    let mut policy = explorer(&args.episode.explorer, &args.episode.lm.served_model)?;
+    let mut phase2 =
+        PhaseTwoRunner::new(&args.planner, &args.episode.lm, &args.episode.decode, &args.episode.chat, args.episode.time_limit)?;
     let (ep, name) = if let Some(game) = &args.which.game {
         let (mut env, mut adapter, goal) = alfworld(game)?;
-        let config = EpisodeConfig { budget: args.budget.unwrap_or(55), closed_loop: args.closed_loop };
+        let config = EpisodeConfig { budget: args.episode.budget.unwrap_or(55), closed_loop: args.episode.closed_loop };
         (episode(&mut env, &mut adapter, policy.as_mut(), &goal, config, &mut phase2), game.display().to_string())
     } else {
         let (benchmark, task) = (args.which.benchmark.as_deref().unwrap_or_default(), args.which.task.as_deref().unwrap_or_default());
         let (mut env, mut adapter, goal) = virtualhome(benchmark, task, args.which.task_dir.as_deref())?;
-        let config = EpisodeConfig { budget: args.budget.unwrap_or(20), closed_loop: args.closed_loop };
+        let config = EpisodeConfig { budget: args.episode.budget.unwrap_or(20), closed_loop: args.episode.closed_loop };
         (episode(&mut env, &mut adapter, policy.as_mut(), &goal, config, &mut phase2), format!("{benchmark}/{task}"))
     };
     if let Some(path) = &args.commands_out {
         let text: String = ep.steps.iter().map(|s| format!("{}\n", s.command)).collect();
         std::fs::write(path, text).with_context(|| format!("cannot write {}", path.display()))?;
     }
-    let record = json!({"task": name, "explorer": args.explorer, "planner": args.planner, "lm": args.lm.lm, "episode": ep});
+    let record = json!({"task": name, "explorer": args.episode.explorer, "planner": args.planner, "lm": args.episode.lm.lm, "episode": ep});
     if let Some(path) = &args.trace {
         std::fs::write(path, serde_json::to_string_pretty(&record)?).with_context(|| format!("cannot write {}", path.display()))?;
     }

@@ -33,9 +33,8 @@ use serde::Serialize;
 use serde_json::{Value, json};
 use transition_model::{Spelling, TransitionModel};
 
-use crate::agent::{ChatPlannerArgs, PhaseTwoRunner, alfworld, alfworld_env, chat_model, episode, explorer, virtualhome, virtualhome_env};
+use crate::agent::{EpisodeArgs, PhaseTwoRunner, alfworld, alfworld_env, chat_model, episode, explorer, virtualhome, virtualhome_env};
 use crate::input::InputError;
-use crate::phase2::{DecodeArgs, LmArgs};
 
 /// Who acts.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum, Serialize)]
@@ -105,26 +104,8 @@ pub struct EvalArgs {
     /// in fixtures/virtualhome-eai/graphs; `cargo xtask fetch-data` prints the folder of all 342].
     #[arg(long)]
     task_dir: Option<PathBuf>,
-    /// Phase I's policy (ours, planner): `systematic`, `smollm2`, a GGUF path, `openai:URL`.
-    /// The direct agent's chat model (direct): `smollm2`, a GGUF path, or `openai:URL` with
-    /// `--served-model` naming the served model.
-    #[arg(long, default_value = "systematic")]
-    explorer: String,
     #[command(flatten)]
-    lm: LmArgs,
-    #[command(flatten)]
-    decode: DecodeArgs,
-    #[command(flatten)]
-    chat: ChatPlannerArgs,
-    /// Environment steps per episode [default: the paper's, 55 ALFWorld, 20 VirtualHome].
-    #[arg(long)]
-    budget: Option<usize>,
-    /// Seconds of search for Phase II per episode.
-    #[arg(long, default_value = "60", value_parser = crate::input::positive_seconds)]
-    time_limit: f64,
-    /// Beyond the paper: replan after a refused step.
-    #[arg(long)]
-    closed_loop: bool,
+    episode: EpisodeArgs,
     /// The direct agent's threshold: failed turns in a row that end an episode (the paper's
     /// "ungroundable threshold", whose value it does not give).
     #[arg(long, default_value_t = exploration_harness::direct::FAILURE_LIMIT, value_parser = crate::input::at_least_one)]
@@ -238,15 +219,15 @@ impl Embodied<'_> {
         let (ep, budget) = match task {
             EvalTask::Game { path, .. } => {
                 let (mut env, mut adapter, goal) = alfworld(path)?;
-                let budget = args.budget.unwrap_or(55);
-                let config = EpisodeConfig { budget, closed_loop: args.closed_loop };
+                let budget = args.episode.budget.unwrap_or(55);
+                let config = EpisodeConfig { budget, closed_loop: args.episode.closed_loop };
                 (episode(&mut env, &mut adapter, self.policy.as_mut(), &goal, config, &mut self.phase2), budget)
             }
             EvalTask::Virtualhome { id } => {
                 let dir = if suite == Suite::VirtualhomeEai { args.task_dir.as_deref() } else { None };
                 let (mut env, mut adapter, goal) = virtualhome(suite.name(), id, dir)?;
-                let budget = args.budget.unwrap_or(20);
-                let config = EpisodeConfig { budget, closed_loop: args.closed_loop };
+                let budget = args.episode.budget.unwrap_or(20);
+                let config = EpisodeConfig { budget, closed_loop: args.episode.closed_loop };
                 (episode(&mut env, &mut adapter, self.policy.as_mut(), &goal, config, &mut self.phase2), budget)
             }
             EvalTask::Files(files) => anyhow::bail!("{}: not an environment task", files.id),
@@ -277,7 +258,7 @@ impl Direct<'_> {
         let start = Instant::now();
         let args = self.args;
         let config = |benchmark: &str| DirectConfig {
-            budget: args.budget.unwrap_or(DirectConfig::paper(benchmark).budget),
+            budget: args.episode.budget.unwrap_or(DirectConfig::paper(benchmark).budget),
             failure_limit: args.failure_limit,
             max_reply_tokens: MAX_REPLY_TOKENS,
         };
@@ -315,7 +296,7 @@ enum Runner<'a> {
 
 /// The served model's name where `model` is `openai:URL` (it changes what the run finds).
 fn served_model(args: &EvalArgs) -> Option<&str> {
-    args.explorer.starts_with("openai:").then_some(args.lm.served_model.as_str())
+    args.episode.explorer.starts_with("openai:").then_some(args.episode.lm.served_model.as_str())
 }
 
 /// The configuration that names a run's records: everything that changes what it finds.
@@ -324,7 +305,7 @@ fn config(args: &EvalArgs, suite: Suite) -> Value {
     let task_dir = if suite == Suite::VirtualhomeEai { args.task_dir.as_ref().map(|p| p.display().to_string()) } else { None };
     if args.agent == AgentName::Direct {
         let more = json!({
-            "model": args.explorer, "served_model": served_model(args), "budget": args.budget, "failure_limit": args.failure_limit,
+            "model": args.episode.explorer, "served_model": served_model(args), "budget": args.episode.budget, "failure_limit": args.failure_limit,
             "max_reply_tokens": MAX_REPLY_TOKENS, "task_dir": task_dir,
         });
         config.as_object_mut().expect("object").extend(more.as_object().expect("object").clone());
@@ -332,8 +313,8 @@ fn config(args: &EvalArgs, suite: Suite) -> Value {
     }
     if args.agent != AgentName::Expert {
         let more = json!({
-            "explorer": args.explorer, "planner": if args.agent == AgentName::Ours { "mcts" } else { "astar" },
-            "budget": args.budget, "time_limit": args.time_limit, "closed_loop": args.closed_loop,
+            "explorer": args.episode.explorer, "planner": if args.agent == AgentName::Ours { "mcts" } else { "astar" },
+            "budget": args.episode.budget, "time_limit": args.episode.time_limit, "closed_loop": args.episode.closed_loop,
             "task_dir": task_dir,
         });
         config.as_object_mut().expect("object").extend(more.as_object().expect("object").clone());
@@ -342,11 +323,11 @@ fn config(args: &EvalArgs, suite: Suite) -> Value {
             config.as_object_mut().expect("object").insert("served_model".into(), json!(served));
         }
         if args.agent == AgentName::Ours {
-            let phase2 = json!({"lm": &args.lm, "decode": &args.decode});
+            let phase2 = json!({"lm": &args.episode.lm, "decode": &args.episode.decode});
             config.as_object_mut().expect("object").extend(phase2.as_object().expect("object").clone());
             // Only with a chat planner: the hashes of other runs stay as they were.
-            if args.chat.chat_planner.is_some() {
-                config.as_object_mut().expect("object").insert("chat_planner".into(), json!(&args.chat));
+            if args.episode.chat.chat_planner.is_some() {
+                config.as_object_mut().expect("object").insert("chat_planner".into(), json!(&args.episode.chat));
             }
         }
     }
@@ -373,15 +354,15 @@ pub fn run(args: EvalArgs) -> anyhow::Result<ExitCode> {
     let mut runner = match args.agent {
         AgentName::Expert => Runner::Expert,
         AgentName::Direct => {
-            if args.explorer == "systematic" {
+            if args.episode.explorer == "systematic" {
                 return Err(InputError("--agent direct needs a chat model: --explorer smollm2, a GGUF path, or openai:URL".into()).into());
             }
-            Runner::Direct(Direct { args: &args, model: chat_model(&args.explorer, &args.lm.served_model)? })
+            Runner::Direct(Direct { args: &args, model: chat_model(&args.episode.explorer, &args.episode.lm.served_model)? })
         }
         agent => {
             let planner = if agent == AgentName::Ours { "mcts" } else { "astar" };
-            let policy = explorer(&args.explorer, &args.lm.served_model)?;
-            let phase2 = PhaseTwoRunner::new(planner, &args.lm, &args.decode, &args.chat, args.time_limit)?;
+            let policy = explorer(&args.episode.explorer, &args.episode.lm.served_model)?;
+            let phase2 = PhaseTwoRunner::new(planner, &args.episode.lm, &args.episode.decode, &args.episode.chat, args.episode.time_limit)?;
             Runner::Embodied(Box::new(Embodied { args: &args, policy, phase2 }))
         }
     };
