@@ -52,10 +52,44 @@ fn io(path: &Path) -> impl FnOnce(std::io::Error) -> RecordError + '_ {
     move |source| RecordError::Io { path: path.to_path_buf(), source }
 }
 
-/// `value` as canonical JSON: object keys sorted (serde_json's map is ordered), no spaces.
+/// `value` as canonical JSON: object keys sorted at every level, no spaces.
 pub fn canonical_json(value: &impl Serialize) -> String {
     let value = serde_json::to_value(value).unwrap_or(Value::Null);
-    value.to_string()
+    let mut out = String::new();
+    write_sorted(&value, &mut out);
+    out
+}
+
+/// Writes `value` with every object's keys in sorted order, whatever order its map keeps
+/// (serde_json keeps insertion order when any crate of the build turns on `preserve_order`).
+fn write_sorted(value: &Value, out: &mut String) {
+    match value {
+        Value::Object(map) => {
+            let mut keys: Vec<&String> = map.keys().collect();
+            keys.sort();
+            out.push('{');
+            for (i, key) in keys.into_iter().enumerate() {
+                if i > 0 {
+                    out.push(',');
+                }
+                out.push_str(&Value::from(key.as_str()).to_string());
+                out.push(':');
+                write_sorted(&map[key], out);
+            }
+            out.push('}');
+        }
+        Value::Array(items) => {
+            out.push('[');
+            for (i, item) in items.iter().enumerate() {
+                if i > 0 {
+                    out.push(',');
+                }
+                write_sorted(item, out);
+            }
+            out.push(']');
+        }
+        scalar => out.push_str(&scalar.to_string()),
+    }
 }
 
 /// The first 12 hex digits of the sha256 of [`canonical_json`]`(config)`.

@@ -121,3 +121,27 @@ fn shards_are_given_as_i_of_n() {
     let shard = Shard { index: 2, count: 3 };
     assert_eq!((0..9).filter(|&i| shard.selects(i)).collect::<Vec<_>>(), [1, 4, 7]);
 }
+
+/// The hash is of the keys sorted at every level, whatever order serde_json's map keeps (it
+/// keeps insertion order when any crate of the build turns on `preserve_order`, as the
+/// workspace's build does): fields declared out of order hash as the sorted text.
+#[test]
+fn canonical_json_sorts_keys_at_every_level() {
+    #[derive(serde::Serialize)]
+    struct Inner {
+        zeta: u8,
+        alpha: u8,
+    }
+    #[derive(serde::Serialize)]
+    struct Config {
+        width: u8,
+        agent: &'static str,
+        inner: Inner,
+        list: Vec<Inner>,
+    }
+    let config = Config { width: 16, agent: "ours", inner: Inner { zeta: 1, alpha: 2 }, list: vec![Inner { zeta: 3, alpha: 4 }] };
+    let text = eval_harness::records::canonical_json(&config);
+    assert_eq!(text, r#"{"agent":"ours","inner":{"alpha":2,"zeta":1},"list":[{"alpha":4,"zeta":3}],"width":16}"#);
+    let sorted: Value = serde_json::from_str(&text).expect("json");
+    assert_eq!(config_hash(&config), config_hash(&sorted));
+}
