@@ -5,7 +5,9 @@
 #   tools/screenshot_report.sh REPORT_DIR [OUT_DIR] [EPISODE_PAGE]
 #
 # REPORT_DIR: what `cargo xtask report ... --out REPORT_DIR` wrote. OUT_DIR (default
-# REPORT_DIR/screenshots) receives index.png, episode.png and one PNG per figure. EPISODE_PAGE: a path under
+# REPORT_DIR/screenshots) receives index.png (the top: the tables), index-figures.png and
+# index-episodes.png (further down: headless Chromium ignores a URL's #fragment, so these frame
+# index.html#figures and #episodes in a small wrapper page), episode.png and one PNG per figure. EPISODE_PAGE: a path under
 # REPORT_DIR (default: the first episode page, in sorted order). Needs Debian's `chromium`
 # (`apt-get install -y chromium`); set CHROMIUM to use another binary.
 set -euo pipefail
@@ -42,6 +44,13 @@ shoot() {
 }
 
 shoot "$report/index.html" "$out/index.png" 1280,2000
+for anchor in figures episodes; do
+    wrapper="$out/index-$anchor.html"
+    printf '<!DOCTYPE html><html><body style="margin:0"><iframe src="file://%s/index.html#%s" style="width:1280px;height:2000px;border:0"></iframe></body></html>\n' \
+        "$report" "$anchor" > "$wrapper"
+    shoot "$wrapper" "$out/index-$anchor.png" 1280,2000
+    rm -f "$wrapper"
+done
 shoot "$report/$episode" "$out/episode.png" 1280,2000
 for svg in "$report"/*.svg; do
     [[ -f $svg ]] || continue

@@ -91,25 +91,28 @@ fn chart(title: &str, axis: &str, legend: &[(&str, &str)], groups: &[Group], max
         let value = max * f64::from(i) / 5.0;
         let _ = writeln!(
             svg,
-            "<line x1=\"{0:.1}\" y1=\"{1}\" x2=\"{0:.1}\" y2=\"{2}\" stroke=\"#dddddd\"/><text x=\"{0:.1}\" y=\"{3}\" text-anchor=\"middle\" fill=\"#555555\">{4}{unit}</text>",
+            "<text x=\"{:.1}\" y=\"{}\" text-anchor=\"middle\" fill=\"#555555\">{}{unit}</text>",
             x(value),
-            TOP - 4.0,
-            height - 16.0,
             TOP - 10.0,
             number(value)
         );
     }
-    let _ = writeln!(svg, "<line x1=\"{PLOT_LEFT}\" y1=\"{}\" x2=\"{PLOT_LEFT}\" y2=\"{}\" stroke=\"#333333\"/>", TOP - 4.0, height - 16.0);
     let mut y = TOP;
     for group in groups {
         let _ = writeln!(
             svg,
-            "<text x=\"10\" y=\"{:.1}\" font-weight=\"bold\" stroke=\"#ffffff\" stroke-width=\"4\" paint-order=\"stroke\"><title>{}</title>{}</text>",
+            "<text x=\"10\" y=\"{:.1}\" font-weight=\"bold\"><title>{}</title>{}</text>",
             y + 15.0,
             escape(&group.label),
             escape(&clipped(&group.label, 120))
         );
         y += GROUP_HEADER;
+        // Grid lines and the axis beside this group's bars only, clear of its header.
+        let (top, bottom) = (y - 3.0, y + group.bars.len() as f64 * BAR_ROW - 3.0);
+        for i in 0..=5 {
+            let (at, colour) = (x(max * f64::from(i) / 5.0), if i == 0 { "#333333" } else { "#dddddd" });
+            let _ = writeln!(svg, "<line x1=\"{at:.1}\" y1=\"{top:.1}\" x2=\"{at:.1}\" y2=\"{bottom:.1}\" stroke=\"{colour}\"/>");
+        }
         for (benchmark, colour, segments) in &group.bars {
             let _ = writeln!(svg, "<text x=\"{}\" y=\"{:.1}\" text-anchor=\"end\">{}</text>", PLOT_LEFT - 8.0, y + 11.0, escape(benchmark));
             let mut left = 0.0;

@@ -187,13 +187,12 @@ pub(crate) fn index(study: &Study<'_>, sets: &[RecordSet], paths: &[Vec<String>]
     for table in tables {
         body.push_str(&table.html());
     }
-    body.push_str("</div>\n<div id=\"figures\">\n");
+    body.push_str("</div>\n<div id=\"figures\">\n<h2>Figures</h2>\n");
     for figure in figures {
         let id = figure.name.trim_end_matches(".svg");
         let _ = writeln!(
             body,
-            "<figure id=\"figure-{id}\">\n<h2>{}</h2>\n{}<figcaption>{} (<a href=\"{}\">{}</a>)</figcaption>\n</figure>",
-            escape(&figure.title),
+            "<figure id=\"figure-{id}\">\n{}<figcaption>{} (<a href=\"{}\">{}</a>)</figcaption>\n</figure>",
             figure.svg,
             escape(&figure.caption),
             figure.name,
@@ -329,9 +328,18 @@ fn steps_html(steps: &[Value]) -> String {
             }
         }
     }
-    let mut out = String::from("<table>\n<thead><tr><th class=\"num\">#</th><th>Phase</th><th>Request</th><th>Executed</th>");
+    let phases = steps.iter().any(|s| s.get("phase").is_some());
+    let mut out = String::from("<table>\n<thead><tr><th class=\"num\">#</th>");
+    if phases {
+        out.push_str("<th>Phase</th>");
+    }
+    out.push_str("<th>Request</th><th>Executed</th>");
     for key in &extra {
-        let _ = write!(out, "<th>{}</th>", escape(key));
+        let mut name: Vec<char> = key.replace('_', " ").chars().collect();
+        if let Some(first) = name.first_mut() {
+            *first = first.to_ascii_uppercase();
+        }
+        let _ = write!(out, "<th>{}</th>", escape(&name.into_iter().collect::<String>()));
     }
     out.push_str("<th>Observation</th></tr></thead>\n<tbody>\n");
     for (i, step) in steps.iter().enumerate() {
@@ -341,13 +349,11 @@ fn steps_html(steps: &[Value]) -> String {
             Some(false) => "<span class=\"bad\">✗ not executed</span>",
             None => "—",
         };
-        let _ = write!(
-            out,
-            "<tr><td class=\"num\">{}</td><td>{}</td><td><code>{}</code></td><td>{executed}</td>",
-            i + 1,
-            text("phase"),
-            text("command")
-        );
+        let _ = write!(out, "<tr><td class=\"num\">{}</td>", i + 1);
+        if phases {
+            let _ = write!(out, "<td>{}</td>", text("phase"));
+        }
+        let _ = write!(out, "<td><code>{}</code></td><td>{executed}</td>", text("command"));
         for key in &extra {
             let _ = write!(out, "<td>{}</td>", text(key));
         }
@@ -451,13 +457,19 @@ pub(crate) fn episode_page(study: &Study<'_>, set: &RecordSet, record: &Record) 
             }
             if let Some(detail) = episode.get("phase2_detail") {
                 body.push_str("<h2>Phase II</h2>\n");
-                match detail.as_object() {
-                    Some(detail) => body.push_str(&key_value_table(detail, &[])),
-                    None => {
-                        let _ = writeln!(body, "<p>{}</p>", value_html(detail));
+                match detail {
+                    Value::Object(detail) => body.push_str(&key_value_table(detail, &[])),
+                    Value::Null => {
+                        body.push_str("<p class=\"empty\">No Phase II summary: Phase II returned none (see the failure above).</p>\n")
+                    }
+                    other => {
+                        let _ = writeln!(body, "<p>{}</p>", value_html(other));
                     }
                 }
-                body.push_str("<p class=\"note\">The search tree is not recorded: the record keeps Phase II's summary above (stop reason, simulations, nodes, the plan's lines), not its nodes.</p>\n");
+                body.push_str(
+                    "<p class=\"note\">The search tree is not recorded: a record keeps Phase II's summary (stop reason, simulations, nodes, \
+                     the plan's lines), not its nodes.</p>\n",
+                );
             }
             body.push_str("<h2>Record</h2>\n");
             body.push_str(&key_value_table(&record.fields, &["episode"]));

@@ -308,11 +308,11 @@ fn mcnemar_tables(study: &Study<'_>, options: &ReportOptions) -> Result<Vec<Tabl
         }
     }
     let [main, ablation] = families;
-    let described = |title: &str, what: &str, tests: &[Test]| {
+    let described = |what: &str, tests: &[Test]| {
         format!(
             "Exact paired McNemar tests ({what}; m = {} tests), Holm correction within the family, significant at α = {}. \
              n = tasks both conditions ran (in every run); b/c = tasks only the first / only the second solved. Against a \
-             condition with several runs the largest exact p over the run pairs is kept. ({title})",
+             condition with several runs the largest exact p over the run pairs is kept.",
             tests.len(),
             options.alpha
         )
@@ -322,7 +322,7 @@ fn mcnemar_tables(study: &Study<'_>, options: &ReportOptions) -> Result<Vec<Tabl
             study,
             "mcnemar-main",
             "Paired significance: main comparisons (Table 9)",
-            described("Table 9", "every pair of conditions outside the ablation family", &main),
+            described("every pair of conditions outside the ablation family", &main),
             "No pair of conditions shares a task on any benchmark.",
             &main,
             options,
@@ -331,7 +331,7 @@ fn mcnemar_tables(study: &Study<'_>, options: &ReportOptions) -> Result<Vec<Tabl
             study,
             "mcnemar-ablation",
             "Paired significance: component ablations (Table 10)",
-            described("Table 10", "`ours` with constrained MCTS against the same agent under another Phase II mode", &ablation),
+            described("`ours` with constrained MCTS against the same agent under another Phase II mode", &ablation),
             "No ablation pair: records of `ours` under constrained MCTS and another `--mode`, otherwise equal, on shared tasks.",
             &ablation,
             options,
