@@ -26,6 +26,7 @@ use serde_json::json;
 use vlm_client::{ChatClient, ChatModel, ClientConfig};
 
 use crate::input::InputError;
+use crate::model_spec::ModelSpec;
 use crate::phase2::{DecodeArgs, LmArgs, load_lm};
 
 #[derive(Debug, clap::Args)]
@@ -58,8 +59,8 @@ pub struct EpisodeArgs {
     /// model, decoding under the reply's schema), a GGUF path, or `openai:URL` (a served chat
     /// model; `--served-model` names it). For `eval --agent direct`: the direct agent's chat
     /// model.
-    #[arg(long, default_value = "systematic")]
-    pub explorer: String,
+    #[arg(long, default_value = "systematic", value_parser = crate::model_spec::explorer)]
+    pub explorer: ModelSpec,
     #[command(flatten)]
     pub lm: LmArgs,
     #[command(flatten)]
@@ -78,22 +79,22 @@ pub struct EpisodeArgs {
 }
 
 /// Phase I's policy, named as `--explorer` names it: `systematic` or a chat model.
-pub fn explorer(name: &str, served_model: &str) -> anyhow::Result<Box<dyn Policy>> {
-    if name == "systematic" {
+pub fn explorer(spec: &ModelSpec, served_model: &str) -> anyhow::Result<Box<dyn Policy>> {
+    if *spec == ModelSpec::Systematic {
         return Ok(Box::new(Systematic));
     }
-    Ok(Box::new(ChatPolicy::new(chat_model(name, served_model)?, name)))
+    Ok(Box::new(ChatPolicy::new(chat_model(spec, served_model)?, &spec.to_string())))
 }
 
 /// A chat model by name: `openai:URL` (a served model, `served_model` names it), `smollm2` (the
 /// local default model) or a GGUF path, through `LocalChat`. An unknown name is bad input.
-pub fn chat_model(name: &str, served_model: &str) -> anyhow::Result<Box<dyn ChatModel>> {
-    if let Some(url) = name.strip_prefix("openai:") {
+pub fn chat_model(spec: &ModelSpec, served_model: &str) -> anyhow::Result<Box<dyn ChatModel>> {
+    if let Some(url) = spec.url() {
         return Ok(Box::new(ChatClient::new(ClientConfig::new(url, served_model)).map_err(|e| InputError(format!("{url}: {e}")))?));
     }
-    let path = crate::lm::resolve_model(name)?;
+    let path = crate::lm::resolve_spec(spec)?;
     let model = LocalModel::load(&path).map_err(|e| InputError(format!("{}: {e}", path.display())))?;
-    Ok(Box::new(LocalChat::new(model, name).map_err(|e| InputError(format!("{}: {e}", path.display())))?))
+    Ok(Box::new(LocalChat::new(model, &spec.to_string()).map_err(|e| InputError(format!("{}: {e}", path.display())))?))
 }
 
 /// Phase II by a chat model without the constraint (`exploration_harness::chat_planner`): the
@@ -103,8 +104,8 @@ pub struct ChatPlannerArgs {
     /// Phase II by this chat model, writing the plan as free text from the same planning prompt,
     /// instead of `--lm`'s decoder: `smollm2`, a GGUF path, or `openai:URL` (`--served-model`
     /// names it).
-    #[arg(long)]
-    pub chat_planner: Option<String>,
+    #[arg(long, value_parser = crate::model_spec::chat_model)]
+    pub chat_planner: Option<ModelSpec>,
     /// With `--chat-planner`: thinking on, Qwen3's recommended sampling (temperature 0.6, top-p
     /// 0.95, top-k 20, seed `--seed`), 32K tokens: the paper's unconstrained thinking. Without
     /// it: greedy, 512 tokens, thinking off.

@@ -296,7 +296,7 @@ enum Runner<'a> {
 
 /// The served model's name where `model` is `openai:URL` (it changes what the run finds).
 fn served_model(args: &EvalArgs) -> Option<&str> {
-    args.episode.explorer.starts_with("openai:").then_some(args.episode.lm.served_model.as_str())
+    args.episode.explorer.url().map(|_| args.episode.lm.served_model.as_str())
 }
 
 /// The configuration that names a run's records: everything that changes what it finds.
@@ -354,7 +354,7 @@ pub fn run(args: EvalArgs) -> anyhow::Result<ExitCode> {
     let mut runner = match args.agent {
         AgentName::Expert => Runner::Expert,
         AgentName::Direct => {
-            if args.episode.explorer == "systematic" {
+            if args.episode.explorer == crate::model_spec::ModelSpec::Systematic {
                 return Err(InputError("--agent direct needs a chat model: --explorer smollm2, a GGUF path, or openai:URL".into()).into());
             }
             Runner::Direct(Direct { args: &args, model: chat_model(&args.episode.explorer, &args.episode.lm.served_model)? })

@@ -89,6 +89,17 @@ pub fn resolve_model(name: &str) -> Result<PathBuf, InputError> {
     Ok(path)
 }
 
+/// The GGUF file a local model spec names (`smollm2`: the cached default; a path); other specs
+/// are bad input here.
+pub fn resolve_spec(spec: &crate::model_spec::ModelSpec) -> Result<PathBuf, InputError> {
+    use crate::model_spec::ModelSpec;
+    match spec {
+        ModelSpec::Smollm2 => resolve_model("smollm2"),
+        ModelSpec::Gguf(path) => resolve_model(&path.display().to_string()),
+        other => Err(InputError(format!("{other}: not a local model file"))),
+    }
+}
+
 fn load(path: &Path) -> anyhow::Result<LocalModel> {
     LocalModel::load(path).map_err(|e| InputError(format!("{}: {e}", path.display())).into())
 }

@@ -15,6 +15,7 @@ mod fetch_data;
 mod input;
 mod lm;
 mod mask_bench;
+mod model_spec;
 mod ontology;
 mod phase2;
 mod planning;

@@ -22,6 +22,7 @@ use transition_model::{Spelling, TransitionModel};
 use eval_harness::records::RecordFile;
 
 use crate::input::{self, InputError};
+use crate::model_spec::ModelSpec;
 
 /// Which language model writes the plan.
 #[derive(Debug, Clone, clap::Args, Serialize)]
@@ -29,8 +30,8 @@ pub struct LmArgs {
     /// `uniform` (every allowed token equally likely, over the Qwen3 tokenizer in fixtures/),
     /// `smollm2` (the default model; `cargo xtask fetch-model` first), `openai:URL` (an
     /// OpenAI-compatible completions server), or a path to a GGUF file.
-    #[arg(long, default_value = "uniform")]
-    pub lm: String,
+    #[arg(long, default_value = "uniform", value_parser = crate::model_spec::language_model)]
+    pub lm: ModelSpec,
     /// Tokenizer for `uniform` and `openai:` (a `tokenizer.json`, or a GGUF file)
     /// [default: fixtures/tokenizers/qwen3/tokenizer.json].
     #[arg(long)]
@@ -230,17 +231,17 @@ fn tokenizer_at(path: &Path) -> anyhow::Result<Tokenizer> {
 /// The model `args` names.
 pub fn load_lm(args: &LmArgs) -> anyhow::Result<Box<dyn LanguageModel>> {
     let tokenizer_path = args.tokenizer.clone().unwrap_or_else(default_tokenizer);
-    if args.lm == "uniform" {
+    if args.lm == ModelSpec::Uniform {
         return Ok(Box::new(UniformModel::new(Arc::new(tokenizer_at(&tokenizer_path)?))));
     }
-    if let Some(url) = args.lm.strip_prefix("openai:") {
+    if let Some(url) = args.lm.url() {
         let tokenizer = Arc::new(tokenizer_at(&tokenizer_path)?);
         let mut config = OpenAiConfig::new(url, &args.served_model);
         config.dialect = args.server_dialect;
         let model = OpenAiModel::new(config, tokenizer).map_err(|e| InputError(format!("{url}: {e}")))?;
         return Ok(Box::new(model));
     }
-    let path = crate::lm::resolve_model(&args.lm)?;
+    let path = crate::lm::resolve_spec(&args.lm)?;
     let model = lm::LocalModel::load(&path).map_err(|e| InputError(format!("{}: {e}", path.display())))?;
     Ok(Box::new(model))
 }
@@ -377,7 +378,7 @@ pub fn plan_one(
 ) -> anyhow::Result<ExitCode> {
     let mut lm = load_lm(lm_args)?;
     let vocab = Arc::new(mcts::constraint_vocabulary(lm.vocabulary()).context("the model's vocabulary")?);
-    let (mut record, outcome, model) = solve(files, lm.as_mut(), &lm_args.lm, &vocab, args, time_limit)?;
+    let (mut record, outcome, model) = solve(files, lm.as_mut(), &lm_args.lm.to_string(), &vocab, args, time_limit)?;
     // The settings that made this plan, hashed as a run's records are (the task is the set).
     let config = RunConfig { benchmark: files.benchmark.name(), set: &files.id, lm: lm_args, decode: args, time_limit };
     record.config = eval_harness::records::config_hash(&config);
@@ -456,14 +457,7 @@ pub fn run(args: Phase2Args) -> anyhow::Result<ExitCode> {
         None => benchmark_data::load(benchmark)?,
     };
     tasks.truncate(args.limit.unwrap_or(usize::MAX));
-    let lm_name = if args.lm.lm.starts_with("openai:") {
-        // A URL's last segment (`v1`) names nothing; the configuration's hash tells servers apart.
-        "openai".to_string()
-    } else if args.lm.lm.contains('/') {
-        Path::new(&args.lm.lm).file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_else(|| args.lm.lm.clone())
-    } else {
-        args.lm.lm.clone()
-    };
+    let lm_name = args.lm.lm.short_name();
     // A subset given as a path is named by its file stem (`/tmp/hard.txt` → `hard`).
     let set = match &args.subset {
         Some(subset) if subset.contains('/') || subset.ends_with(".txt") => {

@@ -1,0 +1,119 @@
+//! A model as the command line names it, parsed once: `uniform` (every allowed token equally
+//! likely), `systematic` (Phase I's fixed sweep, no model), `smollm2` (the cached default
+//! GGUF), `openai:URL` (a served model), or a path to a GGUF file. Each option states which of
+//! these it takes (`--lm`: a language model; `--explorer`: a Phase I policy; `--chat-planner`:
+//! a chat model), and a name it does not take is bad input when the command line is read. A
+//! spec serialises as the text it was parsed from, so record configurations keep their hashes.
+
+use std::path::PathBuf;
+
+/// A model named on the command line.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum ModelSpec {
+    Uniform,
+    Systematic,
+    Smollm2,
+    /// `openai:URL`: the URL of an OpenAI-compatible server (`http://` or `https://`).
+    OpenAi(String),
+    Gguf(PathBuf),
+}
+
+impl std::fmt::Display for ModelSpec {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            ModelSpec::Uniform => f.write_str("uniform"),
+            ModelSpec::Systematic => f.write_str("systematic"),
+            ModelSpec::Smollm2 => f.write_str("smollm2"),
+            ModelSpec::OpenAi(url) => write!(f, "openai:{url}"),
+            ModelSpec::Gguf(path) => write!(f, "{}", path.display()),
+        }
+    }
+}
+
+impl serde::Serialize for ModelSpec {
+    fn serialize<S: serde::Serializer>(&self, serializer: S) -> Result<S::Ok, S::Error> {
+        serializer.collect_str(self)
+    }
+}
+
+impl ModelSpec {
+    /// Any spec: the names, `openai:` with an http(s) URL, or a `.gguf` path.
+    fn parse(text: &str) -> Result<ModelSpec, String> {
+        let text = text.trim();
+        Ok(match text {
+            "uniform" => ModelSpec::Uniform,
+            "systematic" => ModelSpec::Systematic,
+            "smollm2" => ModelSpec::Smollm2,
+            _ => {
+                if let Some(url) = text.strip_prefix("openai:") {
+                    if !(url.starts_with("http://") || url.starts_with("https://")) {
+                        return Err(format!("`{text}`: give the server as openai:http://HOST:PORT/v1"));
+                    }
+                    ModelSpec::OpenAi(url.to_string())
+                } else if text.ends_with(".gguf") {
+                    ModelSpec::Gguf(PathBuf::from(text))
+                } else {
+                    return Err(format!("`{text}`: not a model name (uniform, systematic, smollm2), openai:URL or a .gguf path"));
+                }
+            }
+        })
+    }
+
+    /// The served model's URL, for `openai:URL`.
+    pub fn url(&self) -> Option<&str> {
+        match self {
+            ModelSpec::OpenAi(url) => Some(url),
+            _ => None,
+        }
+    }
+
+    /// A short name for file names: `openai` for a server (a URL's last segment names
+    /// nothing; the configuration's hash tells servers apart), a GGUF file's stem, else the name.
+    pub fn short_name(&self) -> String {
+        match self {
+            ModelSpec::OpenAi(_) => "openai".into(),
+            ModelSpec::Gguf(path) => path.file_stem().map_or_else(|| self.to_string(), |s| s.to_string_lossy().into_owned()),
+            other => other.to_string(),
+        }
+    }
+}
+
+fn taking(text: &str, allowed: &[fn(&ModelSpec) -> bool], what: &str) -> Result<ModelSpec, String> {
+    let spec = ModelSpec::parse(text)?;
+    if allowed.iter().any(|ok| ok(&spec)) { Ok(spec) } else { Err(format!("`{text}` is not {what}")) }
+}
+
+/// `--lm`: uniform, smollm2, openai:URL or a GGUF path.
+pub fn language_model(text: &str) -> Result<ModelSpec, String> {
+    taking(text, &[|s| !matches!(s, ModelSpec::Systematic)], "a language model (uniform, smollm2, openai:URL, a .gguf path)")
+}
+
+/// `--explorer`: systematic, smollm2, openai:URL or a GGUF path.
+pub fn explorer(text: &str) -> Result<ModelSpec, String> {
+    taking(text, &[|s| !matches!(s, ModelSpec::Uniform)], "a Phase I policy (systematic, smollm2, openai:URL, a .gguf path)")
+}
+
+/// `--chat-planner`: smollm2, openai:URL or a GGUF path.
+pub fn chat_model(text: &str) -> Result<ModelSpec, String> {
+    taking(text, &[|s| !matches!(s, ModelSpec::Uniform | ModelSpec::Systematic)], "a chat model (smollm2, openai:URL, a .gguf path)")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn specs_parse_print_back_and_are_checked_per_option() {
+        for text in ["uniform", "systematic", "smollm2", "openai:http://127.0.0.1:8080/v1", "models/x.gguf"] {
+            assert_eq!(ModelSpec::parse(text).expect(text).to_string(), text);
+        }
+        assert_eq!(ModelSpec::parse("openai:http://h:1/v1").unwrap().short_name(), "openai");
+        assert_eq!(ModelSpec::parse("/m/SmolLM2.Q4_1.gguf").unwrap().short_name(), "SmolLM2.Q4_1");
+        assert!(ModelSpec::parse("openai:localhost:8080").is_err());
+        assert!(ModelSpec::parse("gpt-9").is_err());
+        assert!(language_model("systematic").is_err() && language_model("uniform").is_ok());
+        assert!(explorer("uniform").is_err() && explorer("systematic").is_ok());
+        assert!(chat_model("uniform").is_err() && chat_model("systematic").is_err() && chat_model("smollm2").is_ok());
+        assert_eq!(serde_json::to_string(&ModelSpec::Smollm2).unwrap(), "\"smollm2\"");
+    }
+}
