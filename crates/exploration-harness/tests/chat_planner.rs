@@ -4,7 +4,6 @@
 //! spells commands, wrapped in the decorations real models add.
 
 use std::path::{Path, PathBuf};
-use std::time::Duration;
 
 use exploration_harness::alfworld::AlfworldAdapter;
 use exploration_harness::chat_planner::{ChatPlannerConfig, plan_by_chat, strip_thinking};
@@ -27,15 +26,7 @@ impl ChatModel for Scripted<'_> {
     fn chat(&mut self, request: &ChatRequest) -> Result<ChatReply, ChatError> {
         self.requests.push(request.clone());
         let usage = Usage { requests: 1, prompt_tokens: 300, completion_tokens: 42, reasoning_tokens: None, images: 0 };
-        Ok(ChatReply {
-            text: (self.answer)(&self.plan),
-            reasoning: None,
-            finish_reason: Some("stop".into()),
-            usage,
-            json_mode: None,
-            attempts: 1,
-            waited: Duration::ZERO,
-        })
+        Ok(ChatReply::local((self.answer)(&self.plan), usage))
     }
 
     fn endpoint(&self) -> String {

@@ -4,7 +4,6 @@
 //! observation states them.
 
 use std::path::{Path, PathBuf};
-use std::time::Duration;
 
 use exploration_harness::alfworld::AlfworldAdapter;
 use exploration_harness::chat_policy::ChatPolicy;
@@ -16,15 +15,7 @@ use vlm_client::{ChatError, ChatModel, ChatReply, ChatRequest, Usage};
 fn reply(text: String, usage: &mut Usage) -> Result<ChatReply, ChatError> {
     let one = Usage { requests: 1, prompt_tokens: 100, completion_tokens: 20, reasoning_tokens: None, images: 0 };
     usage.add(&one);
-    Ok(ChatReply {
-        text,
-        reasoning: None,
-        finish_reason: Some("stop".into()),
-        usage: one,
-        json_mode: None,
-        attempts: 1,
-        waited: Duration::ZERO,
-    })
+    Ok(ChatReply::local(text, one))
 }
 
 /// Answers every request with the first valid skill and a made-up fact.

@@ -9,7 +9,6 @@
 
 use std::collections::VecDeque;
 use std::path::{Path, PathBuf};
-use std::time::Duration;
 
 use exploration_harness::direct::{self, DirectConfig, DirectEnd, DirectEpisode, FAILURE_LIMIT};
 use exploration_harness::{Attribution, parse_goal, run_direct};
@@ -44,15 +43,7 @@ impl ChatModel for Scripted {
         let text = self.replies.pop_front().unwrap_or_else(|| self.otherwise.clone());
         let one = Usage { requests: 1, prompt_tokens: 100, completion_tokens: 20, reasoning_tokens: None, images: 0 };
         self.usage.add(&one);
-        Ok(ChatReply {
-            text,
-            reasoning: None,
-            finish_reason: Some("stop".into()),
-            usage: one,
-            json_mode: None,
-            attempts: 1,
-            waited: Duration::ZERO,
-        })
+        Ok(ChatReply::local(text, one))
     }
 
     fn endpoint(&self) -> String {

@@ -50,6 +50,22 @@ pub struct ChatReply {
     pub waited: Duration,
 }
 
+impl ChatReply {
+    /// A reply made on this side (scripted models in tests, a local model): `text` in one
+    /// attempt, finished with `stop`, no separate reasoning, no JSON mode.
+    pub fn local(text: impl Into<String>, usage: Usage) -> ChatReply {
+        ChatReply {
+            text: text.into(),
+            reasoning: None,
+            finish_reason: Some("stop".into()),
+            usage,
+            json_mode: None,
+            attempts: 1,
+            waited: Duration::ZERO,
+        }
+    }
+}
+
 /// Reads a chat completion body.
 pub fn parse_reply(body: &[u8]) -> Result<ChatReply, ChatErrorKind> {
     let malformed = |why: String| ChatErrorKind::MalformedReply(why);
