@@ -142,6 +142,8 @@ pub fn run_episode<E: Environment + Judge>(
 ) -> Episode {
     let start = Instant::now();
     let first = env.reset();
+    // A policy's usage is summed over its life; a harness reuses one policy across episodes.
+    let usage_before = policy.usage();
     let exploration = explore(env, adapter, policy, goal, &first, config.budget);
     let phase1_ms = start.elapsed().as_secs_f64() * 1e3;
     let (precision, recall) = score(adapter, goal, &exploration, &env.hidden_atoms());
@@ -158,7 +160,7 @@ pub fn run_episode<E: Environment + Judge>(
         attribution: None,
         precision,
         recall,
-        phase1_usage: policy.usage(),
+        phase1_usage: policy.usage().since(&usage_before),
         phase2_calls: 0,
         phase2_tokens: 0,
         phase2_detail: serde_json::Value::Null,

@@ -159,11 +159,26 @@ pub struct PolicyUsage {
     pub images: u64,
 }
 
+impl PolicyUsage {
+    /// What was used after `earlier` (a reading of the same policy's usage).
+    pub fn since(&self, earlier: &PolicyUsage) -> PolicyUsage {
+        PolicyUsage {
+            calls: self.calls.saturating_sub(earlier.calls),
+            prompt_tokens: self.prompt_tokens.saturating_sub(earlier.prompt_tokens),
+            generated_tokens: self.generated_tokens.saturating_sub(earlier.generated_tokens),
+            observations: self.observations.saturating_sub(earlier.observations),
+            images: self.images.saturating_sub(earlier.images),
+        }
+    }
+}
+
 /// The policy f_φ (paper Eq. 2).
 pub trait Policy {
     /// `systematic`, `openai:URL`, `local:NAME`, ...
     fn name(&self) -> String;
     fn choose(&mut self, input: &PolicyInput<'_>) -> Result<PolicyReply, String>;
+    /// Usage summed over every call so far (a harness reading one episode takes the difference:
+    /// [`PolicyUsage::since`]).
     fn usage(&self) -> PolicyUsage;
 }
 
