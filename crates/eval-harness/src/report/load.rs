@@ -96,7 +96,8 @@ pub fn load(path: &Path) -> Result<RecordSet, ReportError> {
             return Err(config_fault(format!("no string `{key}`")));
         }
     }
-    let hashes = config_hashes(&config_text, &config);
+    // The hash every record of this configuration carries (`records::config_hash`).
+    let expected = crate::records::config_hash(&Value::Object(config.clone()));
     let text = std::fs::read_to_string(path).map_err(|source| RecordError::Io { path: path.to_path_buf(), source })?;
     let whole = text.rfind('\n').map_or(0, |i| i + 1);
     let mut warnings = Vec::new();
@@ -110,62 +111,14 @@ pub fn load(path: &Path) -> Result<RecordSet, ReportError> {
     let mut records = Vec::with_capacity(fields.len());
     for (line, fields) in lines.into_iter().zip(fields) {
         let found = fields.get("config").and_then(Value::as_str).unwrap_or("none");
-        if !hashes.iter().any(|h| h == found) {
-            let message = format!("a record of configuration {found}, beside the configuration {} ({})", config_path.display(), hashes[0]);
+        if found != expected {
+            let message = format!("a record of configuration {found}, beside the configuration {} ({expected})", config_path.display());
             return Err(RecordError::Bad { path: path.to_path_buf(), line, message }.into());
         }
         check(path, line, &fields)?;
         records.push(Record { line, fields });
     }
-    let hash = records.first().and_then(|r| r.fields.get("config")).and_then(Value::as_str).unwrap_or(&hashes[0]).to_string();
-    Ok(RecordSet { path: path.to_path_buf(), config, hash, records, warnings })
-}
-
-/// The hashes the records of a configuration may carry: of its text as written (keys in the
-/// writer's order, which is what `records::config_hash` hashes where serde_json keeps
-/// insertion order, as it does in `xtask`'s build) and of its keys sorted (where it does not).
-fn config_hashes(text: &str, config: &Map<String, Value>) -> Vec<String> {
-    use sha2::{Digest, Sha256};
-    let short = |canonical: &str| Sha256::digest(canonical.as_bytes()).iter().take(6).map(|b| format!("{b:02x}")).collect::<String>();
-    let mut hashes = vec![short(&minified(text)), short(&sorted_canonical(&Value::Object(config.clone())))];
-    hashes.dedup();
-    hashes
-}
-
-/// JSON text without the white space outside strings: the compact form of a pretty-printed
-/// value, keys in the order written.
-fn minified(text: &str) -> String {
-    let (mut out, mut in_string, mut escaped) = (String::with_capacity(text.len()), false, false);
-    for c in text.chars() {
-        if in_string {
-            out.push(c);
-            match (escaped, c) {
-                (true, _) => escaped = false,
-                (false, '\\') => escaped = true,
-                (false, '"') => in_string = false,
-                _ => {}
-            }
-        } else if !c.is_whitespace() {
-            in_string = c == '"';
-            out.push(c);
-        }
-    }
-    out
-}
-
-/// Compact JSON with every object's keys sorted, whatever order the map keeps.
-fn sorted_canonical(value: &Value) -> String {
-    match value {
-        Value::Object(map) => {
-            let mut keys: Vec<&String> = map.keys().collect();
-            keys.sort();
-            let fields: Vec<String> =
-                keys.into_iter().map(|k| format!("{}:{}", Value::String(k.clone()), sorted_canonical(&map[k.as_str()]))).collect();
-            format!("{{{}}}", fields.join(","))
-        }
-        Value::Array(items) => format!("[{}]", items.iter().map(sorted_canonical).collect::<Vec<_>>().join(",")),
-        other => other.to_string(),
-    }
+    Ok(RecordSet { path: path.to_path_buf(), config, hash: expected, records, warnings })
 }
 
 /// The fields a report reads from every record.
