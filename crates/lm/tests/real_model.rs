@@ -140,3 +140,39 @@ fn the_prior_over_allowed_tokens_matches_the_full_head() {
     assert!(total_variation < 0.01, "total variation {total_variation}");
     assert_eq!(prior.argmax(), expected.argmax());
 }
+
+/// Greedy continuations of reference prompts, token for token, as the forward pass produced
+/// them before the decode kernels were rewritten for speed (issue 23): a faster kernel may
+/// round differently, but must not change what the model says on these. The long prompt (about
+/// 600 tokens) makes attention run over a deep cache.
+#[test]
+fn greedy_continuations_of_the_reference_prompts() {
+    let mut model = LocalModel::load(&model_path()).expect("loads");
+    let room = "You are in the middle of a kitchen. Looking quickly around you, you see a cabinet 4, a cabinet 3, \
+                a cabinet 2, a cabinet 1, a coffeemachine 1, a countertop 2, a countertop 1, a fridge 1, a microwave 1, \
+                a sinkbasin 1 and a toaster 1. ";
+    let long = format!("{}Your task is to: put a clean mug in the coffeemachine. Which place do you look at first, and why?", room.repeat(10));
+    let prompts: Vec<(&str, String)> = vec![
+        ("coffee", model.chat_prompt("You plan household tasks.", "Make a cup of coffee.").expect("renders")),
+        (
+            "plan",
+            model
+                .chat_prompt(
+                    "You write plans for a household robot, one action per line.",
+                    &format!("{room}Your task is to: put a clean mug in the coffeemachine."),
+                )
+                .expect("renders"),
+        ),
+        ("raw_plan", "Plan:\ngo to countertop 1\ntake mug 1 from countertop 1\ngo to sinkbasin 1\n".to_string()),
+        ("json", model.chat_prompt("Reply with one JSON object with the keys \"skill\" and \"done\".", &format!("{room}Find a mug.")).expect("renders")),
+        ("long", model.chat_prompt("You are a helpful assistant.", &long).expect("renders")),
+    ];
+    let mut lines = Vec::new();
+    for (name, prompt) in &prompts {
+        let ids = model.encode(prompt).expect("encodes");
+        let answer = generate_greedy(&mut model, &ids, 48).expect("generates");
+        let text = String::from_utf8_lossy(&model.decode(&answer).expect("decodes")).into_owned();
+        lines.push(format!("{name} ({} prompt tokens): {answer:?}\n  {text:?}", ids.len()));
+    }
+    insta::assert_snapshot!(lines.join("\n"));
+}
