@@ -68,6 +68,14 @@ pub struct BenchLmArgs {
     /// Skip candle-transformers' quantized llama.
     #[arg(long)]
     no_reference: bool,
+    /// llama.cpp's `llama-bench`, run on the same file in the same run (default:
+    /// `$NSEA_LLAMA_BENCH`, else the build of `../shared/anchors/build_llamacpp.sh` in
+    /// `~/.cache/nsea-anchors/llama.cpp` when it is there).
+    #[arg(long)]
+    llama_bench: Option<PathBuf>,
+    /// Skip llama.cpp even when a build is there.
+    #[arg(long, conflicts_with = "llama_bench")]
+    no_llamacpp: bool,
     /// Print one JSON object.
     #[arg(long)]
     json: bool,
@@ -320,6 +328,13 @@ pub fn bench(args: BenchLmArgs) -> anyhow::Result<ExitCode> {
     .into_iter()
     .filter_map(|(name, on)| on.then_some(name))
     .collect();
+    let llamacpp = if args.no_llamacpp {
+        None
+    } else {
+        llama_bench_binary(args.llama_bench.as_deref())?
+            .map(|binary| run_llama_bench(&binary, &path, candle_threads(), prefix.len(), args.decode, runs, &suffix_lengths[..3]))
+            .transpose()?
+    };
     let report = json!({
         "model": path.display().to_string(),
         "prefix_tokens": prefix.len(),
@@ -335,6 +350,10 @@ pub fn bench(args: BenchLmArgs) -> anyhow::Result<ExitCode> {
         "branch_rewind_ms": rewind_1,
         "branch_rewind_ms_by_suffix": rewind_ms,
         "full_recompute_ms": full_ms,
+        "llamacpp_bench": llamacpp.as_ref().map(|l| l.binary.display().to_string()),
+        "llamacpp_prefill_tok_s": llamacpp.as_ref().map(|l| l.prefill_tok_s),
+        "llamacpp_decode_tok_s": llamacpp.as_ref().map(|l| l.decode_tok_s),
+        "llamacpp_branch_ms_by_suffix": llamacpp.as_ref().map(|l| &l.branch_ms),
     });
     if args.json {
         println!("{report}");
@@ -342,6 +361,72 @@ pub fn bench(args: BenchLmArgs) -> anyhow::Result<ExitCode> {
         println!("{}", serde_json::to_string_pretty(&report)?);
     }
     Ok(ExitCode::SUCCESS)
+}
+
+/// llama.cpp's figures on the same file, thread count and depths.
+struct LlamaCppFigures {
+    binary: PathBuf,
+    prefill_tok_s: f64,
+    decode_tok_s: f64,
+    /// A suffix of k tokens after the shared prefix: llama-bench's prompt of k tokens at depth
+    /// `prefix` (the prefix's keys and values are in its cache, as in our branch test).
+    branch_ms: serde_json::Map<String, serde_json::Value>,
+}
+
+/// The `llama-bench` to run: the one named, else `$NSEA_LLAMA_BENCH`, else the anchors' build
+/// when it exists; `None` when there is none (the figures are then left out, not guessed).
+fn llama_bench_binary(named: Option<&Path>) -> Result<Option<PathBuf>, InputError> {
+    if let Some(path) = named {
+        return if path.is_file() { Ok(Some(path.to_path_buf())) } else { Err(InputError(format!("--llama-bench {}: no such file", path.display()))) };
+    }
+    if let Some(path) = std::env::var_os("NSEA_LLAMA_BENCH") {
+        let path = PathBuf::from(path);
+        return if path.is_file() { Ok(Some(path)) } else { Err(InputError(format!("NSEA_LLAMA_BENCH={}: no such file", path.display()))) };
+    }
+    let built = std::env::var_os("HOME").map(|home| PathBuf::from(home).join(".cache/nsea-anchors/llama.cpp/src/llama.cpp/build/bin/llama-bench"));
+    Ok(built.filter(|path| path.is_file()))
+}
+
+/// Runs `llama-bench` three times (prefill of `prefix` tokens; `decode` tokens at depth
+/// `prefix`; prompts of each branch length at depth `prefix`) with `runs` repetitions each, and
+/// reads its JSON (`avg_ts`, `avg_ns`).
+fn run_llama_bench(
+    binary: &Path,
+    model: &Path,
+    threads: usize,
+    prefix: usize,
+    decode: usize,
+    runs: usize,
+    branches: &[usize],
+) -> anyhow::Result<LlamaCppFigures> {
+    let run = |extra: &[String]| -> anyhow::Result<Vec<serde_json::Value>> {
+        let mut command = Command::new(binary);
+        command.arg("-m").arg(model).args(["-t", &threads.to_string(), "-r", &runs.to_string(), "-o", "json"]).args(extra);
+        let output = command.output().with_context(|| format!("running {}", binary.display()))?;
+        if !output.status.success() {
+            bail!("{} {extra:?} failed ({}): {}", binary.display(), output.status, String::from_utf8_lossy(&output.stderr).trim());
+        }
+        let rows: Vec<serde_json::Value> =
+            serde_json::from_slice(&output.stdout).with_context(|| format!("{} {extra:?}: its JSON output", binary.display()))?;
+        Ok(rows)
+    };
+    let number = |row: &serde_json::Value, key: &str| -> anyhow::Result<f64> {
+        row[key].as_f64().with_context(|| format!("llama-bench JSON without a numeric `{key}`: {row}"))
+    };
+    let first = |rows: Vec<serde_json::Value>| rows.into_iter().next().context("llama-bench printed no result");
+    let prefill = first(run(&["-p".into(), prefix.to_string(), "-n".into(), "0".into()])?)?;
+    let decode_row = first(run(&["-p".into(), "0".into(), "-n".into(), decode.to_string(), "-d".into(), prefix.to_string()])?)?;
+    let lengths = branches.iter().map(usize::to_string).collect::<Vec<_>>().join(",");
+    let mut branch_ms = serde_json::Map::new();
+    for row in run(&["-p".into(), lengths, "-n".into(), "0".into(), "-d".into(), prefix.to_string()])? {
+        branch_ms.insert(number(&row, "n_prompt")?.to_string(), json!(number(&row, "avg_ns")? / 1e6));
+    }
+    Ok(LlamaCppFigures {
+        binary: binary.to_path_buf(),
+        prefill_tok_s: number(&prefill, "avg_ts")?,
+        decode_tok_s: number(&decode_row, "avg_ts")?,
+        branch_ms,
+    })
 }
 
 fn candle_threads() -> usize {
