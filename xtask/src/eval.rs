@@ -87,11 +87,15 @@ pub struct EvalArgs {
     #[arg(long, default_value = "all")]
     benchmark: String,
     /// The agent.
-    #[arg(long, value_enum, default_value_t = AgentName::Expert)]
+    #[arg(long, value_enum, default_value_t = AgentName::Ours)]
     agent: AgentName,
-    /// Run only the tasks a subset file lists (`fixtures/subsets/<NAME>.txt`, or a path).
-    #[arg(long)]
-    subset: Option<String>,
+    /// Run only the tasks that subset files list (`fixtures/subsets/<NAME>.txt`, or a path),
+    /// comma-separated, each for the benchmark its name starts with (one name alone serves every
+    /// benchmark); `default`: `alfworld-seen-12` and `virtualhome-rearrange-8` for those two
+    /// benchmarks (the main job's, under 30 minutes with the local model), the whole set
+    /// elsewhere and for the expert; `all`: the whole sets.
+    #[arg(long, default_value = "default")]
+    subset: String,
     /// Run at most this many tasks per benchmark (the first ones; records stay valid for a
     /// longer run of the same configuration).
     #[arg(long)]
@@ -299,9 +303,39 @@ fn served_model(args: &EvalArgs) -> Option<&str> {
     args.episode.explorer.url().map(|_| args.episode.lm.served_model.as_str())
 }
 
+/// The subset `--subset` names for `suite` (`None`: the whole set). A list names one per
+/// benchmark, by the benchmark's name at the start of the subset's (a path's file name); a
+/// benchmark the list does not name runs whole.
+fn suite_subset(subset: &str, suite: Suite, agent: AgentName) -> Result<Option<String>, InputError> {
+    match subset {
+        "all" => return Ok(None),
+        // The expert replays the benchmark's own plans in seconds: the whole sets.
+        "default" if agent == AgentName::Expert => return Ok(None),
+        "default" => {
+            return Ok(match suite {
+                Suite::AlfworldSeen => Some("alfworld-seen-12".into()),
+                Suite::VirtualhomeRearrange => Some("virtualhome-rearrange-8".into()),
+                Suite::AlfworldTrain | Suite::VirtualhomeEai => None,
+            });
+        }
+        _ => {}
+    }
+    let names: Vec<&str> = subset.split(',').map(str::trim).collect();
+    if let [one] = names[..] {
+        return Ok(Some(one.to_string()));
+    }
+    let stem = |name: &str| Path::new(name).file_name().and_then(|n| n.to_str()).unwrap_or(name).to_string();
+    for name in &names {
+        if !Suite::ALL.iter().any(|s| stem(name).starts_with(s.name())) {
+            return Err(InputError(format!("--subset {name}: in a list, each subset's name starts with its benchmark's")));
+        }
+    }
+    Ok(names.iter().find(|name| stem(name).starts_with(suite.name())).map(|name| name.to_string()))
+}
+
 /// The configuration that names a run's records: everything that changes what it finds.
-fn config(args: &EvalArgs, suite: Suite) -> Value {
-    let mut config = json!({"agent": args.agent, "benchmark": suite.name(), "subset": args.subset});
+fn config(args: &EvalArgs, suite: Suite) -> anyhow::Result<Value> {
+    let mut config = json!({"agent": args.agent, "benchmark": suite.name(), "subset": suite_subset(&args.subset, suite, args.agent)?});
     let task_dir = if suite == Suite::VirtualhomeEai { args.task_dir.as_ref().map(|p| p.display().to_string()) } else { None };
     if args.agent == AgentName::Direct {
         let more = json!({
@@ -309,7 +343,7 @@ fn config(args: &EvalArgs, suite: Suite) -> Value {
             "max_reply_tokens": MAX_REPLY_TOKENS, "task_dir": task_dir,
         });
         config.as_object_mut().expect("object").extend(more.as_object().expect("object").clone());
-        return config;
+        return Ok(config);
     }
     if args.agent != AgentName::Expert {
         let more = json!({
@@ -331,7 +365,7 @@ fn config(args: &EvalArgs, suite: Suite) -> Value {
             }
         }
     }
-    config
+    Ok(config)
 }
 
 pub fn run(args: EvalArgs) -> anyhow::Result<ExitCode> {
@@ -351,6 +385,17 @@ pub fn run(args: EvalArgs) -> anyhow::Result<ExitCode> {
     if args.agent == AgentName::Expert && suites.contains(&Suite::VirtualhomeRearrange) {
         return Err(InputError("--agent expert: the rearrangement set has no expert plans in the benchmark's own form".into()).into());
     }
+    // The local default model, fetched on first use.
+    let uses_default = |spec: &crate::model_spec::ModelSpec| *spec == crate::model_spec::ModelSpec::Smollm2;
+    let needs_model = match args.agent {
+        AgentName::Expert => false,
+        AgentName::Direct => uses_default(&args.episode.explorer),
+        AgentName::Planner => uses_default(&args.episode.explorer),
+        AgentName::Ours => uses_default(&args.episode.explorer) || uses_default(&args.episode.lm.lm),
+    };
+    if needs_model && let Err(code) = crate::lm::ensure_default_model()? {
+        return Ok(code);
+    }
     let mut runner = match args.agent {
         AgentName::Expert => Runner::Expert,
         AgentName::Direct => {
@@ -368,12 +413,16 @@ pub fn run(args: EvalArgs) -> anyhow::Result<ExitCode> {
     };
     let agent_name = serde_json::to_value(args.agent)?.as_str().unwrap_or_default().to_string();
     let mut summaries = serde_json::Map::new();
+    let mut written = Vec::new();
     for suite in suites {
         let stem = format!("{}-{agent_name}", suite.name());
         let mut records =
-            RecordFile::open(&args.out, &stem, &config(&args, suite), args.shard, args.fresh).map_err(|e| InputError(e.to_string()))?;
-        let tasks = tasks(suite, args.agent, args.task_dir.as_deref(), args.subset.as_deref())?;
+            RecordFile::open(&args.out, &stem, &config(&args, suite)?, args.shard, args.fresh).map_err(|e| InputError(e.to_string()))?;
+        let subset = suite_subset(&args.subset, suite, args.agent)?;
+        let tasks = tasks(suite, args.agent, args.task_dir.as_deref(), subset.as_deref())?;
         let total = tasks.len().min(args.limit.unwrap_or(usize::MAX));
+        let selected = (0..total).filter(|&i| args.shard.is_none_or(|s| s.selects(i))).count();
+        let bar = progress_bar(suite.name(), &agent_name, selected);
         let mut ids = Vec::new();
         for (index, task) in tasks.iter().enumerate().take(total) {
             if args.shard.is_some_and(|s| !s.selects(index)) {
@@ -381,8 +430,10 @@ pub fn run(args: EvalArgs) -> anyhow::Result<ExitCode> {
             }
             ids.push(task.id().to_string());
             if records.done().contains(task.id()) {
+                bar.inc(1);
                 continue;
             }
+            bar.set_message(task.id().to_string());
             let record = match (&mut runner, task) {
                 (Runner::Expert, EvalTask::Files(files)) => expert(files),
                 (Runner::Embodied(embodied), task) => embodied.run(suite, task),
@@ -391,10 +442,10 @@ pub fn run(args: EvalArgs) -> anyhow::Result<ExitCode> {
             }
             .map_err(|e| e.context(format!("task {}", task.id())))?;
             records.append(index, &record)?;
-            if (index + 1) % 50 == 0 || index + 1 == total {
-                eprintln!("{}: {}/{total}", suite.name(), index + 1);
-            }
+            bar.inc(1);
         }
+        bar.finish_and_clear();
+        written.push(records.path().to_path_buf());
         let kept: Vec<&serde_json::Map<String, Value>> = records
             .records()
             .iter()
@@ -428,10 +479,29 @@ pub fn run(args: EvalArgs) -> anyhow::Result<ExitCode> {
             }),
         );
     }
+    // The report of this run's records: tables, figures, a page per episode.
+    let report_dir = args.out.join("report");
+    let report = crate::report::write_report(&written, &report_dir, 10_000, 0)?;
     if args.json {
+        summaries.insert("report".into(), json!(report_dir.join("index.html").display().to_string()));
         println!("{}", Value::Object(summaries));
+    } else {
+        println!("report: {report}");
     }
     Ok(ExitCode::SUCCESS)
+}
+
+/// A progress bar with the elapsed time and an estimate of the time left, on standard error
+/// (hidden when it is not a terminal).
+fn progress_bar(suite: &str, agent: &str, tasks: usize) -> indicatif::ProgressBar {
+    let bar = indicatif::ProgressBar::new(tasks as u64);
+    bar.set_style(
+        indicatif::ProgressStyle::with_template("{prefix} [{bar:30}] {pos}/{len} ({elapsed}, eta {eta}) {wide_msg}")
+            .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar())
+            .progress_chars("=> "),
+    );
+    bar.set_prefix(format!("{suite} {agent}"));
+    bar
 }
 
 #[derive(Debug, clap::Args)]
@@ -446,4 +516,27 @@ pub fn merge(args: MergeArgs) -> anyhow::Result<ExitCode> {
     let merged = eval_harness::records::merge(&args.shards).map_err(|e| InputError(e.to_string()))?;
     println!("{} records of configuration {} -> {}", merged.records, merged.config, merged.path.display());
     Ok(ExitCode::SUCCESS)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn subsets_are_named_per_benchmark() {
+        let ours = AgentName::Ours;
+        assert_eq!(suite_subset("default", Suite::AlfworldSeen, ours).unwrap().as_deref(), Some("alfworld-seen-12"));
+        assert_eq!(suite_subset("default", Suite::VirtualhomeRearrange, ours).unwrap().as_deref(), Some("virtualhome-rearrange-8"));
+        assert_eq!(suite_subset("default", Suite::VirtualhomeEai, ours).unwrap(), None);
+        assert_eq!(suite_subset("default", Suite::AlfworldSeen, AgentName::Expert).unwrap(), None, "the expert runs whole sets");
+        assert_eq!(suite_subset("all", Suite::AlfworldSeen, ours).unwrap(), None);
+        // One name serves every benchmark (an unknown one is refused where the tasks are read).
+        assert_eq!(suite_subset("mine.txt", Suite::VirtualhomeEai, ours).unwrap().as_deref(), Some("mine.txt"));
+        let list = "alfworld-seen-50, /tmp/virtualhome-rearrange-50.txt";
+        assert_eq!(suite_subset(list, Suite::AlfworldSeen, ours).unwrap().as_deref(), Some("alfworld-seen-50"));
+        assert_eq!(suite_subset(list, Suite::VirtualhomeRearrange, ours).unwrap().as_deref(), Some("/tmp/virtualhome-rearrange-50.txt"));
+        assert_eq!(suite_subset(list, Suite::VirtualhomeEai, ours).unwrap(), None, "a benchmark the list does not name runs whole");
+        let error = suite_subset("alfworld-seen-50,mine", Suite::AlfworldSeen, ours).unwrap_err();
+        assert!(error.0.contains("--subset mine"), "{}", error.0);
+    }
 }

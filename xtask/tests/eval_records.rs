@@ -14,7 +14,7 @@ fn run_dir(name: &str) -> PathBuf {
 fn eval(out: &Path) -> Command {
     let mut command = Command::new(env!("CARGO_BIN_EXE_xtask"));
     command
-        .args(["eval", "--benchmark", "alfworld-seen", "--out"])
+        .args(["eval", "--agent", "expert", "--benchmark", "alfworld-seen", "--out"])
         .arg(out)
         .current_dir(Path::new(env!("CARGO_MANIFEST_DIR")).join(".."))
         .stdout(Stdio::null())

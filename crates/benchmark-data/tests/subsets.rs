@@ -5,6 +5,9 @@ use benchmark_data::{Benchmark, DataError, TaskFiles, load_subset, stratified_su
 
 const SUBSETS: [(Benchmark, &str); 2] = [(Benchmark::AlfworldSeen, "alfworld-seen-50"), (Benchmark::VirtualhomeEai, "virtualhome-eai-50")];
 
+/// The stratified subsets of other sizes: `cargo xtask eval`'s default for ALFWorld.
+const SMALL_SUBSETS: [(Benchmark, &str, usize); 1] = [(Benchmark::AlfworldSeen, "alfworld-seen-12", 12)];
+
 fn families(tasks: &[TaskFiles]) -> Vec<&str> {
     let mut out: Vec<&str> = tasks.iter().map(task_family).collect();
     out.sort();
@@ -33,6 +36,15 @@ fn subset_files_are_what_the_rule_derives() {
         let derived: Vec<String> = stratified_subset(&all, 50).into_iter().map(|t| t.id.clone()).collect();
         let listed: Vec<String> = subset_ids(&subset_path(name)).expect("subset file reads").into_iter().map(|(_, id)| id).collect();
         assert_eq!(listed, derived, "{name} differs from `stratified_subset(load({}), 50)`", benchmark.name());
+    }
+    for (benchmark, name, size) in SMALL_SUBSETS {
+        let all = benchmark_data::load(benchmark).expect("benchmark loads");
+        let derived: Vec<String> = stratified_subset(&all, size).into_iter().map(|t| t.id.clone()).collect();
+        if std::env::var_os("NSEA_PRINT_SUBSETS").is_some() {
+            eprintln!("{name}:\n{}", derived.join("\n"));
+        }
+        let listed: Vec<String> = subset_ids(&subset_path(name)).expect("subset file reads").into_iter().map(|(_, id)| id).collect();
+        assert_eq!(listed, derived, "{name} differs from `stratified_subset(load({}), {size})`", benchmark.name());
     }
 }
 
@@ -116,4 +128,24 @@ fn fixtures_load_from_a_root_the_caller_passes() {
     let missing = benchmark_data::Fixtures::at(root.join("nowhere")).load(Benchmark::Ipc).expect_err("no data there");
     assert!(missing.to_string().contains("nowhere"), "{missing}");
     std::fs::remove_dir_all(&root).ok();
+}
+
+/// The rearrangement set's subsets: every k-th task id in sorted order from the first (the rule
+/// written in each file).
+#[test]
+fn rearrangement_subsets_are_every_kth_task() {
+    let dir = benchmark_data::fixtures_dir().join("virtualhome-rearrange");
+    let mut ids: Vec<String> = std::fs::read_dir(&dir)
+        .expect("the rearrangement set is in fixtures/")
+        .flatten()
+        .filter_map(|e| e.file_name().to_str().and_then(|n| n.strip_suffix(".json.gz")).map(str::to_string))
+        .collect();
+    ids.sort();
+    assert_eq!(ids.len(), 200);
+    for (name, step, size) in [("virtualhome-rearrange-50", 4, 50), ("virtualhome-rearrange-8", 25, 8)] {
+        let listed: Vec<String> = subset_ids(&subset_path(name)).expect("subset file reads").into_iter().map(|(_, id)| id).collect();
+        let expected: Vec<String> = ids.iter().step_by(step).cloned().collect();
+        assert_eq!(listed.len(), size, "{name}");
+        assert_eq!(listed, expected, "{name}: every {step}th id");
+    }
 }
