@@ -70,15 +70,13 @@ fn a_sibling_branch_costs_its_suffix_and_matches_a_fresh_computation() {
         Usage { forward_calls: 1, tokens_prefilled: suffix, tokens_reused: prefix.len() as u64, tokens_generated: 1, cache_hits: 0 }
     );
     let fresh = dense(LocalModel::load(&path).expect("loads").next_logprobs(&b).expect("runs"));
-    // Not bitwise: with 8-bit activations, computing the same positions in chunks of other
+    // Bit for bit: every row of every matrix product, and each query's attention, depends only
+    // on that position's own activations and the cache before it (activations are quantized to
+    // 8 bits per 32-value block of one row), so computing the positions in chunks of other
     // sizes (the prefix inside `a`, then a 3-token suffix, against all of `b` at once) changes
-    // the shapes of candle's attention matmuls, hence a few roundings, hence a few activation
-    // quanta downstream. candle-transformers' quantized llama shows the same spread between a
-    // one-shot prefill and prefix-then-suffix on these tokens (total variation 0.023, the same
-    // floats as ours). A wrong cache position gives a different distribution altogether.
-    let total_variation: f32 = sibling.iter().zip(&fresh).map(|(a, b)| (a.exp() - b.exp()).abs()).sum::<f32>() / 2.0;
-    assert!(total_variation < 0.05, "total variation {total_variation}");
-    assert_eq!(Logprobs::Dense(sibling.clone()).argmax(), Logprobs::Dense(fresh).argmax());
+    // nothing. (Until issue 23, attention in candle's tensor ops rounded differently with the
+    // chunk's shape: total variation 0.023 here, as candle-transformers' quantized llama shows.)
+    assert_eq!(sibling, fresh, "the sibling branch differs from a fresh computation");
     // Chunked the same way, it is the same bit for bit, whatever was computed in between.
     let c: Vec<u32> = prefix.iter().copied().chain(model.encode(" fridge 1").expect("encodes")).collect();
     let mut other = LocalModel::load(&path).expect("loads");
