@@ -53,7 +53,7 @@ pub struct AgentArgs {
 
 /// How an episode runs, for `agent` and `eval`: Phase I's policy, Phase II's model and
 /// decoding, the step budget, the search time, open or closed loop.
-#[derive(Debug, clap::Args)]
+#[derive(Debug, Clone, clap::Args)]
 pub struct EpisodeArgs {
     /// Phase I's policy: `systematic` (the fixed sweep, no model), `smollm2` (the local default
     /// model, decoding under the reply's schema), a GGUF path, or `openai:URL` (a served chat

@@ -79,7 +79,7 @@ impl Suite {
     }
 }
 
-#[derive(Debug, clap::Args)]
+#[derive(Debug, Clone, clap::Args)]
 pub struct EvalArgs {
     /// Benchmarks: alfworld-seen, alfworld-train, virtualhome-eai, virtualhome-rearrange
     /// (comma-separated), or all [expert: the first three; ours, planner, direct: alfworld-seen
@@ -114,6 +114,11 @@ pub struct EvalArgs {
     /// "ungroundable threshold", whose value it does not give).
     #[arg(long, default_value_t = exploration_harness::direct::FAILURE_LIMIT, value_parser = crate::input::at_least_one)]
     failure_limit: usize,
+    /// Run once per seed (comma-separated; e.g. the paper's `0,42,1738` for the stochastic
+    /// conditions, Appendix B): each run sets `--seed` and has its own records, and the report
+    /// puts them together as runs of one condition.
+    #[arg(long, value_delimiter = ',', conflicts_with = "seed")]
+    seeds: Vec<u64>,
     /// Folder for the records.
     #[arg(long, default_value = "target/eval")]
     out: PathBuf,
@@ -369,6 +374,54 @@ fn config(args: &EvalArgs, suite: Suite) -> anyhow::Result<Value> {
 }
 
 pub fn run(args: EvalArgs) -> anyhow::Result<ExitCode> {
+    // The local default model, fetched on first use.
+    let uses_default = |spec: &crate::model_spec::ModelSpec| *spec == crate::model_spec::ModelSpec::Smollm2;
+    let needs_model = match args.agent {
+        AgentName::Expert => false,
+        AgentName::Direct => uses_default(&args.episode.explorer),
+        AgentName::Planner => uses_default(&args.episode.explorer),
+        AgentName::Ours => uses_default(&args.episode.explorer) || uses_default(&args.episode.lm.lm),
+    };
+    if !args.seeds.is_empty() && args.agent != AgentName::Ours {
+        return Err(InputError(format!("--seeds: the {} agent has no seed (its runs are deterministic)", serde_json::to_value(args.agent)?.as_str().unwrap_or_default())).into());
+    }
+    if needs_model && let Err(code) = crate::lm::ensure_default_model()? {
+        return Ok(code);
+    }
+    if args.seeds.is_empty() {
+        let (summaries, written) = run_once(&args)?;
+        return finish(&args, summaries, &written);
+    }
+    // One run per seed; the summaries are keyed `<benchmark> seed <s>`.
+    let mut all = serde_json::Map::new();
+    let mut written = Vec::new();
+    for &seed in &args.seeds {
+        let mut one = args.clone();
+        one.episode.decode.seed = seed;
+        one.seeds.clear();
+        let (summaries, files) = run_once(&one)?;
+        all.extend(summaries.into_iter().map(|(k, v)| (format!("{k} seed {seed}"), v)));
+        written.extend(files);
+    }
+    finish(&args, all, &written)
+}
+
+/// The report of the run's records, and the summary when `--json`.
+fn finish(args: &EvalArgs, mut summaries: serde_json::Map<String, Value>, written: &[PathBuf]) -> anyhow::Result<ExitCode> {
+    // The report of this run's records: tables, figures, a page per episode.
+    let report_dir = args.out.join("report");
+    let report = crate::report::write_report(written, &report_dir, 10_000, 0)?;
+    if args.json {
+        summaries.insert("report".into(), json!(report_dir.join("index.html").display().to_string()));
+        println!("{}", Value::Object(summaries));
+    } else {
+        println!("report: {report}");
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+/// One run over the suites: the summaries by benchmark and the record files written.
+fn run_once(args: &EvalArgs) -> anyhow::Result<(serde_json::Map<String, Value>, Vec<PathBuf>)> {
     let suites: Vec<Suite> = if args.benchmark == "all" {
         Suite::defaults(args.agent)
     } else {
@@ -384,17 +437,6 @@ pub fn run(args: EvalArgs) -> anyhow::Result<ExitCode> {
     };
     if args.agent == AgentName::Expert && suites.contains(&Suite::VirtualhomeRearrange) {
         return Err(InputError("--agent expert: the rearrangement set has no expert plans in the benchmark's own form".into()).into());
-    }
-    // The local default model, fetched on first use.
-    let uses_default = |spec: &crate::model_spec::ModelSpec| *spec == crate::model_spec::ModelSpec::Smollm2;
-    let needs_model = match args.agent {
-        AgentName::Expert => false,
-        AgentName::Direct => uses_default(&args.episode.explorer),
-        AgentName::Planner => uses_default(&args.episode.explorer),
-        AgentName::Ours => uses_default(&args.episode.explorer) || uses_default(&args.episode.lm.lm),
-    };
-    if needs_model && let Err(code) = crate::lm::ensure_default_model()? {
-        return Ok(code);
     }
     let mut runner = match args.agent {
         AgentName::Expert => Runner::Expert,
@@ -479,16 +521,7 @@ pub fn run(args: EvalArgs) -> anyhow::Result<ExitCode> {
             }),
         );
     }
-    // The report of this run's records: tables, figures, a page per episode.
-    let report_dir = args.out.join("report");
-    let report = crate::report::write_report(&written, &report_dir, 10_000, 0)?;
-    if args.json {
-        summaries.insert("report".into(), json!(report_dir.join("index.html").display().to_string()));
-        println!("{}", Value::Object(summaries));
-    } else {
-        println!("report: {report}");
-    }
-    Ok(ExitCode::SUCCESS)
+    Ok((summaries, written))
 }
 
 /// A progress bar with the elapsed time and an estimate of the time left, on standard error

@@ -76,3 +76,42 @@ fn killed_runs_resume_to_exactly_the_records_of_an_uninterrupted_run() {
         assert_eq!(a, b, "record {i}");
     }
 }
+
+/// `--seeds`: one run per seed, each with its own record file named by its configuration, all
+/// in the report as runs of one condition; an agent without a seed refuses the option.
+#[test]
+fn seeds_make_one_run_each() {
+    let dir = run_dir("seeds");
+    let output = Command::new(env!("CARGO_BIN_EXE_xtask"))
+        .args(["eval", "--explorer", "systematic", "--lm", "uniform", "--mode", "sample", "--seeds", "0,42", "--benchmark", "alfworld-seen", "--time-limit", "5"])
+        .args(["--limit", "1", "--json", "--out"])
+        .arg(&dir)
+        .current_dir(Path::new(env!("CARGO_MANIFEST_DIR")).join(".."))
+        .output()
+        .expect("runs");
+    let stdout = String::from_utf8_lossy(&output.stdout);
+    assert!(output.status.success(), "{}", String::from_utf8_lossy(&output.stderr));
+    let summary: serde_json::Value = serde_json::from_str(&stdout).expect("one JSON object");
+    let (a, b) = (&summary["alfworld-seen seed 0"], &summary["alfworld-seen seed 42"]);
+    assert_eq!((a["tasks"].as_u64(), b["tasks"].as_u64()), (Some(1), Some(1)), "{summary}");
+    assert_ne!(a["config"], b["config"], "each seed is its own configuration");
+    let files: Vec<PathBuf> =
+        std::fs::read_dir(&dir).expect("records").flatten().map(|e| e.path()).filter(|p| p.extension().is_some_and(|e| e == "jsonl")).collect();
+    assert_eq!(files.len(), 2, "{files:?}");
+    for file in &files {
+        let config: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(file.with_extension("config.json")).expect("config beside")).expect("JSON");
+        assert!([0, 42].contains(&config["decode"]["seed"].as_u64().expect("a seed")), "{config}");
+    }
+    let report = std::fs::read_to_string(dir.join("report/report.md")).expect("the report");
+    assert!(report.contains("alfworld-seen"), "{report}");
+
+    let refused = Command::new(env!("CARGO_BIN_EXE_xtask"))
+        .args(["eval", "--agent", "planner", "--explorer", "systematic", "--seeds", "0,42", "--out"])
+        .arg(&dir)
+        .output()
+        .expect("runs");
+    assert_eq!(refused.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&refused.stderr).contains("--seeds: the planner agent has no seed"));
+    std::fs::remove_dir_all(&dir).ok();
+}
