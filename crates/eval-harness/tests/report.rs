@@ -41,8 +41,9 @@ fn table_7_numbers_are_the_statistics_modules() {
     let summary = stats::summarize_runs(&rates).unwrap();
     let tasks: Vec<Vec<f64>> = (0..6).map(|t| runs.iter().map(|r| r[t]).collect()).collect();
     let interval = stats::task_cluster_bootstrap(&tasks, &BootstrapConfig::PAPER).unwrap();
+    // Bold: on six tasks no condition is significantly worse than the best.
     let cell = format!(
-        "| {:.1} ± {:.1} | [{:.1}, {:.1}] |",
+        "| **{:.1} ± {:.1}** | [{:.1}, {:.1}] |",
         100.0 * summary.mean,
         100.0 * summary.sample_std_dev.unwrap(),
         100.0 * interval.lower,
@@ -335,4 +336,31 @@ fn well_formed(text: &str) -> Result<String, String> {
         return Err(format!("unclosed <{open}>"));
     }
     root.ok_or_else(|| "no element".into())
+}
+
+/// Table 7's bold: the best condition on a benchmark and those not significantly worse than it
+/// (exact McNemar against the best, Holm within the benchmark). On 12 tasks: the best solves all
+/// 12; one solves 11 (b/c = 1/0, p = 1: bold); one solves 2 (b/c = 10/0, p = 0.002, 0.004 after
+/// Holm: not bold).
+#[test]
+fn table_7_bolds_the_best_and_what_is_not_significantly_worse() {
+    let dir = scratch("table-7-bold");
+    for (mode, solved) in [("constrained-mcts", 12), ("constrained-greedy", 11), ("unconstrained-greedy", 2)] {
+        let config = serde_json::json!({"agent": "ours", "benchmark": "alfworld-seen", "mode": mode, "lm": "uniform"});
+        let mut file = eval_harness::records::RecordFile::open(&dir, "alfworld-seen-ours", &config, None, false).expect("opens");
+        for task in 0..12 {
+            let record = serde_json::json!({"task": format!("t{task:02}"), "agent": "ours", "success": task < solved});
+            file.append(task, &record).expect("appends");
+        }
+    }
+    let paths = record_paths(&[dir]).expect("record files");
+    let sets: Vec<_> = paths.iter().map(|p| load(p).expect("a record file")).collect();
+    let markdown = build(&sets, &ReportOptions::default()).expect("a report").markdown;
+    let table = markdown.split("## ").find(|s| s.starts_with("Accuracy and robustness (Table 7)")).expect("Table 7");
+    let row = |approach: &str| table.lines().find(|l| l.starts_with(&format!("| {approach} |"))).unwrap_or_else(|| panic!("{approach}: {table}"));
+    assert!(row("Ours").contains("| **100.0 ± 0.0** |"), "{table}");
+    assert!(row("Constrained greedy").contains("| **91.7 ± 0.0** |"), "{table}");
+    assert!(row("Unconstrained greedy").contains("| 16.7 ± 0.0 |"), "{table}");
+    let p = stats::holm_adjust(&[stats::mcnemar_exact_p(1, 0), stats::mcnemar_exact_p(10, 0)]).unwrap();
+    assert!(p[0] >= 0.05 && p[1] < 0.05, "{p:?}");
 }

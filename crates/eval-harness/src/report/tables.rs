@@ -180,10 +180,13 @@ fn accuracy_table(study: &Study<'_>, options: &ReportOptions) -> Result<Table, R
         format!(
             "Accuracy (%) as mean ± sample standard deviation over runs (a condition with one run is marked ± 0.0, as the paper marks \
              deterministic conditions), and the {:.0}% percentile task-cluster bootstrap interval ({} replicates, seed {}; each \
-             replicate resamples tasks, a task's runs kept together).",
+             replicate resamples tasks, a task's runs kept together). Bold: the highest accuracy on each benchmark and the \
+             results not significantly different from it (exact paired McNemar against the best condition on the tasks both \
+             ran, the largest p over run pairs, Holm correction within the benchmark, α = {}).",
             100.0 * options.bootstrap.confidence,
             options.bootstrap.replicates,
-            options.bootstrap.seed
+            options.bootstrap.seed,
+            options.alpha
         ),
         "No records.",
     );
@@ -199,6 +202,8 @@ fn accuracy_table(study: &Study<'_>, options: &ReportOptions) -> Result<Table, R
         table.grouped_column(benchmark.as_str(), "Accuracy (%)", true);
         table.grouped_column(benchmark.as_str(), "95% CI", true);
     }
+    // Per benchmark, each condition that ran there and its mean accuracy.
+    let mut means: Vec<Vec<(usize, f64)>> = vec![Vec::new(); study.benchmarks.len()];
     for (c, condition) in study.conditions.iter().enumerate() {
         let mut row = condition_cells(condition, with_setting);
         let counts: BTreeSet<usize> = (0..study.benchmarks.len()).map(|b| study.runs(c, b).len()).filter(|n| *n > 0).collect();
@@ -225,11 +230,42 @@ fn accuracy_table(study: &Study<'_>, options: &ReportOptions) -> Result<Table, R
             )))?;
             row.push(Cell::from(format!("{} ± {}", percent(summary.mean), percent(summary.sample_std_dev.unwrap_or(0.0)))));
             row.push(Cell::from(format!("[{}, {}]", percent(interval.lower), percent(interval.upper))));
+            means[b].push((c, summary.mean));
         }
         table.rows.push(row);
     }
-    table.bold_best((first..table.columns.len()).step_by(2));
+    for (b, means) in means.iter().enumerate() {
+        for c in not_worse_than_the_best(study, b, means, options)? {
+            table.rows[c][first + 2 * b].bold = true;
+        }
+    }
     Ok(table)
+}
+
+/// The conditions to bold on benchmark `b`, given each condition's mean accuracy there: those
+/// with the highest mean, and every other whose exact McNemar test against the (first) best,
+/// Holm-corrected over the benchmark's tests, is not significant at `options.alpha`. A
+/// condition sharing no task with the best cannot be compared and is not bold.
+fn not_worse_than_the_best(study: &Study<'_>, b: usize, means: &[(usize, f64)], options: &ReportOptions) -> Result<Vec<usize>, ReportError> {
+    let Some(best) = means.iter().map(|&(_, m)| m).reduce(f64::max) else { return Ok(Vec::new()) };
+    let mut bold: Vec<usize> = means.iter().filter(|&&(_, m)| m == best).map(|&(c, _)| c).collect();
+    let reference = bold[0];
+    let mut tested = Vec::new();
+    for &(c, mean) in means {
+        if mean == best {
+            continue;
+        }
+        if let Some((_, test)) = mcnemar_test(study.runs(reference, b), study.runs(c, b))? {
+            tested.push((c, test.p_value));
+        }
+    }
+    if !tested.is_empty() {
+        let raw: Vec<f64> = tested.iter().map(|&(_, p)| p).collect();
+        let adjusted = stats::holm_adjust(&raw).map_err(stats_error("Holm correction of Table 7's comparisons"))?;
+        bold.extend(tested.iter().zip(adjusted).filter(|(_, p)| *p >= options.alpha).map(|(&(c, _), _)| c));
+    }
+    bold.sort_unstable();
+    Ok(bold)
 }
 
 /// One McNemar test: a pair of conditions on one benchmark.
