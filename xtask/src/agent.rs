@@ -174,6 +174,7 @@ impl PhaseTwoRunner {
             model_calls: outcome.stats.usage.forward_calls,
             generated_tokens: outcome.stats.usage.tokens_generated,
             detail,
+            search_tree: outcome.tree,
         })
     }
 }

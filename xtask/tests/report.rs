@@ -32,15 +32,18 @@ fn report_writes_tables_figures_and_a_page_per_episode() {
         assert!(svg.starts_with("<svg xmlns=\"http://www.w3.org/2000/svg\""), "{figure}");
         assert!(index.contains(&format!("href=\"{figure}\"")));
     }
-    let mut pages = 0;
+    let (mut pages, mut trees) = (0, 0);
     for run in std::fs::read_dir(out.join("episodes")).expect("episodes/").flatten() {
         for page in std::fs::read_dir(run.path()).expect("a run's pages").flatten() {
             let relative = page.path().strip_prefix(&out).expect("under out").display().to_string();
             assert!(index.contains(&format!("href=\"{relative}\"")), "{relative} is not linked");
+            let html = std::fs::read_to_string(page.path()).expect("a page");
+            trees += usize::from(html.contains("<h2>Phase II search (top of the tree)</h2>") && html.contains("✓ on plan"));
             pages += 1;
         }
     }
     assert_eq!(pages, 60);
+    assert_eq!(trees, 1, "the one record with a search tree shows it");
 }
 
 #[test]

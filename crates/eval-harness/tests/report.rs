@@ -72,12 +72,76 @@ fn observations_are_escaped_in_the_episode_page() {
     assert!(page.html.contains("&lt;script&gt;alert(&#39;x&#39;)&lt;/script&gt; &amp; &quot;more&quot;"));
     assert!(page.html.contains("[WALK] &lt;kitchen&gt; (1)"));
     // What the page shows of the episode.
-    for shown in
-        ["inside(plate (10), kitchen (1))", "ON(stove (11))", "(:domain virtualhome-sound)", "✗ not executed", "Phase II", "not recorded"]
-    {
+    for shown in [
+        "inside(plate (10), kitchen (1))",
+        "ON(stove (11))",
+        "(:domain virtualhome-sound)",
+        "✗ not executed",
+        "Phase II",
+        "top of the tree",
+    ] {
         assert!(page.html.contains(shown), "{} lacks {shown}", page.path);
     }
     assert!(!report.index.contains("<script"));
+}
+
+/// The page of the constrained-MCTS episode whose record holds a search tree.
+fn tree_page(report: &Report) -> &str {
+    &report.episodes.iter().find(|p| p.html.contains("alert(")).expect("the constrained-MCTS episode's page").html
+}
+
+/// The part of a page under `heading`, up to the next `<h2>`.
+fn section<'a>(html: &'a str, heading: &str) -> &'a str {
+    let start = html.find(&format!("<h2>{heading}</h2>")).unwrap_or_else(|| panic!("no section {heading}"));
+    let rest = &html[start + 4..];
+    &rest[..rest.find("<h2>").unwrap_or(rest.len())]
+}
+
+#[test]
+fn the_episode_page_shows_the_top_of_the_search_tree() {
+    let report = fixture_report();
+    let tree = section(tree_page(&report), "Phase II search (top of the tree)");
+    assert!(tree.contains("12 simulation(s) backed up at the root"), "{tree}");
+    assert!(tree.contains("value: the best value (Eq. 8) backed up through it"), "max backup: {tree}");
+    // Most visited first, the action text escaped; the plan's first action marked, once per level.
+    let rows = [
+        "<tr><td class=\"num\">1</td><td><code>[WALK] &lt;kitchen&gt; (1)</code></td><td class=\"num\">6</td><td class=\"num\">-1.100</td><td class=\"num\">0.500</td><td></td></tr>",
+        "<tr><td class=\"num\">2</td><td><code>[FIND] &lt;plate&gt; (10)</code></td><td class=\"num\">3</td>",
+        "<tr><td class=\"num\">3</td><td><code>[GRAB] &lt;plate&gt; (10)</code></td><td class=\"num\">1</td><td class=\"num\">1.000</td><td class=\"num\">0.250</td><td><span class=\"ok\">✓ on plan</span></td></tr>",
+        "<tr><td class=\"num\">4</td><td><code>[OPEN] &lt;cab</code> <em>(partial: the search stopped inside the action)</em>",
+        "<tr><td class=\"num\">5</td><td><code>DONE</code> <em>(ends the plan)</em></td><td class=\"num\">1</td><td class=\"num\">-2.000</td><td class=\"num\">4.0e-4</td>",
+    ];
+    for row in rows {
+        assert!(tree.contains(row), "no row {row} in {tree}");
+    }
+    assert_eq!(tree.matches("✓ on plan").count(), 1);
+    // One level below the most visited first action.
+    let below = "<h3>After <code>[WALK] &lt;kitchen&gt; (1)</code> (the most visited first action, 6 visit(s))</h3>";
+    let second = &tree[tree.find(below).unwrap_or_else(|| panic!("no second level in {tree}"))..];
+    assert!(second.contains("<td><code>[FIND] &lt;plate&gt; (10)</code></td><td class=\"num\">3</td>"), "{second}");
+    assert!(second.contains("<code>&lt;|im_end|&gt;</code> <em>(ends the plan)</em>"), "{second}");
+    assert!(!tree.contains("holds no search tree"));
+    // The tree is not repeated among the other episode fields.
+    assert!(!section(tree_page(&report), "Other episode fields").contains("search_tree"));
+}
+
+#[test]
+fn an_episode_page_without_a_tree_says_so() {
+    // The same record as written before records kept the tree.
+    let dir = scratch("no-tree");
+    let path = copy_fixture("virtualhome-rearrange-ours-71477d57ab53", &dir);
+    let text = std::fs::read_to_string(&path).unwrap();
+    let mut lines: Vec<String> = text.lines().map(str::to_string).collect();
+    let mut first: serde_json::Value = serde_json::from_str(&lines[0]).unwrap();
+    assert!(first["episode"].as_object_mut().expect("an episode").remove("search_tree").is_some());
+    lines[0] = first.to_string();
+    std::fs::write(&path, lines.join("\n") + "\n").unwrap();
+    let report = build(&[load(&path).expect("an older record loads")], &ReportOptions::default()).expect("a report");
+    let page = tree_page(&report);
+    let tree = section(page, "Phase II search (top of the tree)");
+    assert!(tree.contains("This record holds no search tree"), "{tree}");
+    assert!(!tree.contains("<table>") && !page.contains("✓ on plan"));
+    well_formed(page).expect("well-formed");
 }
 
 #[test]
@@ -357,7 +421,8 @@ fn table_7_bolds_the_best_and_what_is_not_significantly_worse() {
     let sets: Vec<_> = paths.iter().map(|p| load(p).expect("a record file")).collect();
     let markdown = build(&sets, &ReportOptions::default()).expect("a report").markdown;
     let table = markdown.split("## ").find(|s| s.starts_with("Accuracy and robustness (Table 7)")).expect("Table 7");
-    let row = |approach: &str| table.lines().find(|l| l.starts_with(&format!("| {approach} |"))).unwrap_or_else(|| panic!("{approach}: {table}"));
+    let row =
+        |approach: &str| table.lines().find(|l| l.starts_with(&format!("| {approach} |"))).unwrap_or_else(|| panic!("{approach}: {table}"));
     assert!(row("Ours").contains("| **100.0 ± 0.0** |"), "{table}");
     assert!(row("Constrained greedy").contains("| **91.7 ± 0.0** |"), "{table}");
     assert!(row("Unconstrained greedy").contains("| 16.7 ± 0.0 |"), "{table}");

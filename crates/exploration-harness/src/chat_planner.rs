@@ -110,5 +110,6 @@ pub fn plan_by_chat(chat: &mut dyn ChatModel, grounded: &Grounded, config: &Chat
             "plan_text": plan_text.trim(), "reasoning_chars": reasoning_chars, "finish_reason": reply.finish_reason,
         }),
         actions: read.actions,
+        search_tree: None,
     })
 }

@@ -80,6 +80,8 @@ pub struct PhaseTwo {
     pub generated_tokens: u64,
     /// Anything the planner wants kept in the record (its stop reason, search figures).
     pub detail: serde_json::Value,
+    /// The top of the search tree, from a planner that searches one (MCTS).
+    pub search_tree: Option<mcts::TreeSummary>,
 }
 
 /// Phase II: a planner on the grounded problem.
@@ -118,6 +120,9 @@ pub struct Episode {
     pub phase2_calls: u64,
     pub phase2_tokens: u64,
     pub phase2_detail: serde_json::Value,
+    /// The top of Phase II's search tree, of the last hand-over that returned a plan (`None`
+    /// for planners that build no tree: A*, greedy decoding, sampling, a chat model).
+    pub search_tree: Option<mcts::TreeSummary>,
     pub phase1_ms: f64,
     pub phase2_ms: f64,
     pub execute_ms: f64,
@@ -164,6 +169,7 @@ pub fn run_episode<E: Environment + Judge>(
         phase2_calls: 0,
         phase2_tokens: 0,
         phase2_detail: serde_json::Value::Null,
+        search_tree: None,
         phase1_ms,
         phase2_ms: 0.0,
         execute_ms: 0.0,
@@ -196,6 +202,7 @@ pub fn run_episode<E: Environment + Judge>(
         episode.phase2_calls += phase2.model_calls;
         episode.phase2_tokens += phase2.generated_tokens;
         episode.phase2_detail = phase2.detail.clone();
+        episode.search_tree = phase2.search_tree.clone();
         let t = Instant::now();
         episode.plan.clear();
         not_executed = false;

@@ -143,6 +143,7 @@ impl<'m> Decoder<'m> {
             text: run.text,
             value,
             stats,
+            tree: run.tree,
         }
     }
 }
@@ -194,9 +195,11 @@ fn linear(
                     invalid: Some(InvalidStep { step: cursor.plan().len(), text: line }),
                     stop: StopReason::InvalidAction,
                     text: Some(text(stepper, &sequence)),
+                    tree: None,
                 });
             }
         }
     };
-    Ok(Run { plan: cursor.plan().to_vec(), end_state: cursor.state().clone(), invalid: None, stop, text: Some(text(stepper, &sequence)) })
+    let (plan, end_state) = (cursor.plan().to_vec(), cursor.state().clone());
+    Ok(Run { plan, end_state, invalid: None, stop, text: Some(text(stepper, &sequence)), tree: None })
 }

@@ -57,12 +57,22 @@
 //! every boundary the search reached is one; a goal-reaching one beats any other (the
 //! cheapest of them), then the highest value. Ties break on token order, so a run is
 //! deterministic.
+//!
+//! **Summary.** The run returns the top of the tree as a [`TreeSummary`]: the visited
+//! branches from the root to the first action boundary (a row per action line completed, or
+//! per branch that ended or stopped short of one), then the same from the most visited first
+//! action. It replays the rows' tokens through the cursor (at most [`TreeSummary::STEPS`] per
+//! level), so the nodes stay 32 bytes. The simulation that reaches the goal is backed up
+//! before the search stops, so the plan's branch counts it.
 
+use grounding::ActionId;
 use rustc_hash::FxHashMap;
 use token_constraint::TokenId;
 use transition_model::{State, TransitionModel};
 
-use crate::config::{Backup, DecodeConfig, DecodeError, MctsConfig, Normalization, Run, StopReason};
+use crate::config::{
+    Backup, DecodeConfig, DecodeError, MctsConfig, Normalization, RowKind, Run, StopReason, TreeLevel, TreeRow, TreeSummary,
+};
 use crate::cursor::{Cursor, Event};
 use crate::step::{Session, Stepper};
 use crate::value::Evaluator;
@@ -196,6 +206,10 @@ impl Tree {
         }
     }
 
+    fn visited_children(&self, node: usize) -> impl Iterator<Item = usize> + '_ {
+        self.nodes[node].children().filter(|&c| self.nodes[c].visits > 0)
+    }
+
     /// Closes the last node of `path`, and every ancestor left with no open child.
     fn close(&mut self, path: &[usize]) {
         let Some((&leaf, ancestors)) = path.split_last() else { return };
@@ -222,7 +236,7 @@ enum Leaf {
 
 /// The best plan found so far.
 struct Best {
-    plan: Vec<grounding::ActionId>,
+    plan: Vec<ActionId>,
     state: State,
     goal: bool,
     cost: u64,
@@ -350,7 +364,8 @@ pub(crate) fn run(stepper: &mut Stepper<'_>, session: &mut Session<'_>, root: Cu
     let prompt = session.prompt;
     let budget = &config.budget;
     let start = root.state().clone();
-    let finish = |best: &Best, stop| Run { plan: best.plan.clone(), end_state: best.state.clone(), invalid: None, stop, text: None };
+    let finish =
+        |best: &Best, stop| Run { plan: best.plan.clone(), end_state: best.state.clone(), invalid: None, stop, text: None, tree: None };
     let lambda = stepper.evaluator.config().length_penalty;
     let mut best = Best { plan: Vec::new(), state: start.clone(), goal: model.is_goal(&start), cost: 0, value: 0.0 };
     if best.goal {
@@ -441,7 +456,12 @@ pub(crate) fn run(stepper: &mut Stepper<'_>, session: &mut Session<'_>, root: Cu
             }
         };
         match leaf {
-            Leaf::Goal => break StopReason::Goal,
+            Leaf::Goal => {
+                // Counted in the tree for the summary: the search stops here.
+                tree.backup(&path, stepper.evaluator.config().goal_reward);
+                tree.close(&path);
+                break StopReason::Goal;
+            }
             Leaf::Open(value) => tree.backup(&path, value),
             Leaf::Terminal(value) => {
                 tree.backup(&path, value);
@@ -450,7 +470,120 @@ pub(crate) fn run(stepper: &mut Stepper<'_>, session: &mut Session<'_>, root: Cu
         }
     };
     session.stats.nodes = tree.nodes.len() as u64;
-    Ok(finish(&arrivals.best, stop))
+    let mut run = finish(&arrivals.best, stop);
+    run.tree = Some(summarize(&tree, stepper, &root, &run.plan)?);
+    Ok(run)
+}
+
+/// A branch of a summary level: the node that ends it, where the cursor stands there, and
+/// what it wrote.
+struct Branch {
+    node: usize,
+    cursor: Cursor,
+    tokens: Vec<TokenId>,
+    prior: f64,
+    kind: RowKind,
+}
+
+/// The top of the tree (module documentation, **Summary**).
+fn summarize(tree: &Tree, stepper: &mut Stepper<'_>, root: &Cursor, plan: &[ActionId]) -> Result<TreeSummary, DecodeError> {
+    let (first, branches) = level(tree, stepper, 0, root, plan)?;
+    let next = branches.into_iter().find(|b| b.kind == RowKind::Action && tree.visited_children(b.node).next().is_some());
+    let second = match next {
+        Some(branch) => Some(level(tree, stepper, branch.node, &branch.cursor, plan)?.0),
+        None => None,
+    };
+    Ok(TreeSummary { visits: u64::from(tree.nodes[0].visits), backup: tree.backup, first, second })
+}
+
+/// The visited branches from `from` (where `cursor` stands) to the next action boundary, as a
+/// level, and the branches themselves, most visited first (ties: the node made first).
+fn level(
+    tree: &Tree,
+    stepper: &mut Stepper<'_>,
+    from: usize,
+    cursor: &Cursor,
+    plan: &[ActionId],
+) -> Result<(TreeLevel, Vec<Branch>), DecodeError> {
+    let mut branches = Vec::new();
+    let mut steps = 0;
+    let mut truncated = false;
+    // Depth first, the most visited child first, so that a level cut short keeps those.
+    let mut stack = vec![(from, cursor.clone(), Vec::new(), 1.0)];
+    'walk: while let Some((node, cursor, tokens, prior)) = stack.pop() {
+        let mut children: Vec<usize> = tree.visited_children(node).collect();
+        if children.is_empty() {
+            if node != from {
+                branches.push(Branch { node, cursor, tokens, prior, kind: RowKind::Partial });
+            }
+            continue;
+        }
+        children.sort_by_key(|&c| (tree.nodes[c].visits, std::cmp::Reverse(c)));
+        for c in children {
+            if steps == TreeSummary::STEPS {
+                truncated = true;
+                break 'walk;
+            }
+            steps += 1;
+            let child = tree.nodes[c];
+            let mut next = cursor.clone();
+            let event = stepper.advance(&mut next, child.token)?;
+            let mut tokens = tokens.clone();
+            tokens.push(child.token);
+            let prior = prior * f64::from(child.prior);
+            let kind = match event {
+                Event::Partial => {
+                    stack.push((c, next, tokens, prior));
+                    continue;
+                }
+                Event::Action => RowKind::Action,
+                Event::End => RowKind::End,
+                Event::Invalid(_) => RowKind::Invalid,
+            };
+            branches.push(Branch { node: c, cursor: next, tokens, prior, kind });
+        }
+    }
+    branches.sort_by_key(|b| (std::cmp::Reverse(tree.nodes[b.node].visits), b.node));
+    let base = cursor.plan().len();
+    let rows = branches
+        .iter()
+        .take(TreeSummary::LISTED)
+        .map(|b| {
+            let node = &tree.nodes[b.node];
+            let text = match b.kind {
+                RowKind::Action => b.cursor.plan()[base..].iter().map(|&a| spell(stepper, a)).collect::<Vec<_>>().join("; "),
+                RowKind::End | RowKind::Invalid | RowKind::Partial => {
+                    String::from_utf8_lossy(&stepper.vocab.decode(&b.tokens)).trim().to_string()
+                }
+            };
+            TreeRow {
+                text,
+                kind: b.kind,
+                tokens: b.tokens.len(),
+                visits: u64::from(node.visits),
+                value: tree.raw(node),
+                prior: b.prior,
+                on_plan: b.kind == RowKind::Action && plan.starts_with(b.cursor.plan()),
+                closed: node.closed(),
+            }
+        })
+        .collect();
+    let rest = branches.get(TreeSummary::LISTED..).unwrap_or_default();
+    let level = TreeLevel {
+        after: cursor.plan().iter().map(|&a| spell(stepper, a)).collect(),
+        visits: u64::from(tree.nodes[from].visits),
+        rows,
+        omitted: rest.len(),
+        omitted_visits: rest.iter().map(|b| u64::from(tree.nodes[b.node].visits)).sum(),
+        truncated,
+    };
+    Ok((level, branches))
+}
+
+/// An action's line as the model writes it.
+fn spell(stepper: &Stepper<'_>, action: ActionId) -> String {
+    let spelling = stepper.languages.bytes.spelling();
+    spelling.spell(action).map_or_else(|| stepper.model.task().action_name(action), str::to_string)
 }
 
 #[cfg(test)]

@@ -1,8 +1,9 @@
 //! The HTML pages: `index.html` (inputs, the tables, the figures inline, every episode
 //! linked) and one page per record (Phase I's decisions with the facts admitted and refused,
 //! the grounded problem, the plan, each executed step with its observation, the verdict,
-//! precision, recall and attribution, Phase II's summary). Every text from a record is
-//! escaped: observations carry `<`, `>` and `&`. Pages are well-formed XML as well as HTML.
+//! precision, recall and attribution, Phase II's summary and the top of its search tree).
+//! Every text from a record is escaped: observations carry `<`, `>` and `&`. Pages are
+//! well-formed XML as well as HTML.
 
 use std::collections::BTreeSet;
 use std::fmt::Write;
@@ -406,6 +407,98 @@ fn plan_html(episode: &Map<String, Value>) -> String {
     }
 }
 
+/// A probability for a table cell: three decimals, or two significant digits below 0.001.
+fn probability(p: f64) -> String {
+    if p > 0.0 && p < 1e-3 { format!("{p:.1e}") } else { format!("{p:.3}") }
+}
+
+/// One level of the search tree's summary (`mcts::TreeLevel` as JSON): its rows, most visited
+/// first.
+fn tree_level_html(level: &Map<String, Value>) -> String {
+    let mut rows: Vec<&Map<String, Value>> =
+        level.get("rows").and_then(Value::as_array).map(|r| r.iter().filter_map(Value::as_object).collect()).unwrap_or_default();
+    let visits = |row: &Map<String, Value>| row.get("visits").and_then(Value::as_u64).unwrap_or(0);
+    rows.sort_by_key(|row| std::cmp::Reverse(visits(row)));
+    let mut out = String::new();
+    if rows.is_empty() {
+        out.push_str("<p class=\"empty\">No branch was visited from here.</p>\n");
+    } else {
+        out.push_str("<table>\n<thead><tr><th class=\"num\">#</th><th>Action</th><th class=\"num\">Visits</th><th class=\"num\">Value</th><th class=\"num\">Prior</th><th>On plan</th></tr></thead>\n<tbody>\n");
+        for (i, row) in rows.iter().enumerate() {
+            let text = row.get("text").and_then(Value::as_str).filter(|t| !t.is_empty()).map_or_else(|| "—".into(), escape);
+            let kind = match row.get("kind").and_then(Value::as_str) {
+                Some("action") | None => String::new(),
+                Some("end") => " <em>(ends the plan)</em>".into(),
+                Some("invalid") => " <em>(names no applicable action)</em>".into(),
+                Some("partial") => " <em>(partial: the search stopped inside the action)</em>".into(),
+                Some(other) => format!(" <em>({})</em>", escape(other)),
+            };
+            let on_plan =
+                if row.get("on_plan").and_then(Value::as_bool) == Some(true) { "<span class=\"ok\">✓ on plan</span>" } else { "" };
+            let _ = writeln!(
+                out,
+                "<tr><td class=\"num\">{}</td><td><code>{text}</code>{kind}</td><td class=\"num\">{}</td><td class=\"num\">{}</td><td class=\"num\">{}</td><td>{on_plan}</td></tr>",
+                i + 1,
+                visits(row),
+                row.get("value").and_then(Value::as_f64).map_or_else(|| "—".into(), |v| format!("{v:.3}")),
+                row.get("prior").and_then(Value::as_f64).map_or_else(|| "—".into(), probability),
+            );
+        }
+        out.push_str("</tbody>\n</table>\n");
+    }
+    let omitted = level.get("omitted").and_then(Value::as_u64).unwrap_or(0);
+    if omitted > 0 {
+        let _ = writeln!(
+            out,
+            "<p class=\"note\">{omitted} more branch(es) tried, with {} visit(s) in all, are not listed.</p>",
+            level.get("omitted_visits").and_then(Value::as_u64).unwrap_or(0)
+        );
+    }
+    if level.get("truncated").and_then(Value::as_bool) == Some(true) {
+        out.push_str("<p class=\"note\">The summary stopped replaying this level's tokens at its limit: branches beyond it are neither listed nor counted.</p>\n");
+    }
+    out
+}
+
+/// The top of Phase II's search tree (`episode.search_tree`, `mcts::TreeSummary` as JSON), or
+/// a note that the record holds none.
+fn search_tree_html(episode: &Map<String, Value>) -> String {
+    let Some(tree) = episode.get("search_tree").and_then(Value::as_object) else {
+        return "<p class=\"empty\">This record holds no search tree: its planner builds none (A*, greedy decoding, sampling, a chat \
+                model), the search never ran or returned no plan, or the record was written before records kept the tree.</p>\n"
+            .into();
+    };
+    let backup = match tree.get("backup").and_then(Value::as_str) {
+        Some("mean") => "the mean of the values (Eq. 8) backed up through it",
+        _ => "the best value (Eq. 8) backed up through it",
+    };
+    let mut out = format!(
+        "<p class=\"caption\">{} simulation(s) backed up at the root. The tree's nodes are tokens; a row is a branch from one action \
+         boundary to the next, usually the node where an action's line completes. Visits: simulations through it; value: {backup}; \
+         prior: the product of its tokens' priors (the masked model distribution, Eq. 6). Visited branches only, most visited first.</p>\n",
+        tree.get("visits").and_then(Value::as_u64).unwrap_or(0)
+    );
+    match tree.get("first").and_then(Value::as_object) {
+        Some(first) => out.push_str(&tree_level_html(first)),
+        None => out.push_str("<p class=\"empty\">The summary holds no first level.</p>\n"),
+    }
+    if let Some(second) = tree.get("second").and_then(Value::as_object) {
+        let after: Vec<String> = second
+            .get("after")
+            .and_then(Value::as_array)
+            .map(|lines| lines.iter().filter_map(Value::as_str).map(|l| format!("<code>{}</code>", escape(l))).collect())
+            .unwrap_or_default();
+        let _ = writeln!(
+            out,
+            "<h3>After {} (the most visited first action, {} visit(s))</h3>",
+            if after.is_empty() { "—".into() } else { after.join(" → ") },
+            second.get("visits").and_then(Value::as_u64).unwrap_or(0)
+        );
+        out.push_str(&tree_level_html(second));
+    }
+    out
+}
+
 /// The page of one record.
 pub(crate) fn episode_page(study: &Study<'_>, set: &RecordSet, record: &Record) -> String {
     let (label, benchmark, seed) = place(study, set);
@@ -466,14 +559,15 @@ pub(crate) fn episode_page(study: &Study<'_>, set: &RecordSet, record: &Record) 
                         let _ = writeln!(body, "<p>{}</p>", value_html(other));
                     }
                 }
-                body.push_str(
-                    "<p class=\"note\">The search tree is not recorded: a record keeps Phase II's summary (stop reason, simulations, nodes, \
-                     the plan's lines), not its nodes.</p>\n",
-                );
+            }
+            if episode.contains_key("phase2_detail") || episode.contains_key("search_tree") {
+                body.push_str("<h2>Phase II search (top of the tree)</h2>\n");
+                body.push_str(&search_tree_html(episode));
             }
             body.push_str("<h2>Record</h2>\n");
             body.push_str(&key_value_table(&record.fields, &["episode"]));
-            let shown = ["decisions", "handover", "plan", "steps", "phase2_detail", "phase1_stop", "phase1_steps", "failure"];
+            let shown =
+                ["decisions", "handover", "plan", "steps", "phase2_detail", "search_tree", "phase1_stop", "phase1_steps", "failure"];
             let rest: Map<String, Value> =
                 episode.iter().filter(|(k, _)| !shown.contains(&k.as_str())).map(|(k, v)| (k.clone(), v.clone())).collect();
             if !rest.is_empty() {
