@@ -126,7 +126,8 @@ pub struct PhaseTwoRunner {
 impl PhaseTwoRunner {
     pub fn new(planner: &str, lm: &LmArgs, decode: &DecodeArgs, chat: &ChatPlannerArgs, time_limit: f64) -> anyhow::Result<PhaseTwoRunner> {
         if let Some(name) = &chat.chat_planner {
-            let config = if chat.thinking { ChatPlannerConfig::thinking(decode.seed) } else { ChatPlannerConfig::greedy() };
+            let mut config = if chat.thinking { ChatPlannerConfig::thinking(decode.seed) } else { ChatPlannerConfig::greedy() };
+            config.prompt = decode.prompt_options();
             let chat = Some((chat_model(name, &lm.served_model)?, config));
             return Ok(PhaseTwoRunner { planner: "chat".into(), chat, lm: None, vocab: None, decode: decode.clone(), time_limit });
         }

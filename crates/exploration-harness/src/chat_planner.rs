@@ -25,12 +25,14 @@ pub struct ChatPlannerConfig {
     /// Ask for the model's thinking mode (`chat_template_kwargs.enable_thinking`).
     pub thinking: bool,
     pub sampling: Sampling,
+    /// What the planning prompt shows (the facts relevant to the goal by default, or all).
+    pub prompt: mcts::prompt::PromptOptions,
 }
 
 impl ChatPlannerConfig {
     /// Greedy, thinking off, at most 512 tokens (the paper's greedy conditions, Table 6).
     pub fn greedy() -> ChatPlannerConfig {
-        ChatPlannerConfig { thinking: false, sampling: Sampling::greedy(512) }
+        ChatPlannerConfig { thinking: false, sampling: Sampling::greedy(512), prompt: mcts::prompt::PromptOptions::default() }
     }
 
     /// Thinking on with Qwen3's recommended sampling for it (temperature 0.6, top-p 0.95,
@@ -38,7 +40,7 @@ impl ChatPlannerConfig {
     /// sampling parameters and a 32K-token context"); `seed` for the paper's three runs.
     pub fn thinking(seed: u64) -> ChatPlannerConfig {
         let sampling = Sampling { temperature: Some(0.6), top_p: Some(0.95), top_k: Some(20), max_tokens: Some(32_768), seed: Some(seed) };
-        ChatPlannerConfig { thinking: true, sampling }
+        ChatPlannerConfig { thinking: true, sampling, prompt: mcts::prompt::PromptOptions::default() }
     }
 }
 
@@ -93,7 +95,7 @@ pub fn read_plan(grounded: &Grounded, text: &str) -> ReadPlan {
 /// Phase II by `chat`: the planning prompt of ŝ0, one reply, the plan read from it.
 pub fn plan_by_chat(chat: &mut dyn ChatModel, grounded: &Grounded, config: &ChatPlannerConfig) -> Result<PhaseTwo, String> {
     let initial = grounded.model.initial_state();
-    let prompt = mcts::prompt::planning_prompt(&grounded.model, &grounded.spelling, &initial, &mcts::prompt::PromptOptions::default());
+    let prompt = mcts::prompt::planning_prompt(&grounded.model, &grounded.spelling, &initial, &config.prompt);
     let request = ChatRequest::new(vec![Message::system(prompt.system), Message::user(prompt.user)])
         .with_sampling(config.sampling.clone())
         .with_thinking(config.thinking);

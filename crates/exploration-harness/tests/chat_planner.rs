@@ -98,3 +98,24 @@ fn thinking_is_cut_at_the_last_closing_tag() {
     assert_eq!(strip_thinking("<think>a</think>b</think>\nplan"), "\nplan");
     assert_eq!(strip_thinking("plan only"), "plan only");
 }
+
+#[test]
+fn the_prompt_options_reach_the_chat_planner() {
+    let answer = |plan: &[String]| plan.join("\n");
+    let (relevant, requests) = episode(&answer, &ChatPlannerConfig::greedy());
+    assert!(relevant.success, "{:?}", relevant.failure);
+    let mut all = ChatPlannerConfig::greedy();
+    all.prompt.relevance = mcts::prompt::Relevance::All;
+    let (every, all_requests) = episode(&answer, &all);
+    assert!(every.success, "{:?}", every.failure);
+    let (few, many) = (requests[0].messages[1].joined_text(), all_requests[0].messages[1].joined_text());
+    // The state, named as the agent perceived it (never an empty state, never a type name for
+    // an object): the book where it was found, and the goal's classes.
+    assert!(few.contains("inreceptacle book 1 "), "{few}");
+    assert!(few.contains("Goal:\ninreceptacle book sofa"), "{few}");
+    // Every fact the goal needs is shown either way, and all facts are more.
+    assert!(many.len() > few.len(), "all facts: {} bytes; relevant facts: {} bytes", many.len(), few.len());
+    for line in few.lines().filter(|l| l.starts_with("- ")) {
+        assert!(many.contains(line), "{line} is missing from the all-facts prompt");
+    }
+}

@@ -151,7 +151,7 @@ impl PlanningPrompt {
 pub fn planning_prompt(model: &TransitionModel, spelling: &Spelling, state: &State, options: &PromptOptions) -> PlanningPrompt {
     let task = model.task();
     let style = PromptStyle::from(spelling.language());
-    let names = ObjectNames::new(task, spelling.language());
+    let names = ObjectNames::for_spelling(task, spelling);
     let relevant = match options.relevance {
         Relevance::All => None,
         Relevance::Backward { depth } => Some(relevant_facts(task, depth)),

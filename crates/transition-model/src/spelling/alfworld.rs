@@ -162,7 +162,7 @@ impl Spelling {
             let template = templates.get(&schema.name).ok_or_else(|| SpellingError::MissingTemplate(schema.name.clone()))?;
             compiled.push(compile(&schema.name, template, &schema.params)?);
         }
-        Ok(Spelling::from_fn(task, SurfaceLanguage::Alfworld, |id| {
+        let mut spelling = Spelling::from_fn(task, SurfaceLanguage::Alfworld, |id| {
             let action = task.action(id);
             let mut out = String::new();
             for piece in &compiled[action.schema.index()] {
@@ -172,6 +172,8 @@ impl Spelling {
                 }
             }
             Some(out)
-        }))
+        });
+        spelling.object_names = Some(names);
+        Ok(spelling)
     }
 }

@@ -57,6 +57,10 @@ pub struct Spelling {
     language: SurfaceLanguage,
     texts: Vec<Option<Box<str>>>,
     by_text: FxHashMap<Box<str>, Vec<ActionId>>,
+    /// The object names the commands were written with, where the spelling was built from
+    /// given names ([`Spelling::alfworld_with_names`]: a grounded problem's objects named as the
+    /// agent perceived them), so that prompts name objects as the commands do.
+    object_names: Option<Vec<Option<String>>>,
 }
 
 /// Lowercase, trimmed, with runs of white space as one space.
@@ -83,7 +87,12 @@ impl Spelling {
             }
             texts.push(text);
         }
-        Spelling { language, texts, by_text }
+        Spelling { language, texts, by_text, object_names: None }
+    }
+
+    /// The object names this spelling was built with, when it was given them (see the field).
+    pub fn object_names(&self) -> Option<&[Option<String>]> {
+        self.object_names.as_deref()
     }
 
     /// PDDL: `(schema arg1 ... argn)`, as Fast Downward names operators.

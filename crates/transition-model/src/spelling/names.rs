@@ -34,6 +34,18 @@ impl ObjectNames {
     /// - VirtualHome: object names as they are (class names in EAI); the character is left out.
     /// - PDDL: object names as they are.
     pub fn new(task: &Task, language: SurfaceLanguage) -> ObjectNames {
+        Self::with_instances(task, language, None)
+    }
+
+    /// The names a spelling writes its commands with: [`ObjectNames::new`], except that an
+    /// ALFWorld spelling built from given names ([`crate::Spelling::object_names`], a grounded
+    /// problem's objects as the agent perceived them) names the objects by those instead of by
+    /// ALFWorld's display names of the problem's ids.
+    pub fn for_spelling(task: &Task, spelling: &crate::Spelling) -> ObjectNames {
+        Self::with_instances(task, spelling.language(), spelling.object_names().map(<[Option<String>]>::to_vec))
+    }
+
+    fn with_instances(task: &Task, language: SurfaceLanguage, given: Option<Vec<Option<String>>>) -> ObjectNames {
         let has_type = |o: usize, t: &str| task.objects[o].types.iter().any(|x| x == t);
         let count = task.objects.len();
         let plain = |omitted: Vec<bool>| ObjectNames {
@@ -48,7 +60,7 @@ impl ObjectNames {
             SurfaceLanguage::Pddl => plain(vec![false; count]),
             SurfaceLanguage::Virtualhome => plain((0..count).map(|o| has_type(o, "character")).collect()),
             SurfaceLanguage::Alfworld => {
-                let mut instance = crate::alfworld::display_names(task);
+                let mut instance = given.unwrap_or_else(|| crate::alfworld::display_names(task));
                 let type_name = |o: usize| task.objects[o].types.first().cloned().unwrap_or_else(|| "object".into());
                 let mut class: Vec<String> = (0..count)
                     .map(|o| match &instance[o] {
