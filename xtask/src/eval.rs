@@ -444,13 +444,13 @@ fn run_once(args: &EvalArgs) -> anyhow::Result<(serde_json::Map<String, Value>, 
             if args.episode.explorer == crate::model_spec::ModelSpec::Systematic {
                 return Err(InputError("--agent direct needs a chat model: --explorer smollm2, a GGUF path, or openai:URL".into()).into());
             }
-            Runner::Direct(Direct { args: &args, model: chat_model(&args.episode.explorer, &args.episode.lm.served_model)? })
+            Runner::Direct(Direct { args, model: chat_model(&args.episode.explorer, &args.episode.lm.served_model)? })
         }
         agent => {
             let planner = if agent == AgentName::Ours { "mcts" } else { "astar" };
             let policy = explorer(&args.episode.explorer, &args.episode.lm.served_model)?;
             let phase2 = PhaseTwoRunner::new(planner, &args.episode.lm, &args.episode.decode, &args.episode.chat, args.episode.time_limit)?;
-            Runner::Embodied(Box::new(Embodied { args: &args, policy, phase2 }))
+            Runner::Embodied(Box::new(Embodied { args, policy, phase2 }))
         }
     };
     let agent_name = serde_json::to_value(args.agent)?.as_str().unwrap_or_default().to_string();
@@ -459,7 +459,7 @@ fn run_once(args: &EvalArgs) -> anyhow::Result<(serde_json::Map<String, Value>, 
     for suite in suites {
         let stem = format!("{}-{agent_name}", suite.name());
         let mut records =
-            RecordFile::open(&args.out, &stem, &config(&args, suite)?, args.shard, args.fresh).map_err(|e| InputError(e.to_string()))?;
+            RecordFile::open(&args.out, &stem, &config(args, suite)?, args.shard, args.fresh).map_err(|e| InputError(e.to_string()))?;
         let subset = suite_subset(&args.subset, suite, args.agent)?;
         let tasks = tasks(suite, args.agent, args.task_dir.as_deref(), subset.as_deref())?;
         let total = tasks.len().min(args.limit.unwrap_or(usize::MAX));

@@ -203,12 +203,12 @@ fn accuracy_table(study: &Study<'_>, options: &ReportOptions) -> Result<Table, R
         table.grouped_column(benchmark.as_str(), "95% CI", true);
     }
     // Per benchmark, each condition that ran there and its mean accuracy.
-    let mut means: Vec<Vec<(usize, f64)>> = vec![Vec::new(); study.benchmarks.len()];
+    let mut per_benchmark: Vec<Vec<(usize, f64)>> = vec![Vec::new(); study.benchmarks.len()];
     for (c, condition) in study.conditions.iter().enumerate() {
         let mut row = condition_cells(condition, with_setting);
         let counts: BTreeSet<usize> = (0..study.benchmarks.len()).map(|b| study.runs(c, b).len()).filter(|n| *n > 0).collect();
         row.push(Cell::from(counts.iter().map(usize::to_string).collect::<Vec<_>>().join("/")));
-        for b in 0..study.benchmarks.len() {
+        for (b, means) in per_benchmark.iter_mut().enumerate() {
             let runs = study.runs(c, b);
             if runs.is_empty() {
                 row.extend([Cell::from("—"), Cell::from("—")]);
@@ -230,11 +230,11 @@ fn accuracy_table(study: &Study<'_>, options: &ReportOptions) -> Result<Table, R
             )))?;
             row.push(Cell::from(format!("{} ± {}", percent(summary.mean), percent(summary.sample_std_dev.unwrap_or(0.0)))));
             row.push(Cell::from(format!("[{}, {}]", percent(interval.lower), percent(interval.upper))));
-            means[b].push((c, summary.mean));
+            means.push((c, summary.mean));
         }
         table.rows.push(row);
     }
-    for (b, means) in means.iter().enumerate() {
+    for (b, means) in per_benchmark.iter().enumerate() {
         for c in not_worse_than_the_best(study, b, means, options)? {
             table.rows[c][first + 2 * b].bold = true;
         }
