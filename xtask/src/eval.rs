@@ -383,7 +383,11 @@ pub fn run(args: EvalArgs) -> anyhow::Result<ExitCode> {
         AgentName::Ours => uses_default(&args.episode.explorer) || uses_default(&args.episode.lm.lm),
     };
     if !args.seeds.is_empty() && args.agent != AgentName::Ours {
-        return Err(InputError(format!("--seeds: the {} agent has no seed (its runs are deterministic)", serde_json::to_value(args.agent)?.as_str().unwrap_or_default())).into());
+        return Err(InputError(format!(
+            "--seeds: the {} agent has no seed (its runs are deterministic)",
+            serde_json::to_value(args.agent)?.as_str().unwrap_or_default()
+        ))
+        .into());
     }
     if needs_model && let Err(code) = crate::lm::ensure_default_model()? {
         return Ok(code);

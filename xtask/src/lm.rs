@@ -389,13 +389,18 @@ struct LlamaCppFigures {
 /// when it exists; `None` when there is none (the figures are then left out, not guessed).
 fn llama_bench_binary(named: Option<&Path>) -> Result<Option<PathBuf>, InputError> {
     if let Some(path) = named {
-        return if path.is_file() { Ok(Some(path.to_path_buf())) } else { Err(InputError(format!("--llama-bench {}: no such file", path.display()))) };
+        return if path.is_file() {
+            Ok(Some(path.to_path_buf()))
+        } else {
+            Err(InputError(format!("--llama-bench {}: no such file", path.display())))
+        };
     }
     if let Some(path) = std::env::var_os("NSEA_LLAMA_BENCH") {
         let path = PathBuf::from(path);
         return if path.is_file() { Ok(Some(path)) } else { Err(InputError(format!("NSEA_LLAMA_BENCH={}: no such file", path.display()))) };
     }
-    let built = std::env::var_os("HOME").map(|home| PathBuf::from(home).join(".cache/nsea-anchors/llama.cpp/src/llama.cpp/build/bin/llama-bench"));
+    let built =
+        std::env::var_os("HOME").map(|home| PathBuf::from(home).join(".cache/nsea-anchors/llama.cpp/src/llama.cpp/build/bin/llama-bench"));
     Ok(built.filter(|path| path.is_file()))
 }
 

@@ -36,7 +36,8 @@ fn an_unknown_model_is_bad_input() {
 #[test]
 fn the_direct_agent_needs_a_chat_model() {
     let dir = out("systematic");
-    let output = xtask(&["eval", "--agent", "direct", "--explorer", "systematic", "--benchmark", "alfworld-seen", "--out", dir.to_str().unwrap()]);
+    let output =
+        xtask(&["eval", "--agent", "direct", "--explorer", "systematic", "--benchmark", "alfworld-seen", "--out", dir.to_str().unwrap()]);
     let stderr = String::from_utf8_lossy(&output.stderr);
     assert_eq!(output.status.code(), Some(2), "{stderr}");
     assert!(stderr.contains("--agent direct needs a chat model"), "{stderr}");

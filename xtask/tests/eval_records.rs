@@ -83,7 +83,21 @@ fn killed_runs_resume_to_exactly_the_records_of_an_uninterrupted_run() {
 fn seeds_make_one_run_each() {
     let dir = run_dir("seeds");
     let output = Command::new(env!("CARGO_BIN_EXE_xtask"))
-        .args(["eval", "--explorer", "systematic", "--lm", "uniform", "--mode", "sample", "--seeds", "0,42", "--benchmark", "alfworld-seen", "--time-limit", "5"])
+        .args([
+            "eval",
+            "--explorer",
+            "systematic",
+            "--lm",
+            "uniform",
+            "--mode",
+            "sample",
+            "--seeds",
+            "0,42",
+            "--benchmark",
+            "alfworld-seen",
+            "--time-limit",
+            "5",
+        ])
         .args(["--limit", "1", "--json", "--out"])
         .arg(&dir)
         .current_dir(Path::new(env!("CARGO_MANIFEST_DIR")).join(".."))
@@ -95,8 +109,12 @@ fn seeds_make_one_run_each() {
     let (a, b) = (&summary["alfworld-seen seed 0"], &summary["alfworld-seen seed 42"]);
     assert_eq!((a["tasks"].as_u64(), b["tasks"].as_u64()), (Some(1), Some(1)), "{summary}");
     assert_ne!(a["config"], b["config"], "each seed is its own configuration");
-    let files: Vec<PathBuf> =
-        std::fs::read_dir(&dir).expect("records").flatten().map(|e| e.path()).filter(|p| p.extension().is_some_and(|e| e == "jsonl")).collect();
+    let files: Vec<PathBuf> = std::fs::read_dir(&dir)
+        .expect("records")
+        .flatten()
+        .map(|e| e.path())
+        .filter(|p| p.extension().is_some_and(|e| e == "jsonl"))
+        .collect();
     assert_eq!(files.len(), 2, "{files:?}");
     for file in &files {
         let config: serde_json::Value =

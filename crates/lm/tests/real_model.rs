@@ -176,7 +176,8 @@ fn reference_prompts(model: &LocalModel) -> Vec<(&'static str, String)> {
     let room = "You are in the middle of a kitchen. Looking quickly around you, you see a cabinet 4, a cabinet 3, \
                 a cabinet 2, a cabinet 1, a coffeemachine 1, a countertop 2, a countertop 1, a fridge 1, a microwave 1, \
                 a sinkbasin 1 and a toaster 1. ";
-    let long = format!("{}Your task is to: put a clean mug in the coffeemachine. Which place do you look at first, and why?", room.repeat(10));
+    let long =
+        format!("{}Your task is to: put a clean mug in the coffeemachine. Which place do you look at first, and why?", room.repeat(10));
     vec![
         ("coffee", model.chat_prompt("You plan household tasks.", "Make a cup of coffee.").expect("renders")),
         (
@@ -189,7 +190,12 @@ fn reference_prompts(model: &LocalModel) -> Vec<(&'static str, String)> {
                 .expect("renders"),
         ),
         ("raw_plan", "Plan:\ngo to countertop 1\ntake mug 1 from countertop 1\ngo to sinkbasin 1\n".to_string()),
-        ("json", model.chat_prompt("Reply with one JSON object with the keys \"skill\" and \"done\".", &format!("{room}Find a mug.")).expect("renders")),
+        (
+            "json",
+            model
+                .chat_prompt("Reply with one JSON object with the keys \"skill\" and \"done\".", &format!("{room}Find a mug."))
+                .expect("renders"),
+        ),
         ("long", model.chat_prompt("You are a helpful assistant.", &long).expect("renders")),
     ]
 }

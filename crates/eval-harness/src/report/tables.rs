@@ -246,7 +246,12 @@ fn accuracy_table(study: &Study<'_>, options: &ReportOptions) -> Result<Table, R
 /// with the highest mean, and every other whose exact McNemar test against the (first) best,
 /// Holm-corrected over the benchmark's tests, is not significant at `options.alpha`. A
 /// condition sharing no task with the best cannot be compared and is not bold.
-fn not_worse_than_the_best(study: &Study<'_>, b: usize, means: &[(usize, f64)], options: &ReportOptions) -> Result<Vec<usize>, ReportError> {
+fn not_worse_than_the_best(
+    study: &Study<'_>,
+    b: usize,
+    means: &[(usize, f64)],
+    options: &ReportOptions,
+) -> Result<Vec<usize>, ReportError> {
     let Some(best) = means.iter().map(|&(_, m)| m).reduce(f64::max) else { return Ok(Vec::new()) };
     let mut bold: Vec<usize> = means.iter().filter(|&&(_, m)| m == best).map(|&(c, _)| c).collect();
     let reference = bold[0];

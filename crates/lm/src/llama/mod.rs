@@ -705,13 +705,15 @@ mod tests {
                     for i in 0..hd {
                         let expected: f64 = (0..seen).map(|j| weights[j] / sum * v[j * kv_dim + kv + i] as f64).sum();
                         let got = ours[(row * heads + head) * hd + i] as f64;
-                        assert!((got - expected).abs() < 1e-5, "head size {hd}, start {start}, row {row}, head {head}, dim {i}: {got} vs {expected}");
+                        assert!(
+                            (got - expected).abs() < 1e-5,
+                            "head size {hd}, start {start}, row {row}, head {head}, dim {i}: {got} vs {expected}"
+                        );
                     }
                 }
             }
         }
     }
-
 
     #[test]
     fn rms_norm_gives_unit_root_mean_square() {
