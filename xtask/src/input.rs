@@ -155,3 +155,16 @@ pub fn at_least_one(text: &str) -> Result<usize, String> {
         _ => Err(format!("`{text}` is not a whole number of at least 1")),
     }
 }
+
+/// The progress bar of a long command: `prefix [====>   ] done/total (elapsed, eta …) message`,
+/// on standard error (hidden when it is not a terminal).
+pub fn progress_bar(prefix: String, total: usize) -> indicatif::ProgressBar {
+    let bar = indicatif::ProgressBar::new(total as u64);
+    bar.set_style(
+        indicatif::ProgressStyle::with_template("{prefix} [{bar:30}] {pos}/{len} ({elapsed}, eta {eta}) {wide_msg}")
+            .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar())
+            .progress_chars("=> "),
+    );
+    bar.set_prefix(prefix);
+    bar
+}

