@@ -210,13 +210,16 @@ const LOOKING: &[&str] = &["look", "inventory", "examinereceptacle", "examineobj
 
 /// ALFWorld's side of Phase I and of the hand-over.
 ///
-/// - K_t: `open X` when the agent stands at X and an observation said X is closed; `close X`
-///   when it stands at X and X is open; `goto X` for every listed place not yet visited, those
+/// - K_t: `open X` when the agent stands at X, an observation said X is closed and Phase I has
+///   not opened X before; `close X` when it stands at X, X is open and Phase I has not closed X
+///   before (what is inside was seen: opening again shows nothing new); `goto X` for every
+///   listed place not yet visited, those
 ///   worth inspecting first (F_str says their class can hold an object class the goal still
 ///   lacks, or the goal names their class and none was visited; among them places F_str says
 ///   are never openable first, since they show their contents in one step), then places the
-///   model's hypotheses name, then the rest in the room listing's order; `look` where the agent stands at
-///   a place; `done`.
+///   model's hypotheses name, then the rest in the room listing's order; `look` where the agent
+///   stands at a place it has not examined; `done`. No skill but `done` can thus target the same
+///   place twice, and no choice of a model's makes Phase I circle.
 /// - The sweep: `open` the place it stands at if closed, else the first place worth inspecting.
 /// - Commands: `goto X` is `go to X`, or `examine X` where the agent already stands at X's
 ///   location (the game does not list `go to X` there); `look` is `examine X` of the place it
@@ -271,14 +274,15 @@ impl Adapter for AlfworldAdapter {
         let mut list = Vec::new();
         let mut sweep = None;
         let at = Self::at(&record.steps);
+        let sent = |command: String| record.steps.iter().any(|s| s.executed && s.command == command);
         if let Some(p) = &at {
             match belief.holds("opened", &[p]) {
-                Some(false) => {
+                Some(false) if !sent(format!("open {p}")) => {
                     sweep = Some(list.len());
                     list.push(Skill::Open(p.clone()));
                 }
-                Some(true) => list.push(Skill::Close(p.clone())),
-                None => {}
+                Some(true) if !sent(format!("close {p}")) => list.push(Skill::Close(p.clone())),
+                _ => {}
             }
         }
         let unvisited: Vec<&String> = belief.places.iter().filter(|p| belief.holds("visited", &[p]) != Some(true)).collect();
@@ -299,7 +303,7 @@ impl Adapter for AlfworldAdapter {
             sweep = Some(list.len());
         }
         list.extend(worth.into_iter().chain(hint).chain(rest).map(|p| Skill::Goto(p.clone())));
-        if at.is_some() {
+        if at.as_ref().is_some_and(|p| !sent(format!("examine {p}"))) {
             list.push(Skill::Look);
         }
         list.push(Skill::Done);

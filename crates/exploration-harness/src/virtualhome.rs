@@ -15,10 +15,14 @@
 //!   Names are as perceived: class and the id the observation shows.
 //! - K_t ([`VirtualhomeAdapter`]'s `skills`): `goto R` for rooms not yet entered; `open X` for a
 //!   container (F_str: `can_open` and `containers`) the agent is close to and saw closed, not yet
-//!   opened; `close X` for one it opened; `goto X` for closed containers not yet opened, those of
-//!   the current room first; `look` (walk up to the first object a model's hypothesis names, for a
-//!   close view) when there is such a hypothesis; `done`. The sweep: open the closed container
-//!   the agent is close to, else enter the next room, else walk to the next closed container.
+//!   opened; `close X` for one it opened; `goto X` for closed containers not yet opened and not
+//!   yet walked to (R_t: a place is inspected once; at X the agent is offered `open X`, and a
+//!   walk back would show nothing new), those of the current room first; `look` (walk up to the
+//!   first object a model's hypothesis names, for a close view) when there is such a hypothesis
+//!   and the agent is not close to that object already; `done`. Every skill but `look` and
+//!   `done` thus has a target it can take at most once, so no choice of the model's can make
+//!   Phase I circle. The sweep: open the closed container the agent is close to, else enter the
+//!   next room, else walk to the next closed container.
 //! - Ready: every object symbol of G has distinct perceived instances of its class (as many as
 //!   the goal names it).
 //! - ŝ0: the perceived scene as a scene graph (perceived nodes; class properties from F_str, the
@@ -229,10 +233,20 @@ impl VirtualhomeAdapter {
         belief.places.iter().find(|r| belief.holds("INSIDE", &[ME, r]) == Some(true)).cloned()
     }
 
+    /// The targets of R_t's executed commands with this script verb (`[OPEN] `, `[WALK] `).
+    fn targets(record: &Record, verb: &str) -> BTreeSet<String> {
+        record.steps.iter().filter(|s| s.executed).filter_map(|s| s.command.strip_prefix(verb).map(script_name)).collect()
+    }
+
+    /// The object `look` walks up to: the first perceived instance a hypothesis names.
+    fn look_target(belief: &Belief) -> Option<String> {
+        let instances = Self::instances(belief);
+        belief.hypotheses().flat_map(|h| h.args.iter()).find(|a| instances.contains(*a)).cloned()
+    }
+
     /// Containers seen closed that Phase I has not opened, with whether they are in the room now.
     fn closed_containers(&self, belief: &Belief, record: &Record) -> Vec<(String, bool)> {
-        let opened: BTreeSet<String> =
-            record.steps.iter().filter(|s| s.executed).filter_map(|s| s.command.strip_prefix("[OPEN] ").map(script_name)).collect();
+        let opened = Self::targets(record, "[OPEN] ");
         let room = Self::room_now(belief);
         let mut out: Vec<(String, bool)> = Self::instances(belief)
             .into_iter()
@@ -290,8 +304,7 @@ impl Adapter for VirtualhomeAdapter {
             sweep.get_or_insert(list.len());
             list.push(Skill::Open(x.clone()));
         }
-        let opened: Vec<String> =
-            record.steps.iter().filter(|s| s.executed).filter_map(|s| s.command.strip_prefix("[OPEN] ").map(script_name)).collect();
+        let opened = Self::targets(record, "[OPEN] ");
         for x in opened.iter().filter(|x| belief.holds("OPEN", &[x]) == Some(true) && belief.holds("CLOSE", &[ME, x]) == Some(true)) {
             list.push(Skill::Close(x.clone()));
         }
@@ -299,12 +312,12 @@ impl Adapter for VirtualhomeAdapter {
             sweep.get_or_insert(list.len());
             list.push(Skill::Goto(r.clone()));
         }
-        for (x, _) in closed.iter().filter(|(x, _)| belief.holds("CLOSE", &[ME, x]) != Some(true)) {
+        let walked = Self::targets(record, "[WALK] ");
+        for (x, _) in closed.iter().filter(|(x, _)| belief.holds("CLOSE", &[ME, x]) != Some(true) && !walked.contains(x)) {
             sweep.get_or_insert(list.len());
             list.push(Skill::Goto(x.clone()));
         }
-        let instances = Self::instances(belief);
-        if belief.hypotheses().any(|h| h.args.iter().any(|a| instances.contains(a))) {
+        if Self::look_target(belief).is_some_and(|x| belief.holds("CLOSE", &[ME, &x]) != Some(true)) {
             list.push(Skill::Look);
         }
         list.push(Skill::Done);
@@ -323,10 +336,7 @@ impl Adapter for VirtualhomeAdapter {
             Skill::Goto(x) => walk(x),
             Skill::Open(x) => vec![line("OPEN", x)],
             Skill::Close(x) => vec![line("CLOSE", x)],
-            Skill::Look => {
-                let instances = Self::instances(belief);
-                belief.hypotheses().flat_map(|h| h.args.iter()).find(|a| instances.contains(*a)).map(|x| walk(x)).unwrap_or_default()
-            }
+            Skill::Look => Self::look_target(belief).map(|x| walk(&x)).unwrap_or_default(),
             Skill::Done => Vec::new(),
         }
     }

@@ -2,7 +2,11 @@
 //! grounded problem: every valid_seen game, each episode judged by the environment's own goal
 //! check within the paper's 55 steps.
 
+mod common;
+
 use std::path::{Path, PathBuf};
+
+use common::{Restless, assert_no_target_repeats};
 
 use exploration_harness::alfworld::AlfworldAdapter;
 use exploration_harness::{Episode, EpisodeConfig, Grounded, Ontology, PhaseTwo, Systematic, parse_goal, run_episode};
@@ -114,6 +118,33 @@ fn episodes_are_reproducible_and_plans_valid_for_their_grounded_problem() {
         assert_checks(&domain, &handover.problem);
         let plan = a_star(&model).unwrap();
         assert!(model.validate(&plan).is_ok(), "{}: {plan:?}", trial.display());
+    }
+}
+
+/// K_t never offers a way to circle: whatever a policy picks, no `goto`, `open` or `close` of
+/// Phase I targets the same place twice, and `look` examines a place once.
+#[test]
+fn no_phase_one_skill_of_the_controller_repeats_a_target() {
+    let ontology =
+        Ontology::from_text(&std::fs::read_to_string(fixtures().join("ontology/alfworld.txt")).unwrap(), "alfworld.txt").unwrap();
+    let (domain, grammar) = domain_and_grammar();
+    let root = fixtures().join("alfworld/valid_seen");
+    let mut games: Vec<PathBuf> = std::fs::read_dir(&root).unwrap().map(|f| f.unwrap().path()).collect();
+    games.sort();
+    for (i, family) in games.iter().step_by(7).enumerate() {
+        let trial = std::fs::read_dir(family).unwrap().next().unwrap().unwrap().path().join("game.tw-pddl");
+        let mut env = AlfworldEnv::from_game_file(&trial).unwrap();
+        let goal = parse_goal(env.goal()).unwrap();
+        let mut adapter = AlfworldAdapter::new(ontology.clone(), domain.clone(), grammar.clone(), env.goal());
+        let mut policy = Restless::new(1 + i % 3, i % 2 == 1);
+        let mut planner = |_: &Grounded| Err::<PhaseTwo, String>("no Phase II here".into());
+        let episode =
+            run_episode(&mut env, &mut adapter, &mut policy, &goal, EpisodeConfig { budget: 55, closed_loop: false }, &mut planner);
+        assert_no_target_repeats(&episode, &trial.display().to_string());
+        let looks: Vec<&str> = episode.steps.iter().filter(|s| s.phase == "explore").map(|s| s.command.as_str()).collect();
+        let examined: Vec<&&str> = looks.iter().filter(|c| c.starts_with("examine ")).collect();
+        let distinct: std::collections::BTreeSet<&&&str> = examined.iter().collect();
+        assert_eq!(distinct.len(), examined.len(), "{}: {looks:?}", trial.display());
     }
 }
 

@@ -6,6 +6,9 @@ use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
 use exploration_harness::virtualhome::VirtualhomeAdapter;
+mod common;
+
+use common::{Restless, assert_no_target_repeats};
 use exploration_harness::{Attribution, Episode, EpisodeConfig, Grounded, Ontology, PhaseTwo, Systematic, parse_goal, run_episode};
 use household_sim::{Environment, VirtualhomeEnv, VirtualhomeTask};
 
@@ -89,6 +92,25 @@ fn systematic_exploration_then_a_star_on_eai_fixture_tasks() {
     // failures), and 15 tasks spend the 20 steps searching closed containers.
     assert_eq!(total, 33);
     assert!(won >= 11, "won {won}/{total}");
+}
+
+/// K_t never offers a way to circle: whatever a policy picks, no `goto`, `open` or `close` of
+/// Phase I targets the same object twice (SmolLM2 walked between two closed containers for all
+/// 20 steps when a visited one was offered again), so a wandering policy keeps finding new
+/// places until Ready or the budget.
+#[test]
+fn no_phase_one_skill_of_the_controller_repeats_a_target() {
+    let ontology = ontology();
+    for (i, path) in tasks(&fixtures().join("virtualhome-rearrange")).iter().step_by(10).enumerate() {
+        let mut env = VirtualhomeEnv::new(VirtualhomeTask::load(path).unwrap(), "virtualhome-rearrange");
+        let goal = parse_goal(env.goal()).unwrap();
+        let mut adapter = VirtualhomeAdapter::new(ontology.clone()).unwrap();
+        let mut policy = Restless::new(1 + i % 3, i % 2 == 1);
+        let mut planner = |_: &Grounded| Err::<PhaseTwo, String>("no Phase II here".into());
+        let episode =
+            run_episode(&mut env, &mut adapter, &mut policy, &goal, EpisodeConfig { budget: 60, closed_loop: false }, &mut planner);
+        assert_no_target_repeats(&episode, &path.display().to_string());
+    }
 }
 
 /// The same task gives the same episode.

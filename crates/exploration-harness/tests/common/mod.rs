@@ -1,0 +1,51 @@
+//! Shared by the agent tests: a wandering policy and what no Phase I may do under it.
+
+use exploration_harness::Episode;
+use exploration_harness::phase1::{Policy, PolicyInput, PolicyReply, PolicyUsage, Skill};
+
+/// A policy that never says done and takes skill `i·k mod n` of K_t (less `done`) at its i-th
+/// choice: a fixed, model-free stand-in for a model that wanders. A fidgeting one takes
+/// `open`, `close` or `look` first whenever one is offered.
+pub struct Restless {
+    turn: usize,
+    stride: usize,
+    fidget: bool,
+}
+
+impl Restless {
+    pub fn new(stride: usize, fidget: bool) -> Restless {
+        Restless { turn: 0, stride, fidget }
+    }
+}
+
+impl Policy for Restless {
+    fn name(&self) -> String {
+        "restless".into()
+    }
+
+    fn choose(&mut self, input: &PolicyInput<'_>) -> Result<PolicyReply, String> {
+        let choices: Vec<&Skill> = input.skills.list.iter().filter(|s| **s != Skill::Done).collect();
+        self.turn += 1;
+        let at_hand = choices.iter().find(|s| matches!(s, Skill::Open(_) | Skill::Close(_) | Skill::Look));
+        if self.fidget
+            && let Some(skill) = at_hand
+        {
+            return Ok(PolicyReply { proposed: Vec::new(), done: false, skill: (*skill).clone() });
+        }
+        let skill = choices.get(self.turn * self.stride % choices.len().max(1)).map_or(Skill::Done, |s| (*s).clone());
+        Ok(PolicyReply { proposed: Vec::new(), done: skill == Skill::Done, skill })
+    }
+
+    fn usage(&self) -> PolicyUsage {
+        PolicyUsage::default()
+    }
+}
+
+/// No skill of Phase I with a target (`goto`, `open`, `close`) was chosen twice, and some were.
+pub fn assert_no_target_repeats(episode: &Episode, what: &str) {
+    let chosen: Vec<&str> =
+        episode.decisions.iter().map(|d| d.skill.as_str()).filter(|s| !s.is_empty() && *s != "look" && *s != "done").collect();
+    let distinct: std::collections::BTreeSet<&str> = chosen.iter().copied().collect();
+    assert_eq!(distinct.len(), chosen.len(), "{what}: a skill repeated: {chosen:?}");
+    assert!(!chosen.is_empty(), "{what}");
+}
