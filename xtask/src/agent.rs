@@ -167,15 +167,14 @@ impl PhaseTwoRunner {
             "lines": outcome.lines, "simulations": outcome.stats.simulations, "nodes": outcome.stats.nodes,
             "prompt_tokens": tokens.len(), "millis": outcome.stats.millis,
         });
-        if outcome.plan.is_empty() && !outcome.solved {
-            return Err(format!("{:?}: no plan", outcome.stop));
-        }
+        let no_plan = (outcome.plan.is_empty() && !outcome.solved).then(|| format!("{:?}: no plan", outcome.stop));
         Ok(PhaseTwo {
             actions: outcome.plan,
             model_calls: outcome.stats.usage.forward_calls,
             generated_tokens: outcome.stats.usage.tokens_generated,
             detail,
             search_tree: outcome.tree,
+            no_plan,
         })
     }
 }

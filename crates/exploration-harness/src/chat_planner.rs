@@ -113,5 +113,6 @@ pub fn plan_by_chat(chat: &mut dyn ChatModel, grounded: &Grounded, config: &Chat
         }),
         actions: read.actions,
         search_tree: None,
+        no_plan: None,
     })
 }

@@ -82,6 +82,10 @@ pub struct PhaseTwo {
     pub detail: serde_json::Value,
     /// The top of the search tree, from a planner that searches one (MCTS).
     pub search_tree: Option<mcts::TreeSummary>,
+    /// Set when the planner ended without a plan (why: a search's stop, `WallClock`), with
+    /// `actions` empty: the episode keeps this attempt's model calls, tokens, detail and tree,
+    /// which an `Err` would lose. `Err` is for a planner that could not run.
+    pub no_plan: Option<String>,
 }
 
 /// Phase II: a planner on the grounded problem.
@@ -120,8 +124,9 @@ pub struct Episode {
     pub phase2_calls: u64,
     pub phase2_tokens: u64,
     pub phase2_detail: serde_json::Value,
-    /// The top of Phase II's search tree, of the last hand-over that returned a plan (`None`
-    /// for planners that build no tree: A*, greedy decoding, sampling, a chat model).
+    /// The top of Phase II's search tree, of the last hand-over's search, whether or not it
+    /// found a plan (`None` for planners that build no tree: A*, greedy decoding, sampling, a
+    /// chat model).
     pub search_tree: Option<mcts::TreeSummary>,
     pub phase1_ms: f64,
     pub phase2_ms: f64,
@@ -203,6 +208,11 @@ pub fn run_episode<E: Environment + Judge>(
         episode.phase2_tokens += phase2.generated_tokens;
         episode.phase2_detail = phase2.detail.clone();
         episode.search_tree = phase2.search_tree.clone();
+        if let Some(why) = &phase2.no_plan {
+            episode.failure = Some(format!("no plan: {why}"));
+            no_plan = true;
+            break;
+        }
         let t = Instant::now();
         episode.plan.clear();
         not_executed = false;

@@ -113,6 +113,33 @@ fn no_phase_one_skill_of_the_controller_repeats_a_target() {
     }
 }
 
+/// A search that ends without a plan still counts: its model calls, tokens and detail are in
+/// the record, and the failure is Phase II's (`search`) when Phase I's state was right.
+#[test]
+fn a_phase_two_without_a_plan_keeps_its_usage() {
+    let path = &tasks(&fixtures().join("virtualhome-rearrange"))[0];
+    let mut env = VirtualhomeEnv::new(VirtualhomeTask::load(path).unwrap(), "virtualhome-rearrange");
+    let goal = parse_goal(env.goal()).unwrap();
+    let mut adapter = VirtualhomeAdapter::new(ontology()).unwrap();
+    let mut planner = |_: &Grounded| {
+        Ok(PhaseTwo {
+            model_calls: 7,
+            generated_tokens: 5,
+            detail: serde_json::json!({"stop": "WallClock"}),
+            no_plan: Some("WallClock: no plan".into()),
+            ..PhaseTwo::default()
+        })
+    };
+    let episode =
+        run_episode(&mut env, &mut adapter, &mut Systematic, &goal, EpisodeConfig { budget: 20, closed_loop: false }, &mut planner);
+    assert!(!episode.success);
+    assert_eq!((episode.phase2_calls, episode.phase2_tokens), (7, 5));
+    assert_eq!(episode.phase2_detail["stop"], "WallClock");
+    assert_eq!(episode.failure.as_deref(), Some("no plan: WallClock: no plan"));
+    assert!(episode.plan.is_empty());
+    assert_eq!(episode.attribution, Some(Attribution::Search), "{:?} {:?}", episode.precision, episode.recall);
+}
+
 /// The same task gives the same episode.
 #[test]
 fn virtualhome_episodes_are_reproducible() {
