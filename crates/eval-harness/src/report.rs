@@ -126,6 +126,9 @@ pub fn build(sets: &[RecordSet], options: &ReportOptions) -> Result<Report, Repo
             markdown.push_str(&format!("  - warning: {warning}\n"));
         }
     }
+    for line in &study.left_out {
+        markdown.push_str(&format!("- left out: {line}\n"));
+    }
     for table in &tables {
         markdown.push('\n');
         markdown.push_str(&table.markdown());

@@ -284,6 +284,28 @@ fn a_record_cut_short_is_left_out_with_a_warning() {
     assert!(build(&[set], &ReportOptions::default()).unwrap().markdown.contains("warning:"));
 }
 
+/// An expert record with no plan to replay is not an episode: it is left out of the tables
+/// (n counts the judged tasks) and the report says so.
+#[test]
+fn tasks_without_an_expert_plan_are_left_out_and_said() {
+    let dir = scratch("no-plan");
+    let path = copy_fixture("alfworld-seen-expert-8ab1a4359acc", &dir);
+    let text = std::fs::read_to_string(&path).unwrap();
+    let mut lines: Vec<String> = text.lines().map(str::to_string).collect();
+    let mut first: serde_json::Value = serde_json::from_str(&lines[0]).unwrap();
+    first["outcome"] = "no-plan".into();
+    first["success"] = false.into();
+    first["steps"] = 0.into();
+    lines[0] = first.to_string();
+    std::fs::write(&path, lines.join("\n") + "\n").unwrap();
+    let set = load(&path).unwrap();
+    let solved = set.records.iter().filter(|r| r.fields["success"] == true).count();
+    let markdown = build(&[set], &ReportOptions::default()).unwrap().markdown;
+    let row = markdown.lines().find(|l| l.starts_with("| Expert plan |")).expect("Table 1's row");
+    assert!(row.contains(&format!("{:.1} (n=5)", 100.0 * solved as f64 / 5.0)), "{row}");
+    assert!(markdown.contains("- left out: Expert plan on alfworld-seen: 1 task(s) with no plan to replay"), "{markdown}");
+}
+
 #[test]
 fn shard_files_of_one_run_make_one_run_and_a_task_twice_is_an_error() {
     let report = fixture_report();

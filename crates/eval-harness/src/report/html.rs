@@ -176,6 +176,9 @@ pub(crate) fn index(study: &Study<'_>, sets: &[RecordSet], paths: &[Vec<String>]
         escape(&study.benchmarks.join(", "))
     );
     body.push_str("<nav><a href=\"#tables\">Tables</a><a href=\"#figures\">Figures</a><a href=\"#episodes\">Episodes</a><a href=\"#inputs\">Inputs</a></nav>\n");
+    for line in &study.left_out {
+        let _ = writeln!(body, "<p class=\"meta\">Left out: {}.</p>", escape(line));
+    }
     let warnings: Vec<&String> = sets.iter().flat_map(|s| &s.warnings).collect();
     if !warnings.is_empty() {
         body.push_str("<div class=\"warn\">");

@@ -80,6 +80,18 @@ pub(crate) struct Study<'a> {
     pub benchmarks: Vec<String>,
     /// (condition, benchmark) → runs, in seed order.
     pub cells: BTreeMap<(usize, usize), Vec<Run<'a>>>,
+    /// What was left out of every table and why, one line each (records that are not
+    /// episodes: the expert's tasks with no plan to replay).
+    pub left_out: Vec<String>,
+}
+
+/// The `outcome` of a record that is not an episode: the expert agent had no plan for the task
+/// (EAI ships none for some), so nothing was judged.
+pub(crate) const NOT_JUDGED: &str = "no-plan";
+
+/// Whether a record is an episode the environment judged.
+fn judged(record: &Record) -> bool {
+    record.fields.get("outcome").and_then(Value::as_str) != Some(NOT_JUDGED)
 }
 
 impl<'a> Study<'a> {
@@ -221,12 +233,22 @@ pub(crate) fn study(sets: &[RecordSet]) -> Result<Study<'_>, ReportError> {
         entry.1.push(set);
     }
     let mut cells = BTreeMap::new();
+    let mut left_out = Vec::new();
     for (cell, runs) in grouped {
         let mut built = Vec::new();
         for (seed, sets) in runs.into_values() {
             let mut by_task: BTreeMap<&str, (&RecordSet, &Record)> = BTreeMap::new();
+            let unjudged = sets.iter().flat_map(|s| &s.records).filter(|r| !judged(r)).count();
+            if unjudged > 0 {
+                let run = if seed.is_empty() { String::new() } else { format!(" ({seed})") };
+                left_out.push(format!(
+                    "{} on {}{run}: {unjudged} task(s) with no plan to replay (`outcome: {NOT_JUDGED}`), not episodes, left out of every table",
+                    conditions[cell.0].label(),
+                    benchmarks[cell.1]
+                ));
+            }
             for set in &sets {
-                for record in &set.records {
+                for record in set.records.iter().filter(|r| judged(r)) {
                     if let Some((other, first)) = by_task.insert(task(record), (set, record)) {
                         return Err(RecordError::Bad {
                             path: set.path.clone(),
@@ -247,7 +269,7 @@ pub(crate) fn study(sets: &[RecordSet]) -> Result<Study<'_>, ReportError> {
         built.sort_by_key(|run| seed_order(&run.seed));
         cells.insert(cell, built);
     }
-    Ok(Study { conditions, benchmarks, cells })
+    Ok(Study { conditions, benchmarks, cells, left_out })
 }
 
 /// Seeds in numeric order (`seed=0`, `seed=42`, `seed=1738`).
