@@ -286,10 +286,6 @@ impl VirtualhomeEnv {
         VirtualhomeEnv { task, world, executed: Vec::new(), steps: 0, annotation }
     }
 
-    pub fn task(&self) -> &VirtualhomeTask {
-        &self.task
-    }
-
     /// What the agent sees now as `(id, class_name)`, by id (the nodes the observation
     /// lists, rooms included, the character left out).
     pub fn visible_objects(&self) -> Vec<(u32, String)> {
