@@ -71,14 +71,19 @@ impl PlanError {
                 format!("invalid: step {step}: `{text}` ({}) is not applicable: unmet {}", task.action_name(*action), parts.join(", "))
             }
             PlanError::GoalNotReached { steps, unmet: parts } if parts.is_empty() => {
-                format!("invalid: goal: after {steps} steps the goal does not hold, and no reachable state satisfies it")
+                format!("invalid: goal: after {steps} step{} the goal does not hold, and no reachable state satisfies it", plural(*steps))
             }
             PlanError::GoalNotReached { steps, unmet: parts } => {
                 let parts: Vec<String> = parts.iter().map(|u| u.describe(task)).collect();
-                format!("invalid: goal: after {steps} steps the goal does not hold: unmet {}", parts.join(", "))
+                format!("invalid: goal: after {steps} step{} the goal does not hold: unmet {}", plural(*steps), parts.join(", "))
             }
         }
     }
+}
+
+/// `s` unless there is one.
+fn plural(n: usize) -> &'static str {
+    if n == 1 { "" } else { "s" }
 }
 
 impl fmt::Display for PlanError {
@@ -86,7 +91,7 @@ impl fmt::Display for PlanError {
         match self {
             PlanError::UnknownAction { step, text } => write!(f, "step {step}: unknown action `{text}`"),
             PlanError::Inapplicable { step, text, .. } => write!(f, "step {step}: `{text}` is not applicable"),
-            PlanError::GoalNotReached { steps, .. } => write!(f, "the goal does not hold after {steps} steps"),
+            PlanError::GoalNotReached { steps, .. } => write!(f, "the goal does not hold after {steps} step{}", plural(*steps)),
         }
     }
 }
