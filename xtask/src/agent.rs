@@ -157,7 +157,10 @@ impl PhaseTwoRunner {
         let prompt = planning_prompt(model, &grounded.spelling, &initial, &self.decode.prompt_options());
         let text = prompt.render(lm.as_ref()).map_err(|e| format!("rendering the prompt: {e}"))?;
         let tokens = lm.tokenizer().encode_prompt(&text).map_err(|e| format!("tokenizing the prompt: {e}"))?;
-        let config = self.decode.config(self.time_limit).map_err(|e| e.to_string())?;
+        let mut config = self.decode.config(self.time_limit).map_err(|e| e.to_string())?;
+        // N_plan: no plan longer than the episode's steps left (each action sends at most one
+        // command), so the search goes on past a goal plan that could not finish.
+        config.budget.max_actions = config.budget.max_actions.min(grounded.steps_left);
         let mut decoder =
             Decoder::with_end_policy(model, &grounded.spelling, Arc::clone(vocab), self.decode.value(), self.decode.end_policy());
         let outcome = decoder.decode(lm.as_mut(), &tokens, &initial, &config).map_err(|e| format!("decoding: {e}"))?;

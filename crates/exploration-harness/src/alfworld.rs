@@ -353,7 +353,7 @@ impl crate::episode::Handing for AlfworldAdapter {
         let model = ground(&self.domain, &handover.problem)?;
         let names = model.task().objects.iter().map(|o| handover.binding.get(&o.name).cloned()).collect();
         let spelling = Spelling::alfworld_with_names(model.task(), &self.grammar, names).map_err(|e| format!("grammar: {e}"))?;
-        Ok(Grounded { handover, model, spelling })
+        Ok(Grounded::new(handover, model, spelling))
     }
 
     fn command(&self, grounded: &Grounded, action: ActionId, env: &dyn Environment) -> Result<Option<String>, String> {

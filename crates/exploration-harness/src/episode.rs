@@ -49,6 +49,17 @@ pub struct Grounded {
     pub handover: Handover,
     pub model: TransitionModel,
     pub spelling: Spelling,
+    /// N_plan: the environment steps the episode has left for the plan (its budget less the
+    /// steps already taken; Appendix A.1, N_exp + N_plan is the budget). [`run_episode`] sets it
+    /// before Phase II; a planner should not return a longer plan, which could not finish.
+    pub steps_left: usize,
+}
+
+impl Grounded {
+    /// A hand-over with no step limit yet ([`run_episode`] sets [`Grounded::steps_left`]).
+    pub fn new(handover: Handover, model: TransitionModel, spelling: Spelling) -> Grounded {
+        Grounded { handover, model, spelling, steps_left: usize::MAX }
+    }
 }
 
 impl std::fmt::Debug for Grounded {
@@ -186,7 +197,7 @@ pub fn run_episode<E: Environment + Judge>(
         episode.handovers += 1;
         let t = Instant::now();
         let grounded = match adapter.handover(goal, &exploration, &episode.steps) {
-            Ok(g) => g,
+            Ok(g) => Grounded { steps_left: config.budget.saturating_sub(episode.steps.len()), ..g },
             Err(e) => {
                 episode.failure = Some(e);
                 no_plan = true;
@@ -194,6 +205,11 @@ pub fn run_episode<E: Environment + Judge>(
             }
         };
         episode.handover = Some(grounded.handover.clone());
+        if grounded.steps_left == 0 {
+            // Phase I spent the budget: no plan could take a step.
+            episode.failure = Some("step budget spent before Phase II".into());
+            break;
+        }
         let planned = plan(&grounded);
         episode.phase2_ms += t.elapsed().as_secs_f64() * 1e3;
         let phase2 = match planned {

@@ -472,7 +472,7 @@ impl Handing for VirtualhomeAdapter {
             .collect();
         let handover = Handover { problem: problem.text.clone(), binding };
         self.last = Some((problem, task));
-        Ok(Grounded { handover, model, spelling })
+        Ok(Grounded::new(handover, model, spelling))
     }
 
     fn command(&self, grounded: &Grounded, action: ActionId, _env: &dyn Environment) -> Result<Option<String>, String> {

@@ -114,14 +114,17 @@ fn no_phase_one_skill_of_the_controller_repeats_a_target() {
 }
 
 /// A search that ends without a plan still counts: its model calls, tokens and detail are in
-/// the record, and the failure is Phase II's (`search`) when Phase I's state was right.
+/// the record, and the failure is Phase II's (`search`) when Phase I's state was right. The
+/// planner is told how many steps the plan may take.
 #[test]
-fn a_phase_two_without_a_plan_keeps_its_usage() {
+fn a_phase_two_without_a_plan_keeps_its_usage_and_was_told_the_steps_left() {
     let path = &tasks(&fixtures().join("virtualhome-rearrange"))[0];
     let mut env = VirtualhomeEnv::new(VirtualhomeTask::load(path).unwrap(), "virtualhome-rearrange");
     let goal = parse_goal(env.goal()).unwrap();
     let mut adapter = VirtualhomeAdapter::new(ontology()).unwrap();
-    let mut planner = |_: &Grounded| {
+    let steps_left = std::cell::Cell::new(None);
+    let mut planner = |g: &Grounded| {
+        steps_left.set(Some(g.steps_left));
         Ok(PhaseTwo {
             model_calls: 7,
             generated_tokens: 5,
@@ -138,6 +141,8 @@ fn a_phase_two_without_a_plan_keeps_its_usage() {
     assert_eq!(episode.failure.as_deref(), Some("no plan: WallClock: no plan"));
     assert!(episode.plan.is_empty());
     assert_eq!(episode.attribution, Some(Attribution::Search), "{:?} {:?}", episode.precision, episode.recall);
+    // N_plan = N − N_exp: the planner was told the steps Phase I left.
+    assert_eq!(steps_left.get(), Some(20 - episode.phase1_steps));
 }
 
 /// The same task gives the same episode.
