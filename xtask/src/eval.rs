@@ -25,7 +25,7 @@ use std::process::ExitCode;
 use std::time::Instant;
 
 use benchmark_data::{Benchmark, Extra, TaskFiles};
-use eval_harness::behaviour::{failure_response, terminal};
+use eval_harness::behaviour::{agent_terminal, failure_response, terminal};
 use eval_harness::records::{RecordFile, Shard};
 use exploration_harness::EpisodeConfig;
 use exploration_harness::direct::{DirectConfig, MAX_REPLY_TOKENS, run_direct};
@@ -243,11 +243,11 @@ impl Embodied<'_> {
         };
         let requests: Vec<(&str, bool)> = ep.steps.iter().map(|s| (s.command.as_str(), s.executed)).collect();
         let response = failure_response(&requests, ep.success);
-        let model_done = ep.phase1_stop == "done" && ep.plan.is_empty();
+        let refused = ep.steps.iter().any(|s| s.phase == "plan" && !s.executed);
         Ok(json!({
             "task": task.id(), "agent": args.agent, "success": ep.success, "steps": ep.steps.len(),
             "phase1_steps": ep.phase1_steps, "plan_length": ep.plan.len(),
-            "terminal": terminal(ep.success, model_done, ep.steps.len(), budget), "failure_response": response,
+            "terminal": agent_terminal(ep.success, ep.no_plan, refused, ep.steps.len(), budget), "failure_response": response,
             "attribution": ep.attribution, "precision": ep.precision, "recall": ep.recall,
             "phase1_calls": ep.phase1_usage.calls, "phase1_tokens": ep.phase1_usage.generated_tokens,
             "phase2_calls": ep.phase2_calls, "phase2_tokens": ep.phase2_tokens,

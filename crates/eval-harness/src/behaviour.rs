@@ -3,7 +3,8 @@
 //!
 //! - **Terminal mechanism** ([`Terminal`]): success; the grounding layer refused a request
 //!   (the step could not be executed, and the episode ended there or ran out of plan); the
-//!   interaction limit (the step budget); the model's own `DONE`.
+//!   interaction limit (the step budget); the model's own `DONE`; for the agent, also Phase II's
+//!   search budget (no plan) ([`agent_terminal`]).
 //! - **Failure response** ([`FailureResponse`]), over the sequence of requests:
 //!   *encounters failure* — some request was not executed; *recovers* — after the first
 //!   failure, the episode still succeeded; *repeats the failed request* — some failed request
@@ -21,8 +22,11 @@ pub enum Terminal {
     Grounding,
     /// The step budget ran out.
     InteractionLimit,
-    /// The model said it was done short of the goal.
+    /// The model said it was done short of the goal (for the agent: Phase I's `done` with
+    /// nothing planned, or a plan that ran to its end, every step executed, without the goal).
     ModelDone,
+    /// The agent's Phase II search returned no plan within its budget (no request was refused).
+    SearchBudget,
 }
 
 /// The failure response of one episode (Table 12).
@@ -53,6 +57,24 @@ pub fn persistent_loop(commands: &[&str]) -> bool {
     let same_five = commands.windows(5).any(|w| w.iter().all(|c| *c == w[0]));
     let oscillation = commands.windows(6).any(|w| w[0] != w[1] && w.iter().enumerate().all(|(i, c)| *c == w[i % 2]));
     same_five || oscillation
+}
+
+/// The agent's terminal mechanism (Phase I, then an open-loop plan): success; the search
+/// budget when Phase II returned no plan; the interaction limit when the steps ran out; grounding
+/// when the environment refused a request; else the model's own end (Phase I's `done` with no
+/// plan, or a plan that ran to its end short of the goal: the plan's end is the model's `DONE`).
+pub fn agent_terminal(success: bool, no_plan: bool, any_refused: bool, steps_used: usize, budget: usize) -> Terminal {
+    if success {
+        Terminal::Success
+    } else if no_plan {
+        Terminal::SearchBudget
+    } else if steps_used >= budget {
+        Terminal::InteractionLimit
+    } else if any_refused {
+        Terminal::Grounding
+    } else {
+        Terminal::ModelDone
+    }
 }
 
 /// The terminal mechanism: `success`, else `model_done` when the model ended the episode,

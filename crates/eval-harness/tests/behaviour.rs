@@ -1,6 +1,6 @@
 //! The terminal mechanism and failure response (Tables 11-12) on hand-made request lists.
 
-use eval_harness::behaviour::{FailureResponse, Terminal, failure_response, persistent_loop, terminal};
+use eval_harness::behaviour::{FailureResponse, Terminal, agent_terminal, failure_response, persistent_loop, terminal};
 
 #[test]
 fn failure_responses() {
@@ -32,4 +32,11 @@ fn terminal_mechanisms() {
     assert_eq!(terminal(false, true, 3, 20), Terminal::ModelDone);
     assert_eq!(terminal(false, false, 20, 20), Terminal::InteractionLimit);
     assert_eq!(terminal(false, false, 7, 20), Terminal::Grounding);
+    // The agent: no plan is the search budget, whatever the steps; a plan that ran to its end
+    // short of the goal is the model's end; a refused plan step, grounding.
+    assert_eq!(agent_terminal(true, false, false, 20, 20), Terminal::Success);
+    assert_eq!(agent_terminal(false, true, false, 4, 20), Terminal::SearchBudget);
+    assert_eq!(agent_terminal(false, false, true, 20, 20), Terminal::InteractionLimit);
+    assert_eq!(agent_terminal(false, false, true, 9, 20), Terminal::Grounding);
+    assert_eq!(agent_terminal(false, false, false, 9, 20), Terminal::ModelDone);
 }

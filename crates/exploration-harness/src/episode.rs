@@ -128,6 +128,9 @@ pub struct Episode {
     /// Hand-overs made (1 open-loop; more when `closed_loop` replanned).
     pub handovers: usize,
     pub failure: Option<String>,
+    /// Phase II's planner returned no plan (it ended without one, or could not run); not set
+    /// when the hand-over itself failed.
+    pub no_plan: bool,
     pub attribution: Option<Attribution>,
     pub precision: Option<f64>,
     pub recall: Option<f64>,
@@ -178,6 +181,7 @@ pub fn run_episode<E: Environment + Judge>(
         plan: Vec::new(),
         handovers: 0,
         failure: None,
+        no_plan: false,
         attribution: None,
         precision,
         recall,
@@ -217,6 +221,7 @@ pub fn run_episode<E: Environment + Judge>(
             Err(e) => {
                 episode.failure = Some(format!("no plan: {e}"));
                 no_plan = true;
+                episode.no_plan = true;
                 break;
             }
         };
@@ -227,6 +232,7 @@ pub fn run_episode<E: Environment + Judge>(
         if let Some(why) = &phase2.no_plan {
             episode.failure = Some(format!("no plan: {why}"));
             no_plan = true;
+            episode.no_plan = true;
             break;
         }
         let t = Instant::now();

@@ -44,7 +44,7 @@ impl RecordSet {
 }
 
 /// The terminal mechanisms a record may name (`behaviour::Terminal`, kebab-case).
-pub const TERMINALS: [&str; 4] = ["success", "grounding", "interaction-limit", "model-done"];
+pub const TERMINALS: [&str; 5] = ["success", "grounding", "interaction-limit", "model-done", "search-budget"];
 /// The failure classes a record may name (`attribution`; null for a success).
 pub const ATTRIBUTIONS: [&str; 4] = ["representation", "search", "grounding", "goal"];
 

@@ -456,14 +456,20 @@ fn terminal_table(study: &Study<'_>) -> Result<Table, ReportError> {
         "terminal",
         "Terminal mechanism (Table 11)",
         "How each episode ended, as a percentage of all tasks (mean over runs): success; grounding (a refused request ended the \
-         episode or left the plan unfinished); the interaction limit; the model's own Done.",
+         episode or left the plan unfinished); the interaction limit; the model's own Done (for `ours`, also a plan that ran to \
+         its end short of the goal); Phase II's search budget (`ours` only: no plan).",
         "No records carry a terminal mechanism (`terminal`): the expert's records do not.",
     );
     let rows = environment_rows(study, |r| metrics::terminal(r).is_some());
     let with_setting = has_setting(rows.iter().map(|(_, c, _)| &study.conditions[*c]));
     environment_columns(&mut table, with_setting);
-    let kinds =
-        [("success", "Success"), ("grounding", "Grounding"), ("interaction-limit", "Interaction limit"), ("model-done", "Model Done")];
+    let kinds = [
+        ("success", "Success"),
+        ("grounding", "Grounding"),
+        ("interaction-limit", "Interaction limit"),
+        ("model-done", "Model Done"),
+        ("search-budget", "Search budget"),
+    ];
     for (_, name) in kinds {
         table.column(name, true);
     }
