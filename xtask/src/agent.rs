@@ -20,8 +20,8 @@ use exploration_harness::{
 };
 use household_sim::{AlfworldEnv, Environment, Judge, VirtualhomeEnv};
 use lm::{LanguageModel, LocalChat, LocalModel};
-use mcts::Decoder;
 use mcts::prompt::planning_prompt;
+use mcts::{Decoder, StopReason};
 use serde_json::json;
 use vlm_client::{ChatClient, ChatModel, ClientConfig};
 
@@ -170,7 +170,14 @@ impl PhaseTwoRunner {
             "lines": outcome.lines, "simulations": outcome.stats.simulations, "nodes": outcome.stats.nodes,
             "prompt_tokens": tokens.len(), "millis": outcome.stats.millis,
         });
-        let no_plan = (outcome.plan.is_empty() && !outcome.solved).then(|| format!("{:?}: no plan", outcome.stop));
+        // No plan: the search ended (its budget, an exhausted tree, no applicable action) with
+        // nothing; a model that ended the plan at once wrote an empty plan, which is its DONE.
+        let searched_out = matches!(
+            outcome.stop,
+            StopReason::Simulations | StopReason::WallClock | StopReason::ModelCalls | StopReason::Exhausted | StopReason::DeadEnd
+        );
+        let no_plan = (outcome.plan.is_empty() && !outcome.solved && searched_out).then(|| format!("{:?}: no plan", outcome.stop));
+        let invalid_step = outcome.invalid.as_ref().map(|i| i.text.clone());
         Ok(PhaseTwo {
             actions: outcome.plan,
             model_calls: outcome.stats.usage.forward_calls,
@@ -178,6 +185,7 @@ impl PhaseTwoRunner {
             detail,
             search_tree: outcome.tree,
             no_plan,
+            invalid_step,
         })
     }
 }

@@ -243,7 +243,7 @@ impl Embodied<'_> {
         };
         let requests: Vec<(&str, bool)> = ep.steps.iter().map(|s| (s.command.as_str(), s.executed)).collect();
         let response = failure_response(&requests, ep.success);
-        let refused = ep.steps.iter().any(|s| s.phase == "plan" && !s.executed);
+        let refused = ep.plan_invalid || ep.steps.iter().any(|s| s.phase == "plan" && !s.executed);
         Ok(json!({
             "task": task.id(), "agent": args.agent, "success": ep.success, "steps": ep.steps.len(),
             "phase1_steps": ep.phase1_steps, "plan_length": ep.plan.len(),

@@ -111,6 +111,7 @@ pub fn plan_by_chat(chat: &mut dyn ChatModel, grounded: &Grounded, config: &Chat
             "invalid": read.invalid.as_ref().map(|(line, text)| format!("line {line}: {text:?}")),
             "plan_text": plan_text.trim(), "reasoning_chars": reasoning_chars, "finish_reason": reply.finish_reason,
         }),
+        invalid_step: read.invalid.as_ref().map(|(_, text)| text.clone()),
         actions: read.actions,
         search_tree: None,
         no_plan: None,

@@ -97,6 +97,11 @@ pub struct PhaseTwo {
     /// `actions` empty: the episode keeps this attempt's model calls, tokens, detail and tree,
     /// which an `Err` would lose. `Err` is for a planner that could not run.
     pub no_plan: Option<String>,
+    /// Set when the plan as written went on past `actions` with a step that is not applicable
+    /// (an unconstrained decoder's, or a chat planner's): `actions` is the applicable prefix,
+    /// sent as usual; the step after it could not be grounded, so the episode ends there, a
+    /// grounding failure, unless the prefix already reached the goal.
+    pub invalid_step: Option<String>,
 }
 
 /// Phase II: a planner on the grounded problem.
@@ -131,6 +136,8 @@ pub struct Episode {
     /// Phase II's planner returned no plan (it ended without one, or could not run); not set
     /// when the hand-over itself failed.
     pub no_plan: bool,
+    /// The plan went on with a step that could not be grounded ([`PhaseTwo::invalid_step`]).
+    pub plan_invalid: bool,
     pub attribution: Option<Attribution>,
     pub precision: Option<f64>,
     pub recall: Option<f64>,
@@ -182,6 +189,7 @@ pub fn run_episode<E: Environment + Judge>(
         handovers: 0,
         failure: None,
         no_plan: false,
+        plan_invalid: false,
         attribution: None,
         precision,
         recall,
@@ -263,6 +271,14 @@ pub fn run_episode<E: Environment + Judge>(
                 not_executed = true;
                 break;
             }
+        }
+        episode.plan_invalid = false;
+        if let Some(step) =
+            phase2.invalid_step.as_ref().filter(|_| !not_executed && episode.steps.len() < config.budget && !env.goal_reached())
+        {
+            episode.failure = Some(format!("plan step {} cannot be grounded: {step}", episode.plan.len() + 1));
+            episode.plan_invalid = true;
+            not_executed = true;
         }
         episode.execute_ms += t.elapsed().as_secs_f64() * 1e3;
         if !(not_executed && config.closed_loop && episode.steps.len() < config.budget) || env.goal_reached() {

@@ -145,6 +145,26 @@ fn a_phase_two_without_a_plan_keeps_its_usage_and_was_told_the_steps_left() {
     assert_eq!(steps_left.get(), Some(20 - episode.phase1_steps));
 }
 
+/// A plan that goes on with a step that cannot be grounded (an unconstrained decoder's) ends
+/// there: the applicable prefix is sent, then the episode fails at grounding.
+#[test]
+fn a_plan_step_that_cannot_be_grounded_ends_the_episode_at_grounding() {
+    let path = &tasks(&fixtures().join("virtualhome-rearrange"))[0];
+    let mut env = VirtualhomeEnv::new(VirtualhomeTask::load(path).unwrap(), "virtualhome-rearrange");
+    let goal = parse_goal(env.goal()).unwrap();
+    let mut adapter = VirtualhomeAdapter::new(ontology()).unwrap();
+    let mut planner = |g: &Grounded| {
+        let plan = heuristics::search::optimal_plan_expanding(&g.model, EXPANSIONS).map_err(|status| format!("{status:?}"))?;
+        Ok(PhaseTwo { actions: plan[..1].to_vec(), invalid_step: Some("walk to the moon".into()), ..PhaseTwo::default() })
+    };
+    let episode =
+        run_episode(&mut env, &mut adapter, &mut Systematic, &goal, EpisodeConfig { budget: 20, closed_loop: false }, &mut planner);
+    assert!(!episode.success && episode.plan_invalid && !episode.no_plan);
+    assert_eq!(episode.plan.len(), 1);
+    assert_eq!(episode.failure.as_deref(), Some("plan step 2 cannot be grounded: walk to the moon"));
+    assert_eq!(episode.attribution, Some(Attribution::Grounding));
+}
+
 /// The same task gives the same episode.
 #[test]
 fn virtualhome_episodes_are_reproducible() {
