@@ -45,6 +45,8 @@ fn assert_checks(domain: &pddl_syntax::Domain, problem: &str) {
     let parsed = pddl_syntax::parse_problem(problem).unwrap();
     let report = pddl_syntax::check(domain, Some(&parsed));
     assert!(!report.has_errors(), "problem does not check: {:?}", report.problem.iter().filter(|d| d.is_error()).collect::<Vec<_>>());
+    let mistyped: Vec<_> = report.problem.iter().filter(|d| d.kind.code() == "type-mismatch").collect();
+    assert!(mistyped.is_empty(), "the hand-over writes atoms of the wrong type: {mistyped:?}");
 }
 
 /// Plays every game of a split; returns (won, total, failures).

@@ -1,9 +1,12 @@
 //! Name resolution: every predicate, function, type, object and variable that a domain or
 //! problem uses is declared, with the right number of arguments.
 //!
-//! Argument *types* are not checked against predicate signatures, as in Fast Downward: the
-//! ALFWorld domain applies `(checked ?a)` to an agent although `checked` is declared over
-//! receptacles, and planners accept it (types only restrict what parameters range over).
+//! Argument *types* of action bodies are not checked against predicate signatures, as in Fast
+//! Downward: the ALFWorld domain applies `(checked ?a)` to an agent although `checked` is
+//! declared over receptacles, and planners accept it (types only restrict what parameters
+//! range over). A problem's ground atoms (`:init`, the goal) are checked, as a warning: an
+//! object of another type in a goal atom makes a goal no typed action reaches, which is
+//! otherwise only found by a search that fails.
 //! Constants used in a domain's actions may be declared by the problem (ALFWorld's
 //! `SinkType`), so they are checked when a problem is given.
 
@@ -51,7 +54,21 @@ struct Checker<'a> {
     objects: BTreeSet<&'a str>,
     /// Variables in scope, innermost last.
     variables: Vec<&'a str>,
+    /// Each declared type's parents (`object` has none).
+    parents: BTreeMap<&'a str, Vec<&'a str>>,
+    /// Each predicate's parameters.
+    signatures: BTreeMap<&'a str, &'a [TypedName]>,
+    /// The declared types of each constant and object (`object` when none is written).
+    object_types: BTreeMap<&'a str, Vec<&'a str>>,
+    /// Whether atoms are ground atoms of the problem (`:init`, goal), whose arguments' types are
+    /// checked.
+    ground: bool,
     out: &'a mut Vec<Diagnostic>,
+}
+
+/// The type names an entry of a typed list declares (`object` when none is written).
+fn type_names(entry: &TypedName) -> Vec<&str> {
+    entry.ty.as_ref().map_or_else(|| vec!["object"], |ty| ty.names().iter().map(Name::as_str).collect())
 }
 
 impl<'a> Checker<'a> {
@@ -69,7 +86,68 @@ impl<'a> Checker<'a> {
         if let Some(problem) = problem {
             objects.extend(problem.objects.iter().map(|o| o.name.as_str()));
         }
-        Checker { domain, objects_known: problem.is_some(), types, predicates, functions, objects, variables: Vec::new(), out }
+        let mut parents: BTreeMap<&str, Vec<&str>> = BTreeMap::new();
+        for declared in &domain.types {
+            parents.entry(declared.name.as_str()).or_default().extend(type_names(declared));
+        }
+        let signatures = domain.predicates.iter().map(|p| (p.name.as_str(), p.params.as_slice())).collect();
+        let mut object_types: BTreeMap<&str, Vec<&str>> = BTreeMap::new();
+        for entry in domain.constants.iter().chain(problem.iter().flat_map(|p| &p.objects)) {
+            object_types.entry(entry.name.as_str()).or_default().extend(type_names(entry));
+        }
+        Checker {
+            domain,
+            objects_known: problem.is_some(),
+            types,
+            predicates,
+            functions,
+            objects,
+            variables: Vec::new(),
+            parents,
+            signatures,
+            object_types,
+            ground: false,
+            out,
+        }
+    }
+
+    /// Whether `ty` is `target` or one of its descendants (every type is an `object`).
+    fn is_a(&self, ty: &str, target: &str) -> bool {
+        let mut seen = BTreeSet::new();
+        let mut stack = vec![ty];
+        while let Some(t) = stack.pop() {
+            if t == target || target == "object" {
+                return true;
+            }
+            if seen.insert(t) {
+                stack.extend(self.parents.get(t).into_iter().flatten().copied().filter(|p| *p != t));
+            }
+        }
+        false
+    }
+
+    /// A ground atom's objects against the predicate's parameter types.
+    fn argument_types(&mut self, atom: &Atom) {
+        let Some(params) = self.signatures.get(atom.predicate.as_str()).copied() else { return };
+        for (position, (arg, param)) in atom.args.iter().zip(params).enumerate() {
+            let Term::Constant(name) = arg else { continue };
+            let Some(has) = self.object_types.get(name.as_str()) else { continue };
+            let wants = type_names(param);
+            if has.iter().any(|t| wants.iter().any(|w| self.is_a(t, w))) {
+                continue;
+            }
+            self.out.push(Diagnostic::warning(
+                DiagnosticKind::TypeMismatch,
+                name.span,
+                format!(
+                    "`{name}` ({}) is given to argument {} of `{}`, which takes {}: no typed action makes or uses this atom",
+                    has.join(" or "),
+                    position + 1,
+                    atom.predicate,
+                    wants.join(" or ")
+                ),
+            ));
+        }
     }
 
     fn error(&mut self, kind: DiagnosticKind, span: Span, message: String) {
@@ -178,6 +256,7 @@ impl<'a> Checker<'a> {
                 atom.span,
                 format!("predicate `{}` takes {arity} argument(s), but {} are given here", atom.predicate, atom.args.len()),
             ),
+            Some(_) if self.ground => self.argument_types(atom),
             Some(_) => {}
         }
         for arg in &atom.args {
@@ -290,6 +369,7 @@ impl<'a> Checker<'a> {
                 }
             }
         }
+        self.ground = true;
         for element in &problem.init {
             match element {
                 InitElement::Atom(atom) => self.atom(atom),
@@ -299,6 +379,7 @@ impl<'a> Checker<'a> {
         if let Some(goal) = &problem.goal {
             self.condition(goal);
         }
+        self.ground = false;
         if let Some(Metric { expr: NumericExpr::Function(term), .. }) = &problem.metric {
             self.function_term(term);
         }

@@ -86,6 +86,9 @@ pub enum DiagnosticKind {
     DomainMismatch,
     /// A literal in `:init` that is not ground or not positive.
     InvalidInit,
+    /// A problem's object given to a predicate argument of a type it does not have (a
+    /// warning: the atom is kept, but no typed action can make or use it).
+    TypeMismatch,
 }
 
 impl DiagnosticKind {
@@ -111,6 +114,7 @@ impl DiagnosticKind {
             DiagnosticKind::ArityMismatch => "arity-mismatch",
             DiagnosticKind::DomainMismatch => "domain-mismatch",
             DiagnosticKind::InvalidInit => "invalid-init",
+            DiagnosticKind::TypeMismatch => "type-mismatch",
         }
     }
 }
