@@ -306,6 +306,35 @@ fn tasks_without_an_expert_plan_are_left_out_and_said() {
     assert!(markdown.contains("- left out: Expert plan on alfworld-seen: 1 task(s) with no plan to replay"), "{markdown}");
 }
 
+/// A run of a subset (`eval --subset default` gives each benchmark its own) is a column of its
+/// own, named by the subset; the subset does not make another condition.
+#[test]
+fn a_subset_names_a_column_not_a_condition() {
+    let dir = scratch("subset");
+    let stem = "alfworld-seen-ours-86924780c5c0";
+    copy_fixture(stem, &dir);
+    let mut config: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(fixtures().join(format!("{stem}.config.json"))).unwrap()).unwrap();
+    config["subset"] = "alfworld-seen-6".into();
+    let hash = eval_harness::records::config_hash(&config);
+    let subset_stem = format!("alfworld-seen-ours-{hash}");
+    std::fs::write(dir.join(format!("{subset_stem}.config.json")), serde_json::to_string_pretty(&config).unwrap()).unwrap();
+    let records: Vec<String> = std::fs::read_to_string(fixtures().join(format!("{stem}.jsonl")))
+        .unwrap()
+        .lines()
+        .map(|line| {
+            let mut record: serde_json::Value = serde_json::from_str(line).unwrap();
+            record["config"] = hash.clone().into();
+            record.to_string()
+        })
+        .collect();
+    std::fs::write(dir.join(format!("{subset_stem}.jsonl")), records.join("\n") + "\n").unwrap();
+    let sets: Vec<_> = record_paths(&[dir]).unwrap().iter().map(|p| load(p).unwrap()).collect();
+    let markdown = build(&sets, &ReportOptions::default()).unwrap().markdown;
+    assert!(markdown.contains("| Approach | Model | alfworld-seen | alfworld-seen-6 |"), "{markdown}");
+    assert!(!markdown.contains("subset="), "{markdown}");
+}
+
 #[test]
 fn shard_files_of_one_run_make_one_run_and_a_task_twice_is_an_error() {
     let report = fixture_report();

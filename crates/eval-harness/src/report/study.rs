@@ -12,8 +12,21 @@ use super::ReportError;
 use super::load::{Record, RecordSet};
 use crate::records::RecordError;
 
-/// Configuration keys that name the benchmark rather than the condition.
-const BENCHMARK_KEYS: [&str; 2] = ["benchmark", "task_dir"];
+/// Configuration keys that name the benchmark (and which of its tasks) rather than the
+/// condition.
+const BENCHMARK_KEYS: [&str; 3] = ["benchmark", "subset", "task_dir"];
+
+/// The column a record set belongs to: its benchmark, or the subset of it the run took
+/// (`alfworld-seen-12`; `eval --subset default` gives each benchmark its own, so the subset
+/// names the column, not the condition).
+pub(crate) fn column(set: &RecordSet) -> String {
+    let benchmark = set.config_str("benchmark").unwrap_or_default();
+    match set.config_str("subset") {
+        None | Some("all") => benchmark.to_string(),
+        Some(subset) if subset.starts_with(benchmark) => subset.to_string(),
+        Some(subset) => format!("{benchmark} ({subset})"),
+    }
+}
 /// Configuration keys that tell runs of one condition apart.
 const SEED_KEYS: [&str; 2] = ["seed", "decode.seed"];
 
@@ -128,7 +141,7 @@ fn key_text(flat: &BTreeMap<String, Value>) -> String {
 /// Benchmarks in the paper's column order (VirtualHome, then ALFWorld), others after.
 fn benchmark_rank(name: &str) -> (usize, String) {
     let known = ["virtualhome-rearrange", "virtualhome-eai", "alfworld-seen", "alfworld-unseen", "alfworld-train"];
-    (known.iter().position(|k| *k == name).unwrap_or(known.len()), name.to_string())
+    (known.iter().position(|k| name.starts_with(k)).unwrap_or(known.len()), name.to_string())
 }
 
 fn agent_rank(agent: &str) -> usize {
@@ -199,7 +212,7 @@ pub(crate) fn study(sets: &[RecordSet]) -> Result<Study<'_>, ReportError> {
     for set in sets {
         let flat = flat(&set.config, &leave_out_condition);
         condition_keys.insert(key_text(&flat), flat);
-        benchmarks.insert(benchmark_rank(set.config_str("benchmark").unwrap_or_default()));
+        benchmarks.insert(benchmark_rank(&column(set)));
     }
     let benchmarks: Vec<String> = benchmarks.into_iter().map(|(_, name)| name).collect();
 
@@ -221,8 +234,8 @@ pub(crate) fn study(sets: &[RecordSet]) -> Result<Study<'_>, ReportError> {
     let mut grouped: BTreeMap<(usize, usize), RunSets<'_>> = BTreeMap::new();
     for set in sets {
         let condition = index_of[&key_text(&flat(&set.config, &leave_out_condition))];
-        let benchmark_name = set.config_str("benchmark").unwrap_or_default();
-        let benchmark = benchmarks.iter().position(|b| b == benchmark_name).unwrap_or_default();
+        let benchmark_name = column(set);
+        let benchmark = benchmarks.iter().position(|b| *b == benchmark_name).unwrap_or_default();
         let run_flat = flat(&set.config, &BENCHMARK_KEYS);
         let seed: Vec<String> = SEED_KEYS
             .iter()
