@@ -26,6 +26,23 @@ fn domain_and_grammar() -> (pddl_syntax::Domain, String) {
     (domain, std::fs::read_to_string(fixtures().join("alfworld/alfred.twl2")).unwrap())
 }
 
+/// ALFWorld's F_str.
+fn ontology() -> Ontology {
+    Ontology::from_text(&std::fs::read_to_string(fixtures().join("ontology/alfworld.txt")).unwrap(), "alfworld.txt").unwrap()
+}
+
+/// The first trial's game of every `step`-th task family of valid_seen, in name order.
+fn first_trials(step: usize) -> Vec<PathBuf> {
+    let mut families: Vec<PathBuf> =
+        std::fs::read_dir(fixtures().join("alfworld/valid_seen")).unwrap().map(|f| f.unwrap().path()).collect();
+    families.sort();
+    families
+        .iter()
+        .step_by(step)
+        .map(|family| std::fs::read_dir(family).unwrap().next().unwrap().unwrap().path().join("game.tw-pddl"))
+        .collect()
+}
+
 /// Phase II: A* with LM-cut on the grounded problem.
 fn a_star(model: &TransitionModel) -> Result<Vec<grounding::ActionId>, String> {
     heuristics::search::optimal_plan_expanding(model, EXPANSIONS).map_err(|status| format!("{status:?}"))
@@ -51,8 +68,7 @@ fn assert_checks(domain: &pddl_syntax::Domain, problem: &str) {
 
 /// Plays every game of a split; returns (won, total, failures).
 fn play_split(split: &str) -> (usize, usize, Vec<String>) {
-    let ontology =
-        Ontology::from_text(&std::fs::read_to_string(fixtures().join("ontology/alfworld.txt")).unwrap(), "alfworld.txt").unwrap();
+    let ontology = ontology();
     let (domain, grammar) = domain_and_grammar();
     let root = fixtures().join("alfworld").join(split);
     let mut games = Vec::new();
@@ -102,14 +118,9 @@ fn systematic_exploration_then_a_star_wins_alfworld_games() {
 /// plan is valid under the transition model of the grounded problem it came from.
 #[test]
 fn episodes_are_reproducible_and_plans_valid_for_their_grounded_problem() {
-    let ontology =
-        Ontology::from_text(&std::fs::read_to_string(fixtures().join("ontology/alfworld.txt")).unwrap(), "alfworld.txt").unwrap();
+    let ontology = ontology();
     let (domain, grammar) = domain_and_grammar();
-    let root = fixtures().join("alfworld/valid_seen");
-    let mut games: Vec<PathBuf> = std::fs::read_dir(&root).unwrap().map(|f| f.unwrap().path()).collect();
-    games.sort();
-    for family in games.iter().step_by(10) {
-        let trial = std::fs::read_dir(family).unwrap().next().unwrap().unwrap().path().join("game.tw-pddl");
+    for trial in first_trials(10) {
         let run = || play(&trial, &ontology, &domain, &grammar);
         let (a, b) = (run(), run());
         assert_eq!(a.steps, b.steps, "{}", trial.display());
@@ -127,14 +138,9 @@ fn episodes_are_reproducible_and_plans_valid_for_their_grounded_problem() {
 /// Phase I targets the same place twice, and `look` examines a place once.
 #[test]
 fn no_phase_one_skill_of_the_controller_repeats_a_target() {
-    let ontology =
-        Ontology::from_text(&std::fs::read_to_string(fixtures().join("ontology/alfworld.txt")).unwrap(), "alfworld.txt").unwrap();
+    let ontology = ontology();
     let (domain, grammar) = domain_and_grammar();
-    let root = fixtures().join("alfworld/valid_seen");
-    let mut games: Vec<PathBuf> = std::fs::read_dir(&root).unwrap().map(|f| f.unwrap().path()).collect();
-    games.sort();
-    for (i, family) in games.iter().step_by(7).enumerate() {
-        let trial = std::fs::read_dir(family).unwrap().next().unwrap().unwrap().path().join("game.tw-pddl");
+    for (i, trial) in first_trials(7).into_iter().enumerate() {
         let mut env = AlfworldEnv::from_game_file(&trial).unwrap();
         let goal = parse_goal(env.goal()).unwrap();
         let mut adapter = AlfworldAdapter::new(ontology.clone(), domain.clone(), grammar.clone(), env.goal());
@@ -154,8 +160,7 @@ fn no_phase_one_skill_of_the_controller_repeats_a_target() {
 /// and the episode is won; open-loop, the same episode fails and is attributed to grounding.
 #[test]
 fn closed_loop_replans_after_a_refused_step() {
-    let ontology =
-        Ontology::from_text(&std::fs::read_to_string(fixtures().join("ontology/alfworld.txt")).unwrap(), "alfworld.txt").unwrap();
+    let ontology = ontology();
     let (domain, grammar) = domain_and_grammar();
     let game = fixtures()
         .join("alfworld/valid_seen/pick_clean_then_place_in_recep-Mug-None-CoffeeMachine-26/trial_T20190907_233056_022802/game.tw-pddl");
