@@ -203,7 +203,8 @@ pub fn run_episode<E: Environment + Judge>(
         execute_ms: 0.0,
     };
     let mut exploration = exploration;
-    let mut no_plan = false;
+    // The hand-over itself failed (no ŝ0): like a missing plan for the attribution.
+    let mut no_handover = false;
     let mut not_executed = false;
     loop {
         episode.handovers += 1;
@@ -212,7 +213,7 @@ pub fn run_episode<E: Environment + Judge>(
             Ok(g) => Grounded { steps_left: config.budget.saturating_sub(episode.steps.len()), ..g },
             Err(e) => {
                 episode.failure = Some(e);
-                no_plan = true;
+                no_handover = true;
                 break;
             }
         };
@@ -228,7 +229,6 @@ pub fn run_episode<E: Environment + Judge>(
             Ok(p) => p,
             Err(e) => {
                 episode.failure = Some(format!("no plan: {e}"));
-                no_plan = true;
                 episode.no_plan = true;
                 break;
             }
@@ -239,7 +239,6 @@ pub fn run_episode<E: Environment + Judge>(
         episode.search_tree = phase2.search_tree.clone();
         if let Some(why) = &phase2.no_plan {
             episode.failure = Some(format!("no plan: {why}"));
-            no_plan = true;
             episode.no_plan = true;
             break;
         }
@@ -295,7 +294,7 @@ pub fn run_episode<E: Environment + Judge>(
         let accurate = precision.is_none_or(|p| p >= 1.0) && recall.is_none_or(|r| r >= 1.0);
         episode.attribution = Some(if !accurate {
             Attribution::Representation
-        } else if no_plan {
+        } else if episode.no_plan || no_handover {
             Attribution::Search
         } else if not_executed {
             Attribution::Grounding
