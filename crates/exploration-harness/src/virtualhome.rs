@@ -23,12 +23,16 @@
 //!   `done` thus has a target it can take at most once, so no choice of the model's can make
 //!   Phase I circle. The sweep: open the closed container the agent is close to, else enter the
 //!   next room, else walk to the next closed container.
-//! - Ready: every object symbol of G has distinct perceived instances of its class (as many as
-//!   the goal names it).
+//! - Ready: every object symbol of G has a distinct perceived instance of its class that G does
+//!   not already describe: when G's literals about the symbol are about it alone (its states,
+//!   its relations to the character) and all already hold of an instance, the task cannot be asking about
+//!   it (a task asks for a change; EAI's goals are what the expert's run changed), so the agent
+//!   looks on for another (`VirtualhomeAdapter::already_done`).
 //! - ŝ0: the perceived scene as a scene graph (perceived nodes; class properties from F_str, the
 //!   affordances of EAI's `properties_data.json`; perceived states and relations; a character
 //!   node of its own, since the agent never sees its id), with G's symbols bound (β) to distinct
-//!   perceived instances of their classes (lowest id first), written by `vh_pddl::problem`,
+//!   perceived instances of their classes (those G does not already describe first, then the
+//!   lowest id), written by `vh_pddl::problem`,
 //!   which adds what the bound objects are inside. For action goals, every perceived object
 //!   whose class has an affordance the action's verb needs joins the problem.
 //! - Plan steps are the executor's script lines with the perceived ids
@@ -261,25 +265,52 @@ impl VirtualhomeAdapter {
         out
     }
 
-    /// Symbol → the perceived instance β binds it to.
-    fn bind(goal: &ClassGoal, belief: &Belief) -> BTreeMap<String, String> {
+    /// Whether `x` already is what G asks of `symbol`: G's literals about `symbol` are about it
+    /// alone (its states, its relations to the character), there is at least one, and every one
+    /// holds of `x` in F_t. A task asks for a change (EAI's goals are what the expert's run changed), so such an
+    /// instance is not the one the task means: another instance of the class is.
+    fn already_done(goal: &ClassGoal, symbol: &str, x: &str, belief: &Belief) -> bool {
+        let me: BTreeSet<&str> = goal.symbols.iter().filter(|s| s.kind == "character").map(|s| s.name.as_str()).collect();
+        let own: Vec<_> = goal.literals.iter().filter(|l| l.args.iter().any(|a| a == symbol)).collect();
+        // A symbol G relates to another object (a dishwasher things go into) is not decided here.
+        !own.is_empty()
+            && own.iter().all(|l| l.args.iter().all(|a| a == symbol || me.contains(a.as_str())))
+            && own.iter().all(|l| {
+                let args: Vec<&str> = l.args.iter().map(|a| if a == symbol { x } else { ME }).collect();
+                belief.holds(&l.predicate.to_ascii_uppercase(), &args) == Some(!l.negated)
+            })
+    }
+
+    /// Symbol → the perceived instance β binds it to: a distinct instance of the symbol's class,
+    /// one G does not already describe ([`Self::already_done`]) first, then the lowest id; and
+    /// whether every symbol found such an instance (Ready).
+    fn bind(goal: &ClassGoal, belief: &Belief) -> (BTreeMap<String, String>, bool) {
         let mut instances: Vec<String> = Self::instances(belief).into_iter().collect();
         instances.extend(belief.places.iter().cloned());
         instances.sort_by_key(|x| split_name(x).map_or(u32::MAX, |(_, id)| id));
         let mut taken = BTreeSet::new();
         let mut out = BTreeMap::new();
+        let mut ready = true;
         for s in &goal.symbols {
             if s.kind == "character" {
                 out.insert(s.name.clone(), ME.to_string());
                 continue;
             }
             let Some(class) = &s.class else { continue };
-            if let Some(x) = instances.iter().find(|x| class_of(x) == class && !taken.contains(*x)) {
+            let free: Vec<&String> = instances.iter().filter(|x| class_of(x) == class && !taken.contains(*x)).collect();
+            let pick = match free.iter().find(|x| !Self::already_done(goal, &s.name, x, belief)) {
+                Some(x) => Some(*x),
+                None => {
+                    ready = false;
+                    free.first().copied()
+                }
+            };
+            if let Some(x) = pick {
                 taken.insert(x.clone());
                 out.insert(s.name.clone(), x.clone());
             }
         }
-        out
+        (out, ready)
     }
 }
 
@@ -342,18 +373,7 @@ impl Adapter for VirtualhomeAdapter {
     }
 
     fn ready(&self, goal: &ClassGoal, belief: &Belief) -> bool {
-        let instances = Self::instances(belief);
-        let mut needed: BTreeMap<&str, usize> = BTreeMap::new();
-        for s in goal.symbols.iter().filter(|s| s.kind != "character") {
-            if let Some(c) = &s.class {
-                *needed.entry(c.as_str()).or_default() += 1;
-            }
-        }
-        needed.into_iter().all(|(class, n)| {
-            let have =
-                instances.iter().filter(|x| class_of(x) == class).count() + belief.places.iter().filter(|r| class_of(r) == class).count();
-            have >= n
-        })
+        Self::bind(goal, belief).1
     }
 
     /// The facts that hold about instances of the goal's classes, the containers' CLOSED and
@@ -390,7 +410,7 @@ impl Adapter for VirtualhomeAdapter {
 impl Handing for VirtualhomeAdapter {
     fn handover(&mut self, goal: &ClassGoal, exploration: &Exploration, _steps: &[StepRecord]) -> Result<Grounded, String> {
         let belief = &exploration.belief;
-        let beta = Self::bind(goal, belief);
+        let (beta, _) = Self::bind(goal, belief);
         let instances = Self::instances(belief);
         let mut names: BTreeSet<String> = instances.clone();
         names.extend(belief.places.iter().cloned());
