@@ -18,6 +18,7 @@ use exploration_harness::virtualhome::VirtualhomeAdapter;
 use exploration_harness::{
     ClassGoal, Episode, EpisodeConfig, Grounded, Handing, Ontology, PhaseTwo, Policy, Systematic, parse_goal, run_episode,
 };
+use heuristics::search::SearchStatus;
 use household_sim::{AlfworldEnv, Environment, Judge, VirtualhomeEnv};
 use lm::{LanguageModel, LocalChat, LocalModel};
 use mcts::prompt::planning_prompt;
@@ -148,8 +149,25 @@ impl PhaseTwoRunner {
             return plan_by_chat(chat.as_mut(), grounded, config);
         }
         if self.planner == "astar" {
-            let actions =
-                heuristics::search::optimal_plan(model, Duration::from_secs_f64(self.time_limit)).map_err(|s| format!("{s:?}"))?;
+            let mut config = heuristics::search::SearchConfig::new(heuristics::search::Algorithm::AStar);
+            config.time_limit = Some(Duration::from_secs_f64(self.time_limit));
+            // Unit costs: a plan's cost is its length, and no longer plan can finish in the
+            // steps the episode has left (as MCTS's action bound).
+            if model.task().actions.iter().all(|a| a.cost == 1) {
+                config.max_cost = Some(grounded.steps_left as u64);
+            }
+            let actions = match heuristics::search::optimal_plan_with(model, &config) {
+                Ok(actions) => actions,
+                Err(status @ (SearchStatus::OverBound | SearchStatus::OutOfBudget)) => {
+                    let why = format!("{status:?}: no plan within {} steps", grounded.steps_left);
+                    return Ok(PhaseTwo {
+                        no_plan: Some(why),
+                        detail: json!({"planner": "astar", "stop": format!("{status:?}")}),
+                        ..PhaseTwo::default()
+                    });
+                }
+                Err(status) => return Err(format!("{status:?}")),
+            };
             return Ok(PhaseTwo { actions, detail: json!({"planner": "astar"}), ..PhaseTwo::default() });
         }
         let (Some(lm), Some(vocab)) = (self.lm.as_mut(), self.vocab.as_ref()) else { return Err("no language model".into()) };

@@ -106,6 +106,7 @@ pub fn plan(args: PlanArgs) -> anyhow::Result<ExitCode> {
         SearchStatus::Solved => "solved",
         SearchStatus::Unsolvable => "unsolvable",
         SearchStatus::OutOfBudget => "out-of-budget",
+        SearchStatus::OverBound => "over-bound",
     };
     if args.json {
         println!(

@@ -8,7 +8,9 @@
 //! hidden state to score F_τ (precision and recall) and attribute a failure (paper §5.3):
 //! - `representation`: Phase I's state is wrong or short: a positive fact of F_τ about a goal
 //!   class is false in the hidden state (precision < 1), or some goal object has no correctly
-//!   located instance in F_τ (recall < 1);
+//!   located instance in F_τ (recall < 1); or exploration left fewer steps of the budget than
+//!   the plan needs (none at all, or fewer than a plan Phase II returned though told the steps
+//!   left: A*'s optimal plan);
 //! - `search`: the state is right but Phase II returned no plan within its budget;
 //! - `grounding`: the state is right, yet a plan step was not executed by the environment
 //!   (binding or domain semantics);
@@ -205,6 +207,8 @@ pub fn run_episode<E: Environment + Judge>(
     let mut exploration = exploration;
     // The hand-over itself failed (no ŝ0): like a missing plan for the attribution.
     let mut no_handover = false;
+    // Phase I left no step for a plan.
+    let mut explored_out = false;
     let mut not_executed = false;
     loop {
         episode.handovers += 1;
@@ -221,6 +225,7 @@ pub fn run_episode<E: Environment + Judge>(
         if grounded.steps_left == 0 {
             // Phase I spent the budget: no plan could take a step.
             episode.failure = Some("step budget spent before Phase II".into());
+            explored_out = true;
             break;
         }
         let planned = plan(&grounded);
@@ -257,7 +262,9 @@ pub fn run_episode<E: Environment + Judge>(
             };
             episode.plan.push(command.clone());
             if episode.steps.len() >= config.budget {
+                // The plan needs more steps than exploration left (planners are told how many).
                 episode.failure = Some("step budget spent".into());
+                explored_out = true;
                 break;
             }
             let result = env.step(&command);
@@ -292,7 +299,7 @@ pub fn run_episode<E: Environment + Judge>(
             episode.failure = Some("goal not reached".into());
         }
         let accurate = precision.is_none_or(|p| p >= 1.0) && recall.is_none_or(|r| r >= 1.0);
-        episode.attribution = Some(if !accurate {
+        episode.attribution = Some(if !accurate || explored_out {
             Attribution::Representation
         } else if episode.no_plan || no_handover {
             Attribution::Search

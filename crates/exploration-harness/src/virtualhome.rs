@@ -17,12 +17,13 @@
 //!   container (F_str: `can_open` and `containers`) the agent is close to and saw closed, not yet
 //!   opened; `close X` for one it opened; `goto X` for closed containers not yet opened and not
 //!   yet walked to (R_t: a place is inspected once; at X the agent is offered `open X`, and a
-//!   walk back would show nothing new), those of the current room first; `look` (walk up to the
-//!   first object a model's hypothesis names, for a close view) when there is such a hypothesis
-//!   and the agent is not close to that object already; `done`. Every skill but `look` and
-//!   `done` thus has a target it can take at most once, so no choice of the model's can make
-//!   Phase I circle. The sweep: open the closed container the agent is close to, else enter the
-//!   next room, else walk to the next closed container.
+//!   walk back would show nothing new), those of a class G names first (the plan goes there
+//!   anyway), then those of the current room; `look` (walk up to the first object a model's
+//!   hypothesis names, for a close view) when there is such a hypothesis and the agent is not
+//!   close to that object already; `done`. Every skill but `look` and `done` thus has a target
+//!   it can take at most once, so no choice of the model's can make Phase I circle. The sweep:
+//!   open the closed container the agent is close to, else walk to a closed container of a
+//!   class G names, else enter the next room, else walk to the next closed container.
 //! - Ready: every object symbol of G has a distinct perceived instance of its class that G does
 //!   not already describe: when G's literals about the symbol are about it alone (its states,
 //!   its relations to the character) and all already hold of an instance, the task cannot be asking about
@@ -34,7 +35,9 @@
 //!   perceived instances of their classes (those G does not already describe first, then the
 //!   lowest id), written by `vh_pddl::problem`,
 //!   which adds what the bound objects are inside. For action goals, every perceived object
-//!   whose class has an affordance the action's verb needs joins the problem.
+//!   whose class has an affordance the action's verb needs joins the problem. When G has the
+//!   left hand hold something and says nothing of the right, the grabbable objects seen in that
+//!   object's room join it too: GRAB fills the right hand first.
 //! - Plan steps are the executor's script lines with the perceived ids
 //!   (`VhProblem::script_line`).
 
@@ -327,7 +330,7 @@ impl Adapter for VirtualhomeAdapter {
         self.entered.extend(Self::room_now(belief));
     }
 
-    fn skills(&self, _goal: &ClassGoal, belief: &Belief, record: &Record, _env: &dyn Environment) -> Skills {
+    fn skills(&self, goal: &ClassGoal, belief: &Belief, record: &Record, _env: &dyn Environment) -> Skills {
         let mut list = Vec::new();
         let mut sweep = None;
         let closed = self.closed_containers(belief, record);
@@ -339,12 +342,23 @@ impl Adapter for VirtualhomeAdapter {
         for x in opened.iter().filter(|x| belief.holds("OPEN", &[x]) == Some(true) && belief.holds("CLOSE", &[ME, x]) == Some(true)) {
             list.push(Skill::Close(x.clone()));
         }
+        let walked = Self::targets(record, "[WALK] ");
+        let goal_classes = self.objects_to_find(goal);
+        let (named, others): (Vec<&String>, Vec<&String>) = closed
+            .iter()
+            .map(|(x, _)| x)
+            .filter(|x| belief.holds("CLOSE", &[ME, x]) != Some(true) && !walked.contains(*x))
+            .partition(|x| goal_classes.iter().any(|c| c == class_of(x)));
+        // A closed container G names first: the plan goes there anyway.
+        for x in named {
+            sweep.get_or_insert(list.len());
+            list.push(Skill::Goto(x.clone()));
+        }
         for r in belief.places.iter().filter(|r| !self.entered.contains(*r)) {
             sweep.get_or_insert(list.len());
             list.push(Skill::Goto(r.clone()));
         }
-        let walked = Self::targets(record, "[WALK] ");
-        for (x, _) in closed.iter().filter(|(x, _)| belief.holds("CLOSE", &[ME, x]) != Some(true) && !walked.contains(x)) {
+        for x in others {
             sweep.get_or_insert(list.len());
             list.push(Skill::Goto(x.clone()));
         }
@@ -476,6 +490,20 @@ impl Handing for VirtualhomeAdapter {
                 .any(|v| VERB_AFFORDANCES.iter().find(|(verb, _)| verb == v).is_none_or(|(_, needs)| needs.iter().any(|n| self.has(x, n))));
             if wanted || (verbs.iter().any(|v| v == "TYPE") && class_of(x) == "keyboard") {
                 classes.insert(class_of(x).to_string());
+            }
+        }
+        // G has the left hand hold something and says nothing of the right: GRAB fills the right
+        // hand first, so a plan needs something else to hold there; the grabbable objects seen in
+        // the room of the left hand's object join the problem.
+        if !goal.literals.iter().any(|l| l.predicate == "holds_rh") {
+            for l in goal.literals.iter().filter(|l| l.predicate == "holds_lh") {
+                let Some(x) = l.args.get(1).and_then(|s| beta.get(s)) else { continue };
+                let rooms: Vec<&String> = belief.places.iter().filter(|r| belief.holds(IN_ROOM, &[x, r]) == Some(true)).collect();
+                for y in instances.iter().filter(|y| self.has(y, "grabbable")) {
+                    if rooms.iter().any(|r| belief.holds(IN_ROOM, &[y, r]) == Some(true)) {
+                        classes.insert(class_of(y).to_string());
+                    }
+                }
             }
         }
         let classes: Vec<&str> = classes.iter().map(String::as_str).collect();

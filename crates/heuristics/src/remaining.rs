@@ -69,7 +69,7 @@ impl Heuristic for RemainingPlanCost<'_> {
                 self.remember(state, &result.plan);
                 Some(result.cost.min(u64::from(INFINITE - 1)) as u32)
             }
-            SearchStatus::Unsolvable => None,
+            SearchStatus::Unsolvable | SearchStatus::OverBound => None,
             SearchStatus::OutOfBudget => self.ff.evaluate(state),
         }
     }

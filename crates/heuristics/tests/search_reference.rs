@@ -94,3 +94,29 @@ fn lazy_greedy_ff_beside_fast_downward() {
     }
     assert!(visitall >= 5, "{visitall}");
 }
+
+/// A cost bound cuts nothing it should keep: at Fast Downward's optimal cost A* still finds a
+/// plan of that cost, and one below it ends `OverBound` (the space up to the bound searched,
+/// no plan in it).
+#[test]
+fn astar_with_a_cost_bound_finds_the_optimum_at_it_and_nothing_below() {
+    let tasks = load(Benchmark::Ipc).expect("fixtures");
+    let mut checked = 0;
+    for (domain, instance, fd_expanded, fd_cost) in fd_reference("fd-astar-lmcut") {
+        if fd_expanded > 500 || fd_cost == 0 {
+            continue;
+        }
+        let id = format!("{domain}/{}", instance.trim_end_matches(".pddl"));
+        let model = model(tasks.iter().find(|t| t.id == id).expect("instance"));
+        let mut config = SearchConfig::new(Algorithm::AStar);
+        config.max_cost = Some(fd_cost);
+        let at = search(&model, &mut LmCut::new(&model), &config, None);
+        assert_eq!((at.status, at.cost), (SearchStatus::Solved, fd_cost), "{id}");
+        config.max_cost = Some(fd_cost - 1);
+        let below = search(&model, &mut LmCut::new(&model), &config, None);
+        assert_eq!(below.status, SearchStatus::OverBound, "{id}");
+        assert!(below.plan.is_empty(), "{id}");
+        checked += 1;
+    }
+    assert!(checked >= 10, "{checked}");
+}

@@ -45,6 +45,12 @@ pub struct SearchConfig {
     pub preferred_operators: bool,
     pub max_expansions: Option<u64>,
     pub time_limit: Option<Duration>,
+    /// A* only: plans costing more are not wanted. A node whose f = g + h exceeds it is pruned
+    /// (LM-cut is admissible, so no plan within the bound is lost), and a search that finds none
+    /// ends `OverBound`. An episode's planner sets it to the steps the episode has left: a plan
+    /// that cannot finish is not searched for. (Fast Downward's `bound` is the same cut,
+    /// exclusive.)
+    pub max_cost: Option<u64>,
     /// The goal-relevant facts states are projected onto ([`relevant_facts`]); computed by
     /// each search when `None`. Set it to share one analysis across many searches.
     pub relevant: Option<Arc<[u64]>>,
@@ -52,7 +58,7 @@ pub struct SearchConfig {
 
 impl SearchConfig {
     pub fn new(algorithm: Algorithm) -> SearchConfig {
-        SearchConfig { algorithm, preferred_operators: false, max_expansions: None, time_limit: None, relevant: None }
+        SearchConfig { algorithm, preferred_operators: false, max_expansions: None, time_limit: None, max_cost: None, relevant: None }
     }
 }
 
@@ -63,6 +69,8 @@ pub enum SearchStatus {
     Unsolvable,
     /// A budget ran out.
     OutOfBudget,
+    /// No plan within `SearchConfig::max_cost` (A*): the space was searched up to the bound.
+    OverBound,
 }
 
 #[derive(Debug, Clone)]
@@ -147,6 +155,12 @@ pub fn optimal_plan_expanding(model: &TransitionModel, max_expansions: u64) -> R
     astar_lmcut(model, &config)
 }
 
+/// A* with LM-cut under any [`SearchConfig`] (its algorithm is taken to be A*): budgets on
+/// expansions and time, and a bound on the plan's cost.
+pub fn optimal_plan_with(model: &TransitionModel, config: &SearchConfig) -> Result<Vec<ActionId>, SearchStatus> {
+    astar_lmcut(model, &SearchConfig { algorithm: Algorithm::AStar, ..config.clone() })
+}
+
 fn astar_lmcut(model: &TransitionModel, config: &SearchConfig) -> Result<Vec<ActionId>, SearchStatus> {
     let mut heuristic = crate::LmCut::new(model);
     let result = search(model, &mut heuristic, config, None);
@@ -193,7 +207,12 @@ fn astar(model: &TransitionModel, heuristic: &mut dyn Heuristic, budget: &Budget
     };
     space.nodes[root as usize].g = 0;
     space.nodes[root as usize].h = h;
-    open.push(Reverse((u64::from(h), h, sequence, root)));
+    let over = |f: u64| budget.config.max_cost.is_some_and(|bound| f > bound);
+    // Whether the bound cut anything: then an empty open list means no plan within it.
+    let mut pruned = over(u64::from(h));
+    if !pruned {
+        open.push(Reverse((u64::from(h), h, sequence, root)));
+    }
     let mut applicable = Vec::new();
     while let Some(Reverse((f, _, _, id))) = open.pop() {
         let node = space.nodes[id as usize];
@@ -233,6 +252,10 @@ fn astar(model: &TransitionModel, heuristic: &mut dyn Heuristic, budget: &Budget
             if child_node.h == crate::INFINITE {
                 continue;
             }
+            if over(g + u64::from(child_node.h)) {
+                pruned = true;
+                continue;
+            }
             // A cheaper path reopens a closed state (LM-cut is admissible, not consistent).
             child_node.g = g;
             child_node.parent = id;
@@ -242,7 +265,8 @@ fn astar(model: &TransitionModel, heuristic: &mut dyn Heuristic, budget: &Budget
             open.push(Reverse((g + u64::from(child_node.h), child_node.h, sequence, child)));
         }
     }
-    finish(SearchStatus::Unsolvable, &space, None, model, (expanded, evaluated, generated), budget)
+    let status = if pruned { SearchStatus::OverBound } else { SearchStatus::Unsolvable };
+    finish(status, &space, None, model, (expanded, evaluated, generated), budget)
 }
 
 /// Two open lists (all successors; preferred successors only), alternated; `boost` extra
