@@ -10,7 +10,8 @@
 //!   where that class can be picked up at all,
 //!   or the goal names their class and none of it was visited); each: `go to` it (`examine`
 //!   where the agent already stands there), and `open` it when the observation says it is
-//!   closed; the sweep ends when Ready holds or no such place is left;
+//!   closed (the `goto` skill's follow-up, whoever chose it); the sweep ends when Ready holds
+//!   or no such place is left;
 //! - Ready(F, G) ([`ready`]): every object symbol of G has a distinct perceived instance of its
 //!   class, every receptacle symbol with a class a visited place of that class;
 //! - ŝ0 ([`write_problem`]): F_τ (perceived contents, open/closed, what is held) and F_str
@@ -274,7 +275,8 @@ impl Adapter for AlfworldAdapter {
         let mut list = Vec::new();
         let mut sweep = None;
         let at = Self::at(&record.steps);
-        let sent = |command: String| record.steps.iter().any(|s| s.executed && s.command == command);
+        // Sent, executed or not: what failed once would fail again.
+        let sent = |command: String| record.steps.iter().any(|s| s.command == command);
         if let Some(p) = &at {
             match belief.holds("opened", &[p]) {
                 Some(false) if !sent(format!("open {p}")) => {
@@ -319,6 +321,13 @@ impl Adapter for AlfworldAdapter {
             Skill::Look => Self::at(&record.steps).map(|p| vec![format!("examine {p}")]).unwrap_or_default(),
             Skill::Done => Vec::new(),
         }
+    }
+
+    /// Arriving at a place seen closed, not yet opened: open it.
+    fn follow_up(&self, skill: &Skill, belief: &Belief, record: &Record) -> Option<String> {
+        let Skill::Goto(p) = skill else { return None };
+        let sent = record.steps.iter().any(|s| s.command == format!("open {p}"));
+        (Self::at(&record.steps).as_ref() == Some(p) && belief.holds("opened", &[p]) == Some(false) && !sent).then(|| format!("open {p}"))
     }
 
     fn ready(&self, goal: &ClassGoal, belief: &Belief) -> bool {

@@ -10,14 +10,15 @@
 //!   relations to visible nodes hold, and a relation F_t had to a node visible now but not listed
 //!   no longer does; a visible node not held is in the room the agent stands in (`IN_ROOM`: the
 //!   graph's direct INSIDE edge to a room is not always there); CLOSE to the
-//!   character as the observation says, for every visible node; what is held, and in which hand;
+//!   character as the observation says, for every visible node, and not CLOSE for a node F_t
+//!   had close that is out of sight now; what is held, and in which hand;
 //!   whether the character sits or lies (`goto` then stands up first).
 //!   Names are as perceived: class and the id the observation shows.
 //! - K_t ([`VirtualhomeAdapter`]'s `skills`): `goto R` for rooms not yet entered; `open X` for a
 //!   container (F_str: `can_open` and `containers`) the agent is close to and saw closed, not yet
-//!   opened; `close X` for one it opened; `goto X` for closed containers not yet opened and not
-//!   yet walked to (R_t: a place is inspected once; at X the agent is offered `open X`, and a
-//!   walk back would show nothing new), those of a class G names first (the plan goes there
+//!   tried to open (a failed attempt, such as a freezer that is on, would fail again); `close X`
+//!   for one it opened, once; `goto X` for closed containers not yet tried and not yet walked to (R_t: a place is inspected once; arriving at X the agent opens it, the
+//!   skill's follow-up, and a walk back would show nothing new), those of a class G names first (the plan goes there
 //!   anyway), then those of the current room; `look` (walk up to the first object a model's
 //!   hypothesis names, for a close view) when there is such a hypothesis and the agent is not
 //!   close to that object already; `done`. Every skill but `look` and `done` thus has a target
@@ -171,6 +172,14 @@ pub fn perceive_virtualhome(text: &str, step: usize, belief: &Belief) -> (Vec<St
         }
         fact("CLOSE", &[ME, name], *close);
     }
+    // Close to something F_t said the agent was close to, now out of sight (another room).
+    if here.is_some() {
+        for f in prior.iter().filter(|f| f.predicate == "CLOSE" && f.args[0] == ME && !visible.contains(f.args[1].as_str())) {
+            if !held.contains(&f.args[1]) {
+                fact("CLOSE", &[ME, &f.args[1]], false);
+            }
+        }
+    }
     // Something F_t said was held and no longer is.
     for f in prior.iter().filter(|f| f.predicate == "HOLDS_RH" || f.predicate == "HOLDS_LH") {
         if !held.contains(&f.args[1]) {
@@ -245,6 +254,12 @@ impl VirtualhomeAdapter {
         record.steps.iter().filter(|s| s.executed).filter_map(|s| s.command.strip_prefix(verb).map(script_name)).collect()
     }
 
+    /// The targets of R_t's commands with this script verb, executed or not: an attempt that
+    /// failed (a freezer that is on does not open) would fail again, so it is not offered again.
+    fn attempted(record: &Record, verb: &str) -> BTreeSet<String> {
+        record.steps.iter().filter_map(|s| s.command.strip_prefix(verb).map(script_name)).collect()
+    }
+
     /// The object `look` walks up to: the first perceived instance a hypothesis names.
     fn look_target(belief: &Belief) -> Option<String> {
         let instances = Self::instances(belief);
@@ -253,7 +268,7 @@ impl VirtualhomeAdapter {
 
     /// Containers seen closed that Phase I has not opened, with whether they are in the room now.
     fn closed_containers(&self, belief: &Belief, record: &Record) -> Vec<(String, bool)> {
-        let opened = Self::targets(record, "[OPEN] ");
+        let opened = Self::attempted(record, "[OPEN] ");
         let room = Self::room_now(belief);
         let mut out: Vec<(String, bool)> = Self::instances(belief)
             .into_iter()
@@ -339,10 +354,13 @@ impl Adapter for VirtualhomeAdapter {
             list.push(Skill::Open(x.clone()));
         }
         let opened = Self::targets(record, "[OPEN] ");
-        for x in opened.iter().filter(|x| belief.holds("OPEN", &[x]) == Some(true) && belief.holds("CLOSE", &[ME, x]) == Some(true)) {
+        let closed_before = Self::attempted(record, "[CLOSE] ");
+        for x in opened.iter().filter(|x| {
+            belief.holds("OPEN", &[x]) == Some(true) && belief.holds("CLOSE", &[ME, x]) == Some(true) && !closed_before.contains(*x)
+        }) {
             list.push(Skill::Close(x.clone()));
         }
-        let walked = Self::targets(record, "[WALK] ");
+        let walked = Self::attempted(record, "[WALK] ");
         let goal_classes = self.objects_to_find(goal);
         let (named, others): (Vec<&String>, Vec<&String>) = closed
             .iter()
@@ -384,6 +402,15 @@ impl Adapter for VirtualhomeAdapter {
             Skill::Look => Self::look_target(belief).map(|x| walk(&x)).unwrap_or_default(),
             Skill::Done => Vec::new(),
         }
+    }
+
+    /// Arriving at a closed container not yet opened: open it.
+    fn follow_up(&self, skill: &Skill, belief: &Belief, record: &Record) -> Option<String> {
+        let Skill::Goto(x) = skill else { return None };
+        let (class, id) = split_name(x)?;
+        let closed = belief.holds("CLOSED", &[x]) == Some(true) && belief.holds("CLOSE", &[ME, x]) == Some(true);
+        (closed && self.has(x, "can_open") && self.has(x, "containers") && !Self::attempted(record, "[OPEN] ").contains(x))
+            .then(|| format!("[OPEN] <{class}> ({id})"))
     }
 
     fn ready(&self, goal: &ClassGoal, belief: &Belief) -> bool {
