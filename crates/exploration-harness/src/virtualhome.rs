@@ -26,8 +26,9 @@
 //!   open the closed container the agent is close to, else walk to a closed container of a
 //!   class G names, else enter the next room, else walk to the next closed container.
 //! - Ready: every object symbol of G has a distinct perceived instance of its class that G does
-//!   not already describe: when G's literals about the symbol are about it alone (its states,
-//!   its relations to the character) and all already hold of an instance, the task cannot be asking about
+//!   not already describe: when G relates the symbol to no other object and the states G gives
+//!   it all already hold of an instance (its relations to the character, the agent's pose, do not
+//!   count), the task cannot be asking about
 //!   it (a task asks for a change; EAI's goals are what the expert's run changed), so the agent
 //!   looks on for another (`VirtualhomeAdapter::already_done`).
 //! - ŝ0: the perceived scene as a scene graph (perceived nodes; class properties from F_str, the
@@ -283,20 +284,18 @@ impl VirtualhomeAdapter {
         out
     }
 
-    /// Whether `x` already is what G asks of `symbol`: G's literals about `symbol` are about it
-    /// alone (its states, its relations to the character), there is at least one, and every one
-    /// holds of `x` in F_t. A task asks for a change (EAI's goals are what the expert's run changed), so such an
-    /// instance is not the one the task means: another instance of the class is.
+    /// Whether `x` already is what G asks of `symbol`: G relates the symbol to no other object,
+    /// G gives it states, and every one of them already holds of `x` in F_t. Its relations to
+    /// the character (FACING, HOLDS) do not count: they are the agent's pose, which acting
+    /// changes anyway.
     fn already_done(goal: &ClassGoal, symbol: &str, x: &str, belief: &Belief) -> bool {
         let me: BTreeSet<&str> = goal.symbols.iter().filter(|s| s.kind == "character").map(|s| s.name.as_str()).collect();
         let own: Vec<_> = goal.literals.iter().filter(|l| l.args.iter().any(|a| a == symbol)).collect();
+        let states: Vec<_> = own.iter().filter(|l| l.args.len() == 1).collect();
         // A symbol G relates to another object (a dishwasher things go into) is not decided here.
-        !own.is_empty()
+        !states.is_empty()
             && own.iter().all(|l| l.args.iter().all(|a| a == symbol || me.contains(a.as_str())))
-            && own.iter().all(|l| {
-                let args: Vec<&str> = l.args.iter().map(|a| if a == symbol { x } else { ME }).collect();
-                belief.holds(&l.predicate.to_ascii_uppercase(), &args) == Some(!l.negated)
-            })
+            && states.iter().all(|l| belief.holds(&l.predicate.to_ascii_uppercase(), &[x]) == Some(!l.negated))
     }
 
     /// Symbol → the perceived instance β binds it to: a distinct instance of the symbol's class,
