@@ -188,16 +188,19 @@ impl PhaseTwoRunner {
             "lines": outcome.lines, "simulations": outcome.stats.simulations, "nodes": outcome.stats.nodes,
             "prompt_tokens": tokens.len(), "millis": outcome.stats.millis,
         });
-        // No plan: the search ended (its budget, an exhausted tree, no applicable action) with
-        // nothing; a model that ended the plan at once wrote an empty plan, which is its DONE.
+        // No plan: the search ended (its budget, an exhausted tree, no applicable action)
+        // without a plan that reaches the goal. Its best partial plan (kept in `lines`) is not
+        // sent: the transition model says it ends short of the goal, so running it would only
+        // spend steps and pass a search failure off as the goal's. A model that ended the plan
+        // at once wrote an empty plan, which is its DONE.
         let searched_out = matches!(
             outcome.stop,
             StopReason::Simulations | StopReason::WallClock | StopReason::ModelCalls | StopReason::Exhausted | StopReason::DeadEnd
         );
-        let no_plan = (outcome.plan.is_empty() && !outcome.solved && searched_out).then(|| format!("{:?}: no plan", outcome.stop));
+        let no_plan = (!outcome.solved && searched_out).then(|| format!("{:?}: no plan", outcome.stop));
         let invalid_step = outcome.invalid.as_ref().map(|i| i.text.clone());
         Ok(PhaseTwo {
-            actions: outcome.plan,
+            actions: if no_plan.is_some() { Vec::new() } else { outcome.plan },
             model_calls: outcome.stats.usage.forward_calls,
             generated_tokens: outcome.stats.usage.tokens_generated,
             detail,

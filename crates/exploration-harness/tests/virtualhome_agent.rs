@@ -29,18 +29,24 @@ fn play(path: &Path, benchmark: &str, ontology: &Ontology) -> Episode {
     play_task(VirtualhomeTask::load(path).unwrap(), path, benchmark, ontology)
 }
 
+/// A* with LM-cut within [`EXPANSIONS`], no plan longer than the steps left (the sound domain
+/// has unit costs, so none longer could finish); a search without a plan as Phase II's no-plan.
+fn a_star(g: &Grounded) -> Result<Vec<grounding::ActionId>, PhaseTwo> {
+    let mut config = heuristics::search::SearchConfig::new(heuristics::search::Algorithm::AStar);
+    config.max_expansions = Some(EXPANSIONS);
+    config.max_cost = Some(g.steps_left as u64);
+    heuristics::search::optimal_plan_with(&g.model, &config)
+        .map_err(|status| PhaseTwo { no_plan: Some(format!("{status:?}")), ..PhaseTwo::default() })
+}
+
 fn play_task(task: VirtualhomeTask, path: &Path, benchmark: &str, ontology: &Ontology) -> Episode {
     let mut env = VirtualhomeEnv::new(task, benchmark);
     let goal = parse_goal(env.goal()).unwrap();
     let mut adapter = VirtualhomeAdapter::new(ontology.clone()).unwrap();
     let mut planner = |g: &Grounded| {
-        // No plan longer than the steps left could finish (the sound domain has unit costs).
-        let mut config = heuristics::search::SearchConfig::new(heuristics::search::Algorithm::AStar);
-        config.max_expansions = Some(EXPANSIONS);
-        config.max_cost = Some(g.steps_left as u64);
-        let plan = match heuristics::search::optimal_plan_with(&g.model, &config) {
+        let plan = match a_star(g) {
             Ok(plan) => plan,
-            Err(status) => return Ok(PhaseTwo { no_plan: Some(format!("{status:?}")), ..PhaseTwo::default() }),
+            Err(no_plan) => return Ok(no_plan),
         };
         assert!(g.model.validate(&plan).is_ok(), "{}: plan invalid for its grounded problem", path.display());
         Ok(PhaseTwo { actions: plan, ..PhaseTwo::default() })
@@ -223,13 +229,9 @@ fn a_plan_step_that_cannot_be_grounded_ends_the_episode_at_grounding() {
     let goal = parse_goal(env.goal()).unwrap();
     let mut adapter = VirtualhomeAdapter::new(ontology()).unwrap();
     let mut planner = |g: &Grounded| {
-        // No plan longer than the steps left could finish (the sound domain has unit costs).
-        let mut config = heuristics::search::SearchConfig::new(heuristics::search::Algorithm::AStar);
-        config.max_expansions = Some(EXPANSIONS);
-        config.max_cost = Some(g.steps_left as u64);
-        let plan = match heuristics::search::optimal_plan_with(&g.model, &config) {
+        let plan = match a_star(g) {
             Ok(plan) => plan,
-            Err(status) => return Ok(PhaseTwo { no_plan: Some(format!("{status:?}")), ..PhaseTwo::default() }),
+            Err(no_plan) => return Ok(no_plan),
         };
         Ok(PhaseTwo { actions: plan[..1].to_vec(), invalid_step: Some("walk to the moon".into()), ..PhaseTwo::default() })
     };
