@@ -30,13 +30,12 @@ fn play(path: &Path, benchmark: &str, ontology: &Ontology) -> Episode {
 }
 
 /// A* with LM-cut within [`EXPANSIONS`], no plan longer than the steps left (the sound domain
-/// has unit costs, so none longer could finish); a search without a plan as Phase II's no-plan.
-fn a_star(g: &Grounded) -> Result<Vec<grounding::ActionId>, PhaseTwo> {
+/// has unit costs, so none longer could finish); `Err` is the status of a search without a plan.
+fn a_star(g: &Grounded) -> Result<Vec<grounding::ActionId>, String> {
     let mut config = heuristics::search::SearchConfig::new(heuristics::search::Algorithm::AStar);
     config.max_expansions = Some(EXPANSIONS);
     config.max_cost = Some(g.steps_left as u64);
-    heuristics::search::optimal_plan_with(&g.model, &config)
-        .map_err(|status| PhaseTwo { no_plan: Some(format!("{status:?}")), ..PhaseTwo::default() })
+    heuristics::search::optimal_plan_with(&g.model, &config).map_err(|status| format!("{status:?}"))
 }
 
 fn play_task(task: VirtualhomeTask, path: &Path, benchmark: &str, ontology: &Ontology) -> Episode {
@@ -46,7 +45,7 @@ fn play_task(task: VirtualhomeTask, path: &Path, benchmark: &str, ontology: &Ont
     let mut planner = |g: &Grounded| {
         let plan = match a_star(g) {
             Ok(plan) => plan,
-            Err(no_plan) => return Ok(no_plan),
+            Err(why) => return Ok(PhaseTwo { no_plan: Some(why), ..PhaseTwo::default() }),
         };
         assert!(g.model.validate(&plan).is_ok(), "{}: plan invalid for its grounded problem", path.display());
         Ok(PhaseTwo { actions: plan, ..PhaseTwo::default() })
@@ -231,7 +230,7 @@ fn a_plan_step_that_cannot_be_grounded_ends_the_episode_at_grounding() {
     let mut planner = |g: &Grounded| {
         let plan = match a_star(g) {
             Ok(plan) => plan,
-            Err(no_plan) => return Ok(no_plan),
+            Err(why) => return Ok(PhaseTwo { no_plan: Some(why), ..PhaseTwo::default() }),
         };
         Ok(PhaseTwo { actions: plan[..1].to_vec(), invalid_step: Some("walk to the moon".into()), ..PhaseTwo::default() })
     };
