@@ -257,6 +257,11 @@ impl AlfworldAdapter {
     }
 }
 
+/// Whether R_t holds `command`, executed or not: what failed once would fail again.
+fn tried(record: &Record, command: &str) -> bool {
+    record.steps.iter().any(|s| s.command == command)
+}
+
 /// Whether the game would answer `go to place` with "Nothing happens." (the agent stands at its
 /// location already): the admissible list has other `go to`s but not this one.
 fn here(env: &dyn Environment, place: &str) -> bool {
@@ -275,8 +280,7 @@ impl Adapter for AlfworldAdapter {
         let mut list = Vec::new();
         let mut sweep = None;
         let at = Self::at(&record.steps);
-        // Sent, executed or not: what failed once would fail again.
-        let sent = |command: String| record.steps.iter().any(|s| s.command == command);
+        let sent = |command: String| tried(record, &command);
         if let Some(p) = &at {
             match belief.holds("opened", &[p]) {
                 Some(false) if !sent(format!("open {p}")) => {
@@ -326,8 +330,9 @@ impl Adapter for AlfworldAdapter {
     /// Arriving at a place seen closed, not yet opened: open it.
     fn follow_up(&self, skill: &Skill, belief: &Belief, record: &Record) -> Option<String> {
         let Skill::Goto(p) = skill else { return None };
-        let sent = record.steps.iter().any(|s| s.command == format!("open {p}"));
-        (Self::at(&record.steps).as_ref() == Some(p) && belief.holds("opened", &[p]) == Some(false) && !sent).then(|| format!("open {p}"))
+        let open = format!("open {p}");
+        (Self::at(&record.steps).as_ref() == Some(p) && belief.holds("opened", &[p]) == Some(false) && !tried(record, &open))
+            .then_some(open)
     }
 
     fn ready(&self, goal: &ClassGoal, belief: &Belief) -> bool {

@@ -9,8 +9,8 @@
 //! - `representation`: Phase I's state is wrong or short: a positive fact of F_τ about a goal
 //!   class is false in the hidden state (precision < 1), or some goal object has no correctly
 //!   located instance in F_τ (recall < 1); or exploration left fewer steps of the budget than
-//!   the plan needs (none at all, or fewer than a plan Phase II returned though told the steps
-//!   left: A*'s optimal plan);
+//!   the first plan needs (none at all, or fewer than a plan Phase II returned though told the
+//!   steps left: A*'s optimal plan);
 //! - `search`: the state is right but Phase II returned no plan within its budget;
 //! - `grounding`: the state is right, yet a plan step was not executed by the environment
 //!   (binding or domain semantics);
@@ -225,7 +225,8 @@ pub fn run_episode<E: Environment + Judge>(
         if grounded.steps_left == 0 {
             // Phase I spent the budget: no plan could take a step.
             episode.failure = Some("step budget spent before Phase II".into());
-            explored_out = true;
+            // With closed-loop replanning, earlier plans spent steps too.
+            explored_out = episode.handovers == 1;
             break;
         }
         let planned = plan(&grounded);
@@ -264,7 +265,7 @@ pub fn run_episode<E: Environment + Judge>(
             if episode.steps.len() >= config.budget {
                 // The plan needs more steps than exploration left (planners are told how many).
                 episode.failure = Some("step budget spent".into());
-                explored_out = true;
+                explored_out = episode.handovers == 1;
                 break;
             }
             let result = env.step(&command);

@@ -17,9 +17,10 @@
 //! - K_t ([`VirtualhomeAdapter`]'s `skills`): `goto R` for rooms not yet entered; `open X` for a
 //!   container (F_str: `can_open` and `containers`) the agent is close to and saw closed, not yet
 //!   tried to open (a failed attempt, such as a freezer that is on, would fail again); `close X`
-//!   for one it opened, once; `goto X` for closed containers not yet tried and not yet walked to (R_t: a place is inspected once; arriving at X the agent opens it, the
-//!   skill's follow-up, and a walk back would show nothing new), those of a class G names first (the plan goes there
-//!   anyway), then those of the current room; `look` (walk up to the first object a model's
+//!   for one it opened, once; `goto X` for closed containers not yet tried and not yet walked
+//!   to (R_t: a place is inspected once; arriving at X the agent opens it, the skill's
+//!   follow-up, and a walk back would show nothing new), those of a class G names first (the
+//!   plan goes there anyway), then those of the current room; `look` (walk up to the first object a model's
 //!   hypothesis names, for a close view) when there is such a hypothesis and the agent is not
 //!   close to that object already; `done`. Every skill but `look` and `done` thus has a target
 //!   it can take at most once, so no choice of the model's can make Phase I circle. The sweep:
