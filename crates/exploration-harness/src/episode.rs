@@ -9,8 +9,9 @@
 //! - `representation`: Phase I's state is wrong or short: a positive fact of F_τ about a goal
 //!   class is false in the hidden state (precision < 1), or some goal object has no correctly
 //!   located instance in F_τ (recall < 1); or exploration left fewer steps of the budget than
-//!   the first plan needs (none at all, or fewer than a plan Phase II returned though told the
-//!   steps left: A*'s optimal plan);
+//!   the first plan needs: none at all, fewer than a plan Phase II returned though told the
+//!   steps left (A*'s optimal plan), or Phase II found no plan and A* with LM-cut proves that
+//!   every plan of ŝ0 is longer than the steps left ([`no_plan_fits`]);
 //! - `search`: the state is right but Phase II returned no plan within its budget;
 //! - `grounding`: the state is right, yet a plan step was not executed by the environment
 //!   (binding or domain semantics);
@@ -246,6 +247,8 @@ pub fn run_episode<E: Environment + Judge>(
         if let Some(why) = &phase2.no_plan {
             episode.failure = Some(format!("no plan: {why}"));
             episode.no_plan = true;
+            // No plan of ŝ0 fits in the steps Phase I left: exploration spent them.
+            explored_out = episode.handovers == 1 && no_plan_fits(&grounded.model, grounded.steps_left);
             break;
         }
         let t = Instant::now();
@@ -311,6 +314,24 @@ pub fn run_episode<E: Environment + Judge>(
         });
     }
     episode
+}
+
+/// A* expansions [`no_plan_fits`] may spend: ample for a household task's ŝ0 (A* with LM-cut
+/// proves the bound on ALFWorld's hand-overs in a few thousand), and a cap on the check's time.
+const FIT_EXPANSIONS: u64 = 200_000;
+
+/// Whether A* with LM-cut proves that ŝ0 has plans, but none of at most `steps` actions (unit
+/// costs only: otherwise a cost says nothing of a length). An exhausted budget proves nothing.
+fn no_plan_fits(model: &transition_model::TransitionModel, steps: usize) -> bool {
+    if !model.task().actions.iter().all(|a| a.cost == 1) {
+        return false;
+    }
+    let mut config = heuristics::search::SearchConfig::new(heuristics::search::Algorithm::AStar);
+    config.max_cost = Some(steps as u64);
+    config.max_expansions = Some(FIT_EXPANSIONS);
+    // `OverBound`: plans exist only beyond the bound. (`Unsolvable`, none at all, is not the
+    // steps' fault.)
+    heuristics::search::optimal_plan_with(model, &config) == Err(heuristics::search::SearchStatus::OverBound)
 }
 
 /// Precision and recall of F_τ against the hidden state (module documentation); `None` where

@@ -30,6 +30,14 @@ pub struct Ontology {
     pub disagreements: BTreeMap<String, BTreeSet<String>>,
 }
 
+impl Ontology {
+    /// Whether every instance of `class` agrees on being openable or not, so that a place of it
+    /// can be planned with before it is seen.
+    pub fn openness_decided(&self, class: &str) -> bool {
+        !self.disagreements.get(class).is_some_and(|a| a.contains("openable"))
+    }
+}
+
 /// Why an ontology cannot be derived.
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
 #[error("{origin}: {message}")]

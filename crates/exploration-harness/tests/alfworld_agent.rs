@@ -193,3 +193,54 @@ fn closed_loop_replans_after_a_refused_step() {
         }
     }
 }
+
+/// Resets `game` and sends `commands`; the belief U builds from what the environment said.
+fn believe(game: &Path, commands: &[&str]) -> (exploration_harness::ClassGoal, exploration_harness::Belief) {
+    let mut env = AlfworldEnv::from_game_file(game).unwrap();
+    let goal = parse_goal(env.goal()).unwrap();
+    let mut belief = exploration_harness::Belief::default();
+    let mut perceive = |text: &str, step: usize| {
+        let (places, percepts) = exploration_harness::perceive_alfworld(text, step);
+        belief.add_places(&places);
+        belief.admit(&percepts);
+    };
+    perceive(&env.reset().text, 0);
+    for (i, command) in commands.iter().enumerate() {
+        perceive(&env.step(command).observation.text, i + 1);
+    }
+    (goal, belief)
+}
+
+#[test]
+fn ready_waits_for_a_visit_only_to_goal_places_whose_openness_f_str_leaves_open() {
+    let ontology = ontology();
+    let valid_seen = fixtures().join("alfworld/valid_seen");
+    // Clean a butter knife and put it on the dining table: F_str says a dining table never
+    // opens, so the listed one serves ŝ0 unvisited, and a butter knife seen on a counter
+    // grounds every symbol.
+    let table =
+        valid_seen.join("pick_clean_then_place_in_recep-ButterKnife-None-DiningTable-16/trial_T20190909_114508_617301/game.tw-pddl");
+    let (goal, belief) = believe(&table, &[]);
+    assert!(!exploration_harness::alfworld::ready(&goal, &belief, &ontology), "no butter knife seen yet");
+    let (goal, belief) = believe(&table, &["go to countertop 2"]);
+    assert_eq!(belief.holds("visited", &["diningtable 1"]), None);
+    assert!(belief.holds("inReceptacle", &["butterknife 3", "countertop 2"]) == Some(true), "{:?}", belief.facts());
+    assert!(exploration_harness::alfworld::ready(&goal, &belief, &ontology));
+    // Put a soap bottle in a cabinet: some cabinets open and some do not, so Ready waits until
+    // one has been visited, even with the soap bottle in hand.
+    let family = valid_seen.join("pick_and_place_simple-SoapBottle-None-Cabinet-414");
+    let trial = std::fs::read_dir(&family).unwrap().next().unwrap().unwrap().path().join("game.tw-pddl");
+    let (goal, belief) = believe(&trial, &[]);
+    let cabinets: Vec<&String> = belief.places.iter().filter(|p| p.starts_with("cabinet ")).collect();
+    assert!(!cabinets.is_empty() && !ontology.openness_decided("cabinet"));
+    let soap = goal.symbols.iter().any(|s| s.class.as_deref() == Some("soapbottle"));
+    assert!(soap, "{goal:?}");
+    let mut seen = belief.clone();
+    seen.admit(&[exploration_harness::Percept {
+        fact: exploration_harness::Fact::new("inReceptacle", &["soapbottle 1", "toilet 1"], true),
+        step: 1,
+    }]);
+    assert!(!exploration_harness::alfworld::ready(&goal, &seen, &ontology), "no cabinet visited");
+    seen.admit(&[exploration_harness::Percept { fact: exploration_harness::Fact::new("visited", &[cabinets[0].as_str()], true), step: 2 }]);
+    assert!(exploration_harness::alfworld::ready(&goal, &seen, &ontology));
+}

@@ -185,6 +185,21 @@ fn phase_one_spending_the_budget_is_an_exploration_failure() {
     assert!(!called && !episode.success);
     assert_eq!(episode.failure.as_deref(), Some("step budget spent before Phase II"));
     assert_eq!(episode.attribution, Some(Attribution::Representation));
+    // One step left, fewer than the optimal plan of ŝ0 needs: Phase II finds no plan, and A*
+    // proves that none fits, so exploration spent the steps.
+    let mut env = VirtualhomeEnv::new(VirtualhomeTask::load(path).unwrap(), "virtualhome-rearrange");
+    let goal = parse_goal(env.goal()).unwrap();
+    let mut adapter = VirtualhomeAdapter::new(ontology()).unwrap();
+    let optimal = std::cell::Cell::new(0);
+    let mut planner = |g: &Grounded| {
+        optimal.set(heuristics::search::optimal_plan_expanding(&g.model, EXPANSIONS).map_or(0, |p| p.len()));
+        Ok(PhaseTwo { no_plan: Some("Exhausted: no plan".into()), ..PhaseTwo::default() })
+    };
+    let episode =
+        run_episode(&mut env, &mut adapter, &mut Systematic, &goal, EpisodeConfig { budget: k + 1, closed_loop: false }, &mut planner);
+    assert!(optimal.get() > 1, "the optimal plan takes {} steps", optimal.get());
+    assert_eq!((episode.precision, episode.recall), (Some(1.0), Some(1.0)));
+    assert_eq!(episode.attribution, Some(Attribution::Representation), "{:?}", episode.failure);
 }
 
 /// A search that ends without a plan still counts: its model calls, tokens and detail are in

@@ -46,7 +46,11 @@
 //! at `max_actions`, and a *transposition* — a prefix whose state another prefix reached
 //! first with no more actions (`prune_transpositions`; with it off, `prune_cycles` closes
 //! only a prefix that returns to a state of its own path) — are leaves: closed, never
-//! selected again. Every continuation of a transposition is open to the prefix that got
+//! selected again. States are compared on the facts relevant to the goal
+//! ([`crate::value::Evaluator::project`]), so an action that changes only facts nothing reads
+//! (ALFWorld's `examine`, `look` and `inventory` set `checked`) closes at once: before, such
+//! lines kept the root's value and drew most of SmolLM2's visits on ALFWorld's heat-a-tomato
+//! task. Every continuation of a transposition is open to the prefix that got
 //! there first at no higher cost, so the tree holds each state once; on EAI 392_2 this took
 //! the search from no plan in 60 s (3.5 M simulations over 5.5 k states) to a plan in 5 s.
 //! A node whose children are all closed is closed; a closed root means the tree is
@@ -327,20 +331,24 @@ impl Arrivals<'_> {
             return Some(if self.config.stop_at_goal { Leaf::Goal } else { Leaf::Terminal(reward) });
         }
         if !ended {
+            // Transpositions and cycles are decided on the goal-relevant facts
+            // ([`Evaluator::project`]): an action that changes only facts nothing reads leads
+            // back to the state it left.
+            let key = evaluator.project(state);
             let repeated = match self.reached.as_mut() {
-                Some(reached) => match reached.get_mut(state) {
+                Some(reached) => match reached.get_mut(&key) {
                     Some(fewest) if *fewest as usize <= length => true,
                     Some(fewest) => {
                         *fewest = length as u32;
                         false
                     }
                     None => {
-                        reached.insert(state.clone(), length as u32);
+                        reached.insert(key, length as u32);
                         false
                     }
                 },
                 None if self.prune_cycles => {
-                    self.states.push(state);
+                    self.states.push(&key);
                     self.states.last_repeats()
                 }
                 None => false,
@@ -385,7 +393,8 @@ pub(crate) fn run(stepper: &mut Stepper<'_>, session: &mut Session<'_>, root: Cu
     // The path's states are kept only to close cycles without transposition pruning, which
     // closes them too.
     let path_cycles = mcts.prune_cycles && !mcts.prune_transpositions;
-    let reached = mcts.prune_transpositions.then(|| FxHashMap::from_iter([(start.clone(), 0)]));
+    let projected_start = stepper.evaluator.project(&start);
+    let reached = mcts.prune_transpositions.then(|| FxHashMap::from_iter([(projected_start.clone(), 0)]));
     let mut arrivals = Arrivals {
         config,
         states: PathStates { states: Vec::new(), depth: 0 },
@@ -409,7 +418,7 @@ pub(crate) fn run(stepper: &mut Stepper<'_>, session: &mut Session<'_>, root: Cu
         sequence.truncate(prompt.len());
         path.clear();
         path.push(0);
-        arrivals.states.reset(&start);
+        arrivals.states.reset(&projected_start);
 
         // Selection: replay the tree's tokens while the nodes were visited before; a node
         // reached for the first time is valued on arrival.
@@ -430,7 +439,7 @@ pub(crate) fn run(stepper: &mut Stepper<'_>, session: &mut Session<'_>, root: Cu
                 break;
             }
             if event == Event::Action && path_cycles {
-                arrivals.states.push(cursor.state());
+                arrivals.states.push(&stepper.evaluator.project(cursor.state()));
             }
         }
 

@@ -27,6 +27,7 @@
 //! picking up the knife needs; since the relaxation counts negative preconditions it does
 //! not, and the task is solved in 37 s (alone, two threads; 45–47 s beside another job).
 
+use heuristics::search::relevant_facts;
 use heuristics::{HFF, LmCut, RemainingPlanCost, WeightedMix};
 use rustc_hash::FxHashMap;
 use transition_model::{State, TransitionModel};
@@ -57,10 +58,18 @@ impl Default for ValueConfig {
 /// Evaluates states with the mix ([`WeightedMix`] of [`HFF`], [`LmCut`] and
 /// [`RemainingPlanCost`]), remembering each state's `h`: MCTS reaches the same state along
 /// many token paths, and a revisit costs a hash lookup.
+///
+/// States are remembered projected onto the facts relevant to the goal
+/// ([`relevant_facts`], as A*'s state registry stores them): a fact outside that set is read
+/// neither by the goal nor by any action that can change a relevant fact, so two states that
+/// differ only there have the same `h` and the same plans. ALFWorld's `look`, `inventory` and
+/// `examine` only set `checked`, which nothing reads: projected, they lead back to the state
+/// they start from ([`Evaluator::project`], which the search's transposition table uses too).
 pub struct Evaluator<'m> {
     model: &'m TransitionModel,
     config: ValueConfig,
     mix: WeightedMix<'m>,
+    relevant: Vec<u64>,
     cache: FxHashMap<State, Option<f64>>,
     evaluations: u64,
     lookups: u64,
@@ -84,7 +93,14 @@ impl<'m> Evaluator<'m> {
         if config.remaining > 0.0 {
             mix = mix.with(config.remaining, RemainingPlanCost::new(model, config.remaining_expansions));
         }
-        Evaluator { model, config, mix, cache: FxHashMap::default(), evaluations: 0, lookups: 0 }
+        let relevant = relevant_facts(model.task());
+        Evaluator { model, config, mix, relevant, cache: FxHashMap::default(), evaluations: 0, lookups: 0 }
+    }
+
+    /// `state` with every fact outside the goal's relevant facts cleared (type docs).
+    pub fn project(&self, state: &State) -> State {
+        let words: Vec<u64> = state.words().iter().zip(&self.relevant).map(|(w, m)| w & m).collect();
+        State::from_words(&words)
     }
 
     pub fn config(&self) -> &ValueConfig {
@@ -101,12 +117,13 @@ impl<'m> Evaluator<'m> {
         if self.model.is_goal(state) {
             return Some(0.0);
         }
-        if let Some(&h) = self.cache.get(state) {
+        let key = self.project(state);
+        if let Some(&h) = self.cache.get(&key) {
             return h;
         }
         self.evaluations += 1;
         let h = self.mix.evaluate(state);
-        self.cache.insert(state.clone(), h);
+        self.cache.insert(key, h);
         h
     }
 

@@ -133,6 +133,34 @@ fn an_exhausted_search_ranks_the_optimal_first_step_first_in_value() {
     assert!(!second.rows.is_empty());
 }
 
+/// The roads with a `look` that only marks where the agent looked: nothing reads `seen`.
+const LOOKING_DOMAIN: &str = "(define (domain roads) (:predicates (at ?x) (road ?x ?y) (seen ?x))
+  (:action go :parameters (?x ?y) :precondition (and (at ?x) (road ?x ?y)) :effect (and (at ?y) (not (at ?x))))
+  (:action look :parameters (?x) :precondition (at ?x) :effect (seen ?x)))";
+
+#[test]
+fn an_action_that_changes_only_facts_nothing_reads_is_a_transposition() {
+    // `(look a)` adds `(seen a)`, which neither the goal nor any action reads: on the facts
+    // relevant to the goal it returns to the root's state, so it is closed when first reached
+    // and never visited again (as ALFWorld's examine, look and inventory, which set `checked`).
+    let dir = TempDir::new("tree-irrelevant");
+    let mut lm = tiny_uniform(&dir);
+    let model = common::ground(LOOKING_DOMAIN, ROADS_PROBLEM);
+    let spelling = Spelling::pddl(model.task());
+    let task = Loaded { id: "looking".into(), model, spelling };
+    let mut config = DecodeConfig::new(mode("constrained-mcts"));
+    config.stop_at_goal = false;
+    config.budget.simulations = Some(200);
+    let outcome = decode(&mut lm, &task, &config);
+    let tree = check(&outcome);
+    let look = tree.first.rows.iter().find(|r| r.text == "(look a)").unwrap_or_else(|| panic!("(look a) was tried: {tree:?}"));
+    assert!(look.closed && look.visits == 1, "{look:?}");
+    let second = tree.second.as_ref().expect("the search went on past the first action");
+    let looks: Vec<_> = second.rows.iter().filter(|r| r.text.starts_with("(look")).collect();
+    assert!(!looks.is_empty() && looks.iter().all(|r| r.closed && r.visits == 1), "{second:?}");
+    assert_eq!(outcome.lines, ["(go a e)", "(go e d)"]);
+}
+
 #[test]
 fn the_summary_is_the_same_on_every_run() {
     let dir = TempDir::new("tree-determinism");
