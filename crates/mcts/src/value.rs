@@ -2,22 +2,22 @@
 //! goal, else `−h(s, G) − λ·|π|`, with `h` a fixed weighted mix of h_FF, LM-cut and the
 //! remaining plan cost (Appendix A.4), each in the task's action-cost units.
 //!
-//! **Default weights: h_FF 1, LM-cut 1, remaining plan cost 0.** The paper names the three
-//! components but not their weights. We measured the third (a lazy GBFS with h_FF and
-//! preferred operators, 200 expansions, h_FF when it finds nothing) with a uniform prior on
-//! the tasks the default search failed: on EAI 27_2, 417_2 and 487_1 (30 s each) the mix
-//! 1,1,0 solved 3/3 at 23,700 simulations/s, 1,1,0.5 solved 0/3 at 5,300/s; on ALFWorld
-//! valid_seen `Ladle-None-DiningTable-16` it costs 4.4 ms per state against 0.18 ms for
-//! h_FF and, alone, steers the search into a trap that h_FF and LM-cut avoid. A bounded
-//! search's plan cost is a noisy upper bound that jumps between neighbouring states;
-//! `--weights 1,1,1` restores it. With a language model the trade reverses: a model call
-//! costs ~40 ms, so 4 ms per state is cheap, and the plan cost sees past the delete
-//! relaxation's bump on ALFWorld's clean/heat/cool tasks whose object already lies on the
-//! target (taking it raises h_FF and LM-cut, which then prefer wandering). With SmolLM2,
-//! `--weights 1,1,1 --prior-mix 0.5` solves all of the ALFWorld-50 and EAI-50 subsets in 60 s
-//! (docs/ARCHITECTURE.md). With the uniform prior it solves every task too (it lost EAI 487_1
-//! and 650_2 before the relaxation counted negative preconditions), at 16,000 simulations/s
-//! on ALFWorld against 21,700 for the default: the default keeps the search fast.
+//! **Default weights: h_FF 1, LM-cut 1, remaining plan cost 1**, the paper's three components
+//! (it gives no weights). The third is a lazy GBFS with h_FF and preferred operators, 200
+//! expansions, h_FF when it finds nothing. It sees past the delete relaxation's bump on
+//! ALFWorld's clean/heat/cool tasks whose object already lies on the target: taking the object
+//! raises h_FF and LM-cut (it must come back), which then prefer wandering. It costs about
+//! 4.4 ms per state on ALFWorld against 0.18 ms for h_FF, cheap beside a model call (~35 ms
+//! with SmolLM2). Measured with SmolLM2 in both phases on the seven ALFWorld-50 games whose
+//! 60 s search found no plan at 5bb0492 (1240289, `--subset` of those seven, two lanes):
+//! with 1,1,0 `Tomato-None-CounterTop-12` (cool a tomato lying on the counter) still found
+//! none in 60 s (3,830 simulations); with 1,1,1 every game whose exploration left the steps
+//! for a plan was solved, the slowest in 23 s. `--prior-mix 0.5` on top solved the same games
+//! in fewer simulations (449 against 1,365 on that tomato); it changes the paper's prior, so
+//! it stays an option. History: with the uniform prior, before the relaxation counted negative
+//! preconditions, 1,1,0.5 solved 0 of EAI 27_2, 417_2 and 487_1 in 30 s (1,1,0: 3/3); since,
+//! 1,1,1 solves every task of ALFWorld valid_seen and EAI too, at 16,000 simulations/s on
+//! ALFWorld against 21,700 for 1,1,0 (`--weights 1,1,0` is the faster choice there).
 //!
 //! When the bounded search finds no plan, the component falls back to h_FF, which can rank a
 //! state whose search gave up above one whose plan it found: on ALFWorld
@@ -51,7 +51,7 @@ pub struct ValueConfig {
 
 impl Default for ValueConfig {
     fn default() -> Self {
-        ValueConfig { ff: 1.0, lmcut: 1.0, remaining: 0.0, remaining_expansions: 200, goal_reward: 1.0, length_penalty: 0.1 }
+        ValueConfig { ff: 1.0, lmcut: 1.0, remaining: 1.0, remaining_expansions: 200, goal_reward: 1.0, length_penalty: 0.1 }
     }
 }
 
