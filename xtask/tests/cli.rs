@@ -244,20 +244,20 @@ fn phase2_writes_records_resumes_and_plan_mcts_prints_json() {
     let greedy_args: Vec<&str> = args
         .iter()
         .copied()
-        .chain(["--mode", "constrained-greedy", "--end", "at-goal", "--prior-mix", "0.25", "--weights", "1,1,1"])
+        .chain(["--mode", "constrained-greedy", "--end", "at-goal", "--prior-mix", "0.25", "--weights", "1,1,0"])
         .collect();
     let greedy = xtask(&greedy_args);
     assert!(greedy.status.success(), "{}", String::from_utf8_lossy(&greedy.stderr));
     let summary: serde_json::Value = serde_json::from_str(stdout(&greedy).trim()).expect("one JSON object");
     assert_eq!((summary["end"].as_str(), summary["tasks"].as_u64()), (Some("at-goal"), Some(2)));
-    assert_eq!((summary["prior_mix"].as_f64(), &summary["weights"]), (Some(0.25), &serde_json::json!([1.0, 1.0, 1.0])));
+    assert_eq!((summary["prior_mix"].as_f64(), &summary["weights"]), (Some(0.25), &serde_json::json!([1.0, 1.0, 0.0])));
     let greedy_path = PathBuf::from(summary["records"].as_str().unwrap());
     assert!(
         greedy_path
             .file_name()
             .unwrap()
             .to_string_lossy()
-            .starts_with("virtualhome-eai-50-constrained-greedy-end-at-goal-mix-0.25-weights-1-1-1-uniform-"),
+            .starts_with("virtualhome-eai-50-constrained-greedy-end-at-goal-mix-0.25-weights-1-1-0-uniform-"),
         "{}",
         greedy_path.display()
     );
