@@ -99,8 +99,9 @@ impl<'m> Evaluator<'m> {
 
     /// `state` with every fact outside the goal's relevant facts cleared (type docs).
     pub fn project(&self, state: &State) -> State {
-        let words: Vec<u64> = state.words().iter().zip(&self.relevant).map(|(w, m)| w & m).collect();
-        State::from_words(&words)
+        let mut projected = state.clone();
+        projected.retain(&self.relevant);
+        projected
     }
 
     pub fn config(&self) -> &ValueConfig {

@@ -63,6 +63,13 @@ impl State {
         self.words.iter().all(|&w| w == 0)
     }
 
+    /// Keeps only the facts set in `mask` (a bit mask over fact ids, as [`State::words`]).
+    pub fn retain(&mut self, mask: &[u64]) {
+        for (w, m) in self.words.iter_mut().zip(mask) {
+            *w &= m;
+        }
+    }
+
     /// The raw words, for compact storage (state registries).
     pub fn words(&self) -> &[u64] {
         &self.words
