@@ -24,7 +24,7 @@ use lm::{LanguageModel, LocalChat, LocalModel};
 use mcts::prompt::planning_prompt;
 use mcts::{Decoder, StopReason};
 use serde_json::json;
-use vlm_client::{ChatClient, ChatModel, ClientConfig};
+use vlm_client::{CachedChat, ChatClient, ChatModel, ClientConfig};
 
 use crate::input::InputError;
 use crate::model_spec::ModelSpec;
@@ -77,14 +77,36 @@ pub struct EpisodeArgs {
     /// Beyond the paper: when a plan step is not executed, hand over again and replan.
     #[arg(long)]
     pub closed_loop: bool,
+    /// Keep Phase I's model replies in this file (JSON lines, keyed by the model file's digest
+    /// or the server and served model, and the whole request): a request asked again is
+    /// answered from it. Runs of Phase II conditions that share an explorer then plan from the
+    /// same Phase I without recomputing it (`phase1_usage.cached_calls` counts the replayed
+    /// replies; their tokens are the ones generated first). Not part of the run's configuration:
+    /// it changes the time a run takes, not what it finds.
+    #[arg(long, value_name = "FILE")]
+    pub chat_cache: Option<PathBuf>,
 }
 
-/// Phase I's policy, named as `--explorer` names it: `systematic` or a chat model.
-pub fn explorer(spec: &ModelSpec, served_model: &str) -> anyhow::Result<Box<dyn Policy>> {
+/// Phase I's policy, named as `--explorer` names it: `systematic` or a chat model, behind the
+/// reply file `cache` when one is given.
+pub fn explorer(spec: &ModelSpec, served_model: &str, cache: Option<&std::path::Path>) -> anyhow::Result<Box<dyn Policy>> {
     if *spec == ModelSpec::Systematic {
         return Ok(Box::new(Systematic));
     }
-    Ok(Box::new(ChatPolicy::new(chat_model(spec, served_model)?, &spec.to_string())))
+    let mut model = chat_model(spec, served_model)?;
+    if let Some(file) = cache {
+        // What names the model's answers: the file's digest for a local model, the server and
+        // the served model's name otherwise.
+        let identity = match spec.url() {
+            Some(url) => format!("{url} served-model:{served_model}"),
+            None => {
+                let path = crate::lm::resolve_spec(spec)?;
+                format!("{spec} sha256:{}", crate::pypi::sha256_of(&path)?)
+            }
+        };
+        model = Box::new(CachedChat::open(model, &identity, file).map_err(|e| InputError(e.to_string()))?);
+    }
+    Ok(Box::new(ChatPolicy::new(model, &spec.to_string())))
 }
 
 /// A chat model by name: `openai:URL` (a served model, `served_model` names it), `smollm2` (the
@@ -153,7 +175,7 @@ impl PhaseTwoRunner {
             config.time_limit = Some(Duration::from_secs_f64(self.time_limit));
             // Unit costs: a plan's cost is its length, and no longer plan can finish in the
             // steps the episode has left (as MCTS's action bound).
-            if model.task().actions.iter().all(|a| a.cost == 1) {
+            if model.task().has_unit_costs() {
                 config.max_cost = Some(grounded.steps_left as u64);
             }
             let actions = match heuristics::search::optimal_plan_with(model, &config) {
@@ -270,7 +292,7 @@ pub fn episode<E: Environment + Judge>(
 }
 
 pub fn run(args: AgentArgs) -> anyhow::Result<ExitCode> {
-    let mut policy = explorer(&args.episode.explorer, &args.episode.lm.served_model)?;
+    let mut policy = explorer(&args.episode.explorer, &args.episode.lm.served_model, args.episode.chat_cache.as_deref())?;
     let mut phase2 =
         PhaseTwoRunner::new(&args.planner, &args.episode.lm, &args.episode.decode, &args.episode.chat, args.episode.time_limit)?;
     let (ep, name) = if let Some(game) = &args.which.game {

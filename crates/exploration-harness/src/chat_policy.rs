@@ -111,6 +111,7 @@ impl Policy for ChatPolicy {
         self.usage.calls += 1;
         self.usage.prompt_tokens += reply.usage.prompt_tokens;
         self.usage.generated_tokens += reply.usage.completion_tokens;
+        self.usage.cached_calls += u64::from(reply.reply.cached);
         read_reply(&reply.value)
     }
 

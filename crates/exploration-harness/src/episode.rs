@@ -323,7 +323,7 @@ const FIT_EXPANSIONS: u64 = 200_000;
 /// Whether A* with LM-cut proves that ŝ0 has plans, but none of at most `steps` actions (unit
 /// costs only: otherwise a cost says nothing of a length). An exhausted budget proves nothing.
 fn no_plan_fits(model: &transition_model::TransitionModel, steps: usize) -> bool {
-    if !model.task().actions.iter().all(|a| a.cost == 1) {
+    if !model.task().has_unit_costs() {
         return false;
     }
     let mut config = heuristics::search::SearchConfig::new(heuristics::search::Algorithm::AStar);

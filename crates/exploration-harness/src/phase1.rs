@@ -157,6 +157,14 @@ pub struct PolicyUsage {
     /// Observations shown to the model, and of them those with a picture.
     pub observations: u64,
     pub images: u64,
+    /// Calls answered from a reply cache (`vlm_client::CachedChat`) instead of the model: the
+    /// tokens above count what the model generated when it first answered them.
+    #[serde(skip_serializing_if = "is_zero")]
+    pub cached_calls: u64,
+}
+
+fn is_zero(n: &u64) -> bool {
+    *n == 0
 }
 
 impl PolicyUsage {
@@ -168,6 +176,7 @@ impl PolicyUsage {
             generated_tokens: self.generated_tokens.saturating_sub(earlier.generated_tokens),
             observations: self.observations.saturating_sub(earlier.observations),
             images: self.images.saturating_sub(earlier.images),
+            cached_calls: self.cached_calls.saturating_sub(earlier.cached_calls),
         }
     }
 }

@@ -185,6 +185,12 @@ impl Task {
         (0..self.actions.len() as u32).map(ActionId)
     }
 
+    /// Whether every action costs 1, so that a plan's cost is its length (a bound on cost is
+    /// then a bound on the number of steps).
+    pub fn has_unit_costs(&self) -> bool {
+        self.actions.iter().all(|a| a.cost == 1)
+    }
+
     /// `(pred a b)`.
     pub fn atom_name(&self, atom: &Atom) -> String {
         let mut out = format!("({}", self.predicates[atom.predicate.index()].name);

@@ -258,6 +258,10 @@ fn household_grounds_to_the_expected_task() {
     );
     assert!(task.uses_costs);
     assert_eq!(task.actions.iter().map(|a| a.cost).sum::<u32>(), 1 + 1 + 1 + 2 + 2);
+    assert!(!task.has_unit_costs(), "walking costs 2");
+    let mut unit = task.clone();
+    unit.actions.retain(|a| a.cost == 1);
+    assert!(unit.has_unit_costs());
     let mut facts: Vec<String> = task.fact_ids().map(|f| task.fact_name(f)).collect();
     facts.sort();
     assert_eq!(

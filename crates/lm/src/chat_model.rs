@@ -32,6 +32,8 @@ pub struct LocalChat {
     factory: ParserFactory,
     name: String,
     usage: Usage,
+    /// Append a token the schema forces without running the model (see [`LocalChat::set_fast_forward`]).
+    fast_forward: bool,
 }
 
 impl std::fmt::Debug for LocalChat {
@@ -60,11 +62,20 @@ impl LocalChat {
         let environment: TokEnv = Arc::new(ApproximateTokEnv::new(trie));
         let mut factory = ParserFactory::new_simple(&environment).map_err(|e| LmError::Tokenizer(format!("llguidance: {e}")))?;
         factory.quiet();
-        Ok(LocalChat { model, factory, name: name.to_string(), usage: Usage::default() })
+        Ok(LocalChat { model, factory, name: name.to_string(), usage: Usage::default(), fast_forward: true })
     }
 
     pub fn model(&self) -> &LocalModel {
         &self.model
+    }
+
+    /// Whether a token the JSON schema forces (the mask allows that one token only) is appended
+    /// without a forward pass; the next step that has a choice prefills the forced tokens in one
+    /// batch, and a reply that ends in forced tokens never runs the model for them. The reply is
+    /// the same either way (a single allowed token is chosen whatever its logit, greedy or
+    /// sampled); only the time differs. On by default; off, every token runs the model.
+    pub fn set_fast_forward(&mut self, on: bool) {
+        self.fast_forward = on;
     }
 
     /// The prompt's token ids: the messages through the chat template, the assistant's turn open.
@@ -183,15 +194,26 @@ impl LocalChat {
                 break;
             }
             let mask = matcher.as_mut().map(Matcher::compute_mask).transpose().map_err(llg_error)?;
-            let logits = self.model.next_logits(&sequence).map_err(model_error)?;
-            let candidates: Vec<(TokenId, f32)> = logits[..vocabulary_size.min(logits.len())]
-                .iter()
-                .enumerate()
-                .map(|(id, &logit)| (id as TokenId, logit))
-                .filter(|&(id, _)| mask.as_ref().is_none_or(|m| m.is_allowed(id)))
-                .collect();
-            let next = choose(candidates, temperature, sampling.top_k, sampling.top_p, &mut random)
-                .ok_or_else(|| ChatErrorKind::Model("the JSON schema allows no token here".into()))?;
+            let forced = mask
+                .as_ref()
+                .filter(|m| self.fast_forward && m.num_set() == 1)
+                .and_then(|m| m.first_bit_set())
+                .and_then(|id| TokenId::try_from(id).ok())
+                .filter(|&id| (id as usize) < vocabulary_size);
+            let next = match forced {
+                Some(id) => id,
+                None => {
+                    let logits = self.model.next_logits(&sequence).map_err(model_error)?;
+                    let candidates: Vec<(TokenId, f32)> = logits[..vocabulary_size.min(logits.len())]
+                        .iter()
+                        .enumerate()
+                        .map(|(id, &logit)| (id as TokenId, logit))
+                        .filter(|&(id, _)| mask.as_ref().is_none_or(|m| m.is_allowed(id)))
+                        .collect();
+                    choose(candidates, temperature, sampling.top_k, sampling.top_p, &mut random)
+                        .ok_or_else(|| ChatErrorKind::Model("the JSON schema allows no token here".into()))?
+                }
+            };
             let vocabulary = self.model.vocabulary();
             if vocabulary.is_stop(next) || next == vocabulary.eos() {
                 finish = "stop";
@@ -220,6 +242,7 @@ impl LocalChat {
             json_mode: request.json_schema.as_ref().map(|_| JsonMode::Schema),
             attempts: 1,
             waited: std::time::Duration::ZERO,
+            cached: false,
         })
     }
 }

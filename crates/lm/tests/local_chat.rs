@@ -8,6 +8,7 @@
 mod common;
 
 use common::{TempDir, tiny_file};
+use lm::LanguageModel;
 use lm::LocalChat;
 use lm::LocalModel;
 use lm::tiny::TinySpec;
@@ -66,6 +67,37 @@ fn greedy_replies_repeat_and_seeds_steer_sampling() {
     assert_eq!(text(&mut chat, Sampling::greedy(40)), text(&mut chat, Sampling::greedy(40)));
     let seeded = |seed| Sampling { temperature: Some(1.0), seed: Some(seed), max_tokens: Some(40), ..Sampling::default() };
     assert_eq!(text(&mut chat, seeded(9)), text(&mut chat, seeded(9)));
+}
+
+#[test]
+fn tokens_the_schema_forces_skip_the_model_and_leave_the_reply_unchanged() {
+    let dir = TempDir::new("local-chat-forced");
+    let schema = json!({
+        "type": "object",
+        "properties": {
+            "skill": { "enum": ["Goto(fridge 1)", "Open(fridge 1)", "Goto(countertop 2)", "Done"] },
+            "facts": { "type": "array", "items": { "enum": ["(inreceptacle apple fridge)", "(opened fridge)"] }, "maxItems": 2 },
+            "done": { "type": "boolean" }
+        },
+        "required": ["facts", "skill", "done"],
+        "additionalProperties": false
+    });
+    let seeded = Sampling { temperature: Some(1.0), seed: Some(5), max_tokens: Some(96), ..Sampling::default() };
+    for sampling in [Sampling::greedy(96), seeded] {
+        let mut fast = tiny_chat(&dir);
+        let mut slow = tiny_chat(&dir);
+        slow.set_fast_forward(false);
+        let a = fast.chat(&request(schema.clone(), sampling.clone())).expect("reply");
+        let b = slow.chat(&request(schema.clone(), sampling.clone())).expect("reply");
+        assert_eq!(a.text, b.text, "{sampling:?}");
+        assert_eq!((a.usage.prompt_tokens, a.usage.completion_tokens), (b.usage.prompt_tokens, b.usage.completion_tokens));
+        assert_eq!(a.finish_reason, b.finish_reason);
+        let (fast_calls, slow_calls) = (fast.model().usage().forward_calls, slow.model().usage().forward_calls);
+        // Off, one forward pass a generated token (the first one prefills the prompt); on, the
+        // keys, quotes and the rest of each chosen option cost none.
+        assert!(slow_calls >= b.usage.completion_tokens, "{slow_calls} calls for {} tokens", b.usage.completion_tokens);
+        assert!(2 * fast_calls < slow_calls, "{fast_calls} calls with fast-forward, {slow_calls} without: {}", a.text);
+    }
 }
 
 #[test]

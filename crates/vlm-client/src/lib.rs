@@ -32,6 +32,7 @@
 //! # Ok::<(), vlm_client::ChatError>(())
 //! ```
 
+mod cache;
 mod client;
 mod error;
 mod json;
@@ -40,6 +41,7 @@ mod reply;
 mod request;
 pub mod transport;
 
+pub use cache::{CacheError, CachedChat};
 pub use client::{ChatClient, ChatModel, ClientConfig};
 pub use error::{ChatError, ChatErrorKind};
 pub use json::{JsonReply, chat_json, check_schema, first_object, read_json, validate};

@@ -48,6 +48,9 @@ pub struct ChatReply {
     pub attempts: u32,
     /// Time spent waiting between attempts (backoff or `Retry-After`).
     pub waited: Duration,
+    /// Answered from a reply file ([`crate::CachedChat`]) without running the model (then
+    /// `attempts` is 0 and `usage` is what the model spent when it first answered).
+    pub cached: bool,
 }
 
 impl ChatReply {
@@ -62,6 +65,7 @@ impl ChatReply {
             json_mode: None,
             attempts: 1,
             waited: Duration::ZERO,
+            cached: false,
         }
     }
 }
@@ -109,6 +113,7 @@ pub fn parse_reply(body: &[u8]) -> Result<ChatReply, ChatErrorKind> {
         json_mode: None,
         attempts: 0,
         waited: Duration::ZERO,
+        cached: false,
     })
 }
 
