@@ -82,7 +82,7 @@ pub struct EpisodeArgs {
     /// answered from it. Runs of Phase II conditions that share an explorer then plan from the
     /// same Phase I without recomputing it (`phase1_usage.cached_calls` counts the replayed
     /// replies; their tokens are the ones generated first). Not part of the run's configuration:
-    /// it changes the time a run takes, not what it finds.
+    /// it changes the time a run takes, not what it finds. Kept outside `eval`'s `--out` folder.
     #[arg(long, value_name = "FILE")]
     pub chat_cache: Option<PathBuf>,
 }

@@ -444,6 +444,19 @@ fn run_once(args: &EvalArgs) -> anyhow::Result<(serde_json::Map<String, Value>, 
     if args.agent == AgentName::Expert && suites.contains(&Suite::VirtualhomeRearrange) {
         return Err(InputError("--agent expert: the rearrangement set has no expert plans in the benchmark's own form".into()).into());
     }
+    if let Some(cache) = &args.episode.chat_cache {
+        // `report` reads every `*.jsonl` of a records folder as records.
+        let folder = |p: &Path| std::fs::canonicalize(p).unwrap_or_else(|_| p.to_path_buf());
+        let parent = cache.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new("."));
+        if folder(parent) == folder(&args.out) {
+            return Err(InputError(format!(
+                "--chat-cache {}: keep the reply file out of the records folder {} (`cargo xtask report` reads every .jsonl there as records)",
+                cache.display(),
+                args.out.display()
+            ))
+            .into());
+        }
+    }
     let mut runner = match args.agent {
         AgentName::Expert => Runner::Expert,
         AgentName::Direct => {

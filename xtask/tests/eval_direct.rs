@@ -1,5 +1,6 @@
 //! `cargo xtask eval --agent direct`: a model that is not there, or no chat model at all, is
-//! bad input (exit 2) before any record file is made. Needs no model file.
+//! bad input (exit 2) before any record file is made; so is a reply cache (`--chat-cache`)
+//! inside the records folder. Needs no model file.
 
 mod common;
 
@@ -45,4 +46,25 @@ fn the_direct_agent_needs_a_chat_model() {
     let output = xtask(&["eval", "--agent", "direct", "--explorer", "smollm2", "--failure-limit", "0", "--out", dir.to_str().unwrap()]);
     assert_eq!(output.status.code(), Some(2), "{}", String::from_utf8_lossy(&output.stderr));
     assert!(!dir.exists());
+}
+
+#[test]
+fn a_reply_cache_inside_the_records_folder_is_refused() {
+    let dir = out("cache");
+    let cache = dir.join("phase1-replies.jsonl");
+    let output = xtask(&[
+        "eval",
+        "--explorer",
+        "no-such-model.gguf",
+        "--chat-cache",
+        cache.to_str().unwrap(),
+        "--limit",
+        "1",
+        "--out",
+        dir.to_str().unwrap(),
+    ]);
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert_eq!(output.status.code(), Some(2), "{stderr}");
+    assert!(stderr.contains("keep the reply file out of the records folder"), "{stderr}");
+    assert!(!dir.exists(), "no records, no reply file");
 }

@@ -19,7 +19,7 @@
 //! killed process (the last one, without its newline) is dropped when the file is opened.
 //! Written by hand: a memo table over a JSON-lines file, which no crate offers in this shape.
 
-use std::collections::HashMap;
+use std::collections::BTreeMap;
 use std::fs::{File, OpenOptions};
 use std::io::{Read, Seek, SeekFrom, Write};
 use std::path::{Path, PathBuf};
@@ -49,7 +49,7 @@ pub struct CachedChat {
     identity: String,
     path: PathBuf,
     file: File,
-    replies: HashMap<String, Stored>,
+    replies: BTreeMap<String, Stored>,
     hits: u64,
     /// What the replies answered from the file cost the model when it first gave them.
     cached_usage: Usage,
@@ -154,7 +154,7 @@ impl CachedChat {
             file.set_len(whole as u64).map_err(io)?;
             file.seek(SeekFrom::End(0)).map_err(io)?;
         }
-        let mut replies = HashMap::new();
+        let mut replies = BTreeMap::new();
         for (i, line) in bytes[..whole].split(|&b| b == b'\n').enumerate() {
             if line.iter().all(u8::is_ascii_whitespace) {
                 continue;
