@@ -42,6 +42,10 @@ pub enum RecordError {
          use another --out folder, or delete the file to start over"
     )]
     ConfigMismatch { path: PathBuf, expected: String, found: String },
+    #[error(
+        "{path}: another run is writing these records now (one run of a configuration per folder at a time); wait for it, or use another --out folder"
+    )]
+    Busy { path: PathBuf },
     #[error("{0}")]
     Merge(String),
     #[error("a record must be a JSON object with a string `task`: {0}")]
@@ -162,10 +166,19 @@ impl RecordFile {
             Err(e) => return Err(io(&config_path)(e)),
         }
         let path = dir.join(format!("{name}{}.jsonl", shard.map(|s| s.suffix()).unwrap_or_default()));
-        if fresh && path.exists() {
-            std::fs::remove_file(&path).map_err(io(&path))?;
-        }
         let mut file = OpenOptions::new().create(true).read(true).append(true).open(&path).map_err(io(&path))?;
+        // One writer per record file: two runs of one configuration into one folder would each
+        // run the tasks the other has not finished yet and record them twice. The lock is the
+        // operating system's advisory file lock (`flock`), held while this value lives and
+        // released when the process ends, however it ends, so a killed run leaves none behind.
+        match file.try_lock() {
+            Ok(()) => {}
+            Err(std::fs::TryLockError::WouldBlock) => return Err(RecordError::Busy { path }),
+            Err(std::fs::TryLockError::Error(e)) => return Err(io(&path)(e)),
+        }
+        if fresh {
+            file.set_len(0).map_err(io(&path))?;
+        }
         let mut text = String::new();
         file.read_to_string(&mut text).map_err(io(&path))?;
         // A last line without its newline is a record cut short by a crash: cut it off.

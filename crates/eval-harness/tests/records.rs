@@ -37,8 +37,34 @@ fn records_resume_and_carry_their_configuration() {
     let other = json!({"agent": "expert", "benchmark": "alfworld-seen", "seed": 42});
     assert_ne!(config_hash(&other), config_hash(&config));
     assert!(RecordFile::open(&dir, "alfworld-seen-expert", &other, None, false).expect("opens").records().is_empty());
-    // --fresh starts this configuration over.
+    // --fresh starts this configuration over (once the run that has it open is done).
+    drop(reopened);
     assert!(RecordFile::open(&dir, "alfworld-seen-expert", &config, None, true).expect("opens").records().is_empty());
+}
+
+#[test]
+fn one_run_at_a_time_writes_a_record_file() {
+    let dir = scratch("busy");
+    let config = json!({"agent": "ours", "benchmark": "alfworld-seen"});
+    let mut first = RecordFile::open(&dir, "alfworld-seen-ours", &config, None, false).expect("opens");
+    first.append(0, &json!({"task": "a", "success": true})).expect("appends");
+    // A second run of the same configuration into the same folder is refused, --fresh or not,
+    // and leaves the first run's records alone.
+    for fresh in [false, true] {
+        let second = RecordFile::open(&dir, "alfworld-seen-ours", &config, None, fresh);
+        assert!(matches!(&second, Err(RecordError::Busy { .. })), "{second:?}");
+        let error = second.expect_err("busy").to_string();
+        assert!(error.contains("another run is writing these records"), "{error}");
+    }
+    // Another configuration, or another shard of this one, is another file and runs beside it.
+    let other = json!({"agent": "ours", "benchmark": "alfworld-seen", "seed": 42});
+    RecordFile::open(&dir, "alfworld-seen-ours", &other, None, false).expect("another configuration");
+    let shard: Shard = "1/2".parse().expect("shard");
+    RecordFile::open(&dir, "alfworld-seen-ours", &config, Some(shard), false).expect("a shard");
+    first.append(1, &json!({"task": "b", "success": false})).expect("appends");
+    drop(first);
+    // The lock ends with its run.
+    assert_eq!(tasks(&RecordFile::open(&dir, "alfworld-seen-ours", &config, None, false).expect("reopens")), ["a", "b"]);
 }
 
 #[test]
