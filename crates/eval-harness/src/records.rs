@@ -174,6 +174,8 @@ impl RecordFile {
         match file.try_lock() {
             Ok(()) => {}
             Err(std::fs::TryLockError::WouldBlock) => return Err(RecordError::Busy { path }),
+            // A file system without locks: run unguarded, as before locks were taken.
+            Err(std::fs::TryLockError::Error(e)) if e.kind() == std::io::ErrorKind::Unsupported => {}
             Err(std::fs::TryLockError::Error(e)) => return Err(io(&path)(e)),
         }
         if fresh {
