@@ -12,24 +12,21 @@ fn out(name: &str) -> std::path::PathBuf {
     dir
 }
 
+/// `cargo xtask eval ARGS --limit 1 --out DIR`, which must exit 2; its stderr.
+fn refused(args: &[&str], dir: &std::path::Path) -> String {
+    let mut all = vec!["eval"];
+    all.extend_from_slice(args);
+    all.extend(["--limit", "1", "--out", dir.to_str().unwrap()]);
+    let output = xtask(&all);
+    let stderr = String::from_utf8_lossy(&output.stderr).into_owned();
+    assert_eq!(output.status.code(), Some(2), "{stderr}");
+    stderr
+}
+
 #[test]
 fn an_unknown_model_is_bad_input() {
     let dir = out("unknown");
-    let output = xtask(&[
-        "eval",
-        "--agent",
-        "direct",
-        "--explorer",
-        "no-such-model.gguf",
-        "--benchmark",
-        "alfworld-seen",
-        "--limit",
-        "1",
-        "--out",
-        dir.to_str().unwrap(),
-    ]);
-    let stderr = String::from_utf8_lossy(&output.stderr);
-    assert_eq!(output.status.code(), Some(2), "{stderr}");
+    let stderr = refused(&["--agent", "direct", "--explorer", "no-such-model.gguf", "--benchmark", "alfworld-seen"], &dir);
     assert!(stderr.contains("no-such-model.gguf"), "{stderr}");
     assert!(!dir.exists(), "no records for a run that never started");
 }
@@ -52,19 +49,7 @@ fn the_direct_agent_needs_a_chat_model() {
 fn a_reply_cache_inside_the_records_folder_is_refused() {
     let dir = out("cache");
     let cache = dir.join("phase1-replies.jsonl");
-    let output = xtask(&[
-        "eval",
-        "--explorer",
-        "no-such-model.gguf",
-        "--chat-cache",
-        cache.to_str().unwrap(),
-        "--limit",
-        "1",
-        "--out",
-        dir.to_str().unwrap(),
-    ]);
-    let stderr = String::from_utf8_lossy(&output.stderr);
-    assert_eq!(output.status.code(), Some(2), "{stderr}");
+    let stderr = refused(&["--explorer", "no-such-model.gguf", "--chat-cache", cache.to_str().unwrap()], &dir);
     assert!(stderr.contains("keep the reply file out of the records folder"), "{stderr}");
     assert!(!dir.exists(), "no records, no reply file");
 }
