@@ -69,7 +69,7 @@ pub struct BenchLmArgs {
     #[arg(long)]
     no_reference: bool,
     /// llama.cpp's `llama-bench`, run on the same file in the same run (default:
-    /// `$NSEA_LLAMA_BENCH`, else the build of `../shared/anchors/build_llamacpp.sh` in
+    /// `$NSEA_LLAMA_BENCH`, else the build of `tools/build_llamacpp.sh` in
     /// `~/.cache/nsea-anchors/llama.cpp` when it is there).
     #[arg(long)]
     llama_bench: Option<PathBuf>,

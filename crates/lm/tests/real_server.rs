@@ -1,6 +1,6 @@
 //! The completions backend against a real llama.cpp `llama-server` serving the default model
 //! (SmolLM2-135M-Instruct Q4_1), behind the `real-server` feature. `.ci/run` builds the server
-//! (`../shared/anchors/build_llamacpp.sh`), starts it on loopback and passes its base URL in
+//! (`tools/build_llamacpp.sh`), starts it on loopback and passes its base URL in
 //! `NSEA_LLAMA_SERVER_URL` (e.g. `http://127.0.0.1:8088/v1`).
 //!
 //! llama-server answers `/v1/completions` logprobs in the chat-style layout
