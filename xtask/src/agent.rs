@@ -74,6 +74,11 @@ pub struct EpisodeArgs {
     /// Seconds of search for Phase II.
     #[arg(long, default_value = "60", value_parser = crate::input::positive_seconds)]
     pub time_limit: f64,
+    /// Phase I offers a model explorer at most this many `goto` skills at a time, the
+    /// controller's most promising first (the places it would sweep next); the others come back
+    /// as those are inspected. Without it, every unvisited place is offered.
+    #[arg(long, value_parser = crate::input::at_least_one)]
+    pub frontier: Option<usize>,
     /// Beyond the paper: when a plan step is not executed, hand over again and replan.
     #[arg(long)]
     pub closed_loop: bool,
@@ -297,12 +302,20 @@ pub fn run(args: AgentArgs) -> anyhow::Result<ExitCode> {
         PhaseTwoRunner::new(&args.planner, &args.episode.lm, &args.episode.decode, &args.episode.chat, args.episode.time_limit)?;
     let (ep, name) = if let Some(game) = &args.which.game {
         let (mut env, mut adapter, goal) = alfworld(game)?;
-        let config = EpisodeConfig { budget: args.episode.budget.unwrap_or(55), closed_loop: args.episode.closed_loop };
+        let config = EpisodeConfig {
+            budget: args.episode.budget.unwrap_or(55),
+            closed_loop: args.episode.closed_loop,
+            frontier: args.episode.frontier,
+        };
         (episode(&mut env, &mut adapter, policy.as_mut(), &goal, config, &mut phase2), game.display().to_string())
     } else {
         let (benchmark, task) = (args.which.benchmark.as_deref().unwrap_or_default(), args.which.task.as_deref().unwrap_or_default());
         let (mut env, mut adapter, goal) = virtualhome(benchmark, task, args.which.task_dir.as_deref())?;
-        let config = EpisodeConfig { budget: args.episode.budget.unwrap_or(20), closed_loop: args.episode.closed_loop };
+        let config = EpisodeConfig {
+            budget: args.episode.budget.unwrap_or(20),
+            closed_loop: args.episode.closed_loop,
+            frontier: args.episode.frontier,
+        };
         (episode(&mut env, &mut adapter, policy.as_mut(), &goal, config, &mut phase2), format!("{benchmark}/{task}"))
     };
     if let Some(path) = &args.commands_out {

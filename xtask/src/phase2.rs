@@ -91,6 +91,10 @@ pub struct DecodeArgs {
     /// `(1 − ε)·p + ε/k` (0: the model's prior alone, as the paper).
     #[arg(long, default_value_t = 0.0, value_parser = input::number_in(0.0, false, 1.0))]
     pub prior_mix: f64,
+    /// MCTS: renormalise each node's prior over its open children in PUCB (`true`), or keep
+    /// closed children's share of it as the paper's Eq. 7 is written (`false`).
+    #[arg(long, default_value_t = false, action = clap::ArgAction::Set)]
+    pub renormalize_prior: bool,
     /// Value: weights of h_FF, LM-cut and the remaining plan cost in h (paper Appendix A.4;
     /// `1,1,0` is faster with the uniform prior, see `mcts::value`).
     #[arg(long, default_value = "1,1,1", value_parser = parse_weights)]
@@ -142,6 +146,7 @@ impl DecodeArgs {
                     backup: self.backup,
                     normalization: self.normalization,
                     prior_mix: self.prior_mix,
+                    renormalize_prior: self.renormalize_prior,
                     ..MctsConfig::default()
                 };
             }
@@ -191,6 +196,9 @@ impl DecodeArgs {
         }
         if self.prior_mix != MctsConfig::default().prior_mix {
             parts.push(format!("mix-{}", self.prior_mix));
+        }
+        if self.renormalize_prior != MctsConfig::default().renormalize_prior {
+            parts.push(format!("renormalize-{}", self.renormalize_prior));
         }
         let value = ValueConfig::default();
         if self.weights != (value.ff, value.lmcut, value.remaining) {

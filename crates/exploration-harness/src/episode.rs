@@ -163,6 +163,9 @@ pub struct EpisodeConfig {
     /// Environment steps for the whole episode (ALFWorld 55, VirtualHome 20).
     pub budget: usize,
     pub closed_loop: bool,
+    /// `Goto` skills Phase I offers at a time, the controller's most promising first
+    /// ([`crate::phase1::Skills::frontier`]); `None`: every unvisited place.
+    pub frontier: Option<usize>,
 }
 
 /// Runs one episode (module documentation).
@@ -178,7 +181,7 @@ pub fn run_episode<E: Environment + Judge>(
     let first = env.reset();
     // A policy's usage is summed over its life; a harness reuses one policy across episodes.
     let usage_before = policy.usage();
-    let exploration = explore(env, adapter, policy, goal, &first, config.budget);
+    let exploration = explore(env, adapter, policy, goal, &first, config.budget, config.frontier);
     let phase1_ms = start.elapsed().as_secs_f64() * 1e3;
     let (precision, recall) = score(adapter, goal, &exploration, &env.hidden_atoms());
     let mut episode = Episode {

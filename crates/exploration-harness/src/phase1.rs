@@ -90,6 +90,26 @@ pub struct Skills {
     pub sweep: Option<usize>,
 }
 
+impl Skills {
+    /// Keeps the first `k` `Goto` skills of the controller's order (and the sweep's skill,
+    /// whatever it is), every other skill as it was. The paper's K_t omits targets already
+    /// inspected or not yet grounded; this also omits, for now, places the controller ranks
+    /// below its `k` most promising (they come back as those are inspected). A small model
+    /// given every unvisited place tends to follow the pattern of its own history (SmolLM2
+    /// opened 27 cabinets one after another where the object stood on the dining table)
+    /// rather than the controller's ranking.
+    pub fn frontier(&mut self, k: usize) {
+        let sweep = self.sweep.map(|i| self.list[i].clone());
+        let mut gotos = 0;
+        self.list.retain(|s| {
+            let goto = matches!(s, Skill::Goto(_));
+            gotos += usize::from(goto);
+            !goto || gotos <= k || sweep.as_ref() == Some(s)
+        });
+        self.sweep = sweep.and_then(|s| self.list.iter().position(|x| *x == s));
+    }
+}
+
 /// One environment step.
 #[derive(Debug, Clone, PartialEq, Eq, Serialize)]
 pub struct StepRecord {
@@ -262,7 +282,8 @@ pub struct Exploration {
     pub stop: String,
 }
 
-/// Phase I within `budget` environment steps. `first` is the reset's observation.
+/// Phase I within `budget` environment steps, offering at most `frontier` `Goto` skills at a
+/// time ([`Skills::frontier`]; `None`: all). `first` is the reset's observation.
 pub fn explore(
     env: &mut dyn Environment,
     adapter: &mut dyn Adapter,
@@ -270,6 +291,7 @@ pub fn explore(
     goal: &ClassGoal,
     first: &Observation,
     budget: usize,
+    frontier: Option<usize>,
 ) -> Exploration {
     let mut belief = Belief::default();
     adapter.observe(first, 0, &mut belief);
@@ -287,7 +309,10 @@ pub fn explore(
         if record.steps.len() >= budget {
             break "budget".to_string();
         }
-        let skills = adapter.skills(goal, &belief, &record, env);
+        let mut skills = adapter.skills(goal, &belief, &record, env);
+        if let Some(k) = frontier {
+            skills.frontier(k);
+        }
         let history = record
             .decisions
             .iter()
@@ -436,5 +461,24 @@ mod tests {
         }
         assert_eq!(Skill::parse("goto"), None);
         assert_eq!(Skill::parse("fly to the moon"), None);
+    }
+
+    #[test]
+    fn a_frontier_keeps_the_first_places_and_every_other_skill() {
+        let goto = |x: &str| Skill::Goto(x.into());
+        let all =
+            vec![Skill::Open("fridge 1".into()), goto("countertop 1"), goto("cabinet 1"), goto("cabinet 2"), Skill::Look, Skill::Done];
+        let mut skills = Skills { list: all.clone(), sweep: Some(1) };
+        skills.frontier(1);
+        assert_eq!(skills.list, [Skill::Open("fridge 1".into()), goto("countertop 1"), Skill::Look, Skill::Done]);
+        assert_eq!(skills.sweep, Some(1), "the sweep's skill, where it now stands");
+        // The sweep's place stays offered even past the frontier.
+        let mut skills = Skills { list: all.clone(), sweep: Some(3) };
+        skills.frontier(1);
+        assert_eq!(skills.list, [Skill::Open("fridge 1".into()), goto("countertop 1"), goto("cabinet 2"), Skill::Look, Skill::Done]);
+        assert_eq!(skills.sweep, Some(2));
+        let mut wide = Skills { list: all.clone(), sweep: None };
+        wide.frontier(5);
+        assert_eq!(wide.list, all, "a frontier wider than the places keeps them all");
     }
 }

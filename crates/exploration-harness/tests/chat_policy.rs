@@ -71,8 +71,14 @@ fn a_chat_policy_explores_and_its_proposals_stay_hypotheses() {
                 .map(|actions| PhaseTwo { actions, ..PhaseTwo::default() })
                 .map_err(|s| format!("{s:?}"))
         };
-        let episode =
-            run_episode(&mut env, &mut adapter, &mut policy, &goal, EpisodeConfig { budget: 55, closed_loop: false }, &mut planner);
+        let episode = run_episode(
+            &mut env,
+            &mut adapter,
+            &mut policy,
+            &goal,
+            EpisodeConfig { budget: 55, closed_loop: false, frontier: None },
+            &mut planner,
+        );
         won += usize::from(episode.success);
         let usage = episode.phase1_usage;
         assert_eq!(usage.calls as usize, episode.decisions.len() + usize::from(episode.phase1_stop == "done"), "{}", game.display());
@@ -108,7 +114,7 @@ fn the_phase_one_prompt_of_a_first_step() {
     let mut adapter = AlfworldAdapter::new(ontology, domain, grammar, env.goal());
     let mut policy = ChatPolicy::new(Box::new(Scripted { usage: Usage::default(), prompts: Vec::new() }), "scripted");
     let first = env.reset();
-    let exploration = explore(&mut env, &mut adapter, &mut policy, &goal, &first, 2);
+    let exploration = explore(&mut env, &mut adapter, &mut policy, &goal, &first, 2, None);
     assert!(!exploration.record.steps.is_empty());
     insta::assert_snapshot!(policy.last_prompt);
 }
@@ -176,7 +182,7 @@ proptest::proptest! {
         let mut adapter = AlfworldAdapter::new(ontology.clone(), domain.clone(), grammar.clone(), env.goal());
         let mut policy = ChatPolicy::new(Box::new(Random { rng: household_sim::PythonRandom::new(seed), usage: Usage::default() }), "random");
         let first = env.reset();
-        let exploration = explore(&mut env, &mut adapter, &mut policy, &goal, &first, 30);
+        let exploration = explore(&mut env, &mut adapter, &mut policy, &goal, &first, 30, None);
         let mut replay = exploration_harness::Belief::default();
         let mut fresh = AlfworldAdapter::new(ontology, domain, grammar, env.goal());
         fresh.observe(&first, 0, &mut replay);

@@ -355,6 +355,13 @@ pub struct MctsConfig {
     /// siblings; mixing in the uniform over the kept children bounds that wait, as AlphaZero's
     /// root noise does. The children kept (the `width` most likely) are the same either way.
     pub prior_mix: f64,
+    /// Divide each open child's prior by the total prior of the node's open children in
+    /// PUCB, so that `p(v | n)` is the model's belief in `v` given that `v` is still open.
+    /// Without it, a closed child keeps its share: once a token the model is sure of closes
+    /// (SmolLM2 gives ALFWorld plans' end token 0.95 at the root), its siblings share what is
+    /// left and PUCB hardly explores them. Not in the paper, whose Eq. 7 does not say what
+    /// happens to a closed child's prior.
+    pub renormalize_prior: bool,
 }
 
 /// The range `Q` is min-max normalised over, so that it and the prior term are on one scale.
@@ -415,6 +422,7 @@ impl Default for MctsConfig {
             backup: Backup::Max,
             normalization: Normalization::Siblings,
             prior_mix: 0.0,
+            renormalize_prior: false,
         }
     }
 }

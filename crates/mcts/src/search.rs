@@ -12,7 +12,8 @@
 //! (default 2.5) is the constant part of `c_N`, the base constant (default 10) sets how fast
 //! it grows with the parent's visits, as AlphaZero's `c_init` and `c_base`. `p` is the
 //! prior: the model's distribution renormalised over the tokens the mask allows (Eq. 6), or
-//! the full distribution in unconstrained mode. `Q` is the best value backed up through the
+//! the full distribution in unconstrained mode (with `renormalize_prior`, over the node's
+//! open children only: a closed child's share goes to its open siblings). `Q` is the best value backed up through the
 //! child (`Backup::Max`, a Bellman backup: the model is deterministic, so a prefix is worth
 //! its best continuation found so far; `Backup::Mean` is the Monte-Carlo mean). `Q̄` is `Q`
 //! min-max normalised over the node's visited open children (`Normalization::Siblings`: the
@@ -181,6 +182,18 @@ impl Tree {
             Normalization::Siblings => 0.5,
         };
         let first_play = if n.visits > 0 { norm(n) } else { 0.5 };
+        // With `renormalize_prior`, p(v | n) is conditioned on v being open: each open
+        // child's prior over the open children's total (uniform over them if that is 0).
+        let (prior_scale, uniform) = if config.renormalize_prior {
+            let (mass, open) = n
+                .children()
+                .map(|c| &self.nodes[c])
+                .filter(|c| !c.closed())
+                .fold((0.0f64, 0usize), |(m, k), c| (m + f64::from(c.prior), k + 1));
+            if mass > 0.0 { (1.0 / mass, 0.0) } else { (0.0, 1.0 / open.max(1) as f64) }
+        } else {
+            (1.0, 0.0)
+        };
         let mut best: Option<(usize, f64)> = None;
         for c in n.children() {
             let child = &self.nodes[c];
@@ -188,7 +201,8 @@ impl Tree {
                 continue;
             }
             let q = if child.visits > 0 { norm(child) } else { first_play };
-            let score = q + scale * f64::from(child.prior) / (1.0 + f64::from(child.visits));
+            let prior = f64::from(child.prior) * prior_scale + uniform;
+            let score = q + scale * prior / (1.0 + f64::from(child.visits));
             if best.is_none_or(|(_, b)| score > b) {
                 best = Some((c, score));
             }
@@ -624,6 +638,41 @@ mod tests {
         let mut unmixed = Tree::new(&config);
         unmixed.expand(0, &[(7, 0.75), (8, 0.25)], 0.0);
         assert_eq!(unmixed.nodes[2].prior, 0.25, "no mix keeps the model's prior");
+    }
+
+    /// Visits to the root before PUCB first selects the unlikely child, once the child the
+    /// model was sure of is closed.
+    fn visits_until_unlikely_child_beside_a_closed_one(renormalize_prior: bool) -> Option<u32> {
+        let config = MctsConfig { renormalize_prior, ..MctsConfig::default() };
+        let mut tree = Tree::new(&config);
+        tree.expand(0, &[(1, 0.95), (2, 0.0495), (3, 0.0005)], 0.0);
+        tree.backup(&[0, 1], -1.0);
+        tree.close(&[0, 1]);
+        for visit in 0..100_000 {
+            let child = tree.select(0, &config).expect("an open child");
+            assert_ne!(child, 1, "a closed child is never selected");
+            if tree.nodes[child].token == 3 {
+                return Some(visit);
+            }
+            tree.backup(&[0, child], -1.0);
+        }
+        None
+    }
+
+    #[test]
+    fn a_closed_childs_prior_goes_to_its_open_siblings_when_renormalised() {
+        let kept = visits_until_unlikely_child_beside_a_closed_one(false).expect("visited eventually");
+        let renormalised = visits_until_unlikely_child_beside_a_closed_one(true).expect("visited");
+        // The open children's priors are 0.99 and 0.01 of what is left: the wait is that of a
+        // 1% token, not of a 0.05% one.
+        assert!(kept > 20 * renormalised, "{kept} vs {renormalised}");
+        assert!(renormalised < 200, "{renormalised}");
+        // All priors zero: uniform over the open children.
+        let config = MctsConfig { renormalize_prior: true, ..MctsConfig::default() };
+        let mut tree = Tree::new(&config);
+        tree.expand(0, &[(1, 0.0), (2, 0.0)], 0.0);
+        tree.backup(&[0, 1], -1.0);
+        assert_eq!(tree.select(0, &config), Some(2), "the unvisited child, by its uniform prior");
     }
 
     #[test]
