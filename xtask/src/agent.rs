@@ -75,10 +75,11 @@ pub struct EpisodeArgs {
     #[arg(long, default_value = "60", value_parser = crate::input::positive_seconds)]
     pub time_limit: f64,
     /// Phase I offers a model explorer at most this many `goto` skills at a time, the
-    /// controller's most promising first (the places it would sweep next); the others come back
-    /// as those are inspected. Without it, every unvisited place is offered.
-    #[arg(long, value_parser = crate::input::at_least_one)]
-    pub frontier: Option<usize>,
+    /// controller's most promising places (those it would sweep next); the others come back as
+    /// those are inspected. 0 offers every unvisited place, as the paper's K_t (which omits only
+    /// places inspected or not yet grounded). The systematic explorer takes the first either way.
+    #[arg(long, default_value_t = 3)]
+    pub frontier: usize,
     /// Beyond the paper: when a plan step is not executed, hand over again and replan.
     #[arg(long)]
     pub closed_loop: bool,
@@ -90,6 +91,13 @@ pub struct EpisodeArgs {
     /// it changes the time a run takes, not what it finds. Kept outside `eval`'s `--out` folder.
     #[arg(long, value_name = "FILE")]
     pub chat_cache: Option<PathBuf>,
+}
+
+impl EpisodeArgs {
+    /// `--frontier` as [`EpisodeConfig::frontier`]: `None` for 0 (every place).
+    pub fn frontier(&self) -> Option<usize> {
+        (self.frontier > 0).then_some(self.frontier)
+    }
 }
 
 /// Phase I's policy, named as `--explorer` names it: `systematic` or a chat model, behind the
@@ -305,7 +313,7 @@ pub fn run(args: AgentArgs) -> anyhow::Result<ExitCode> {
         let config = EpisodeConfig {
             budget: args.episode.budget.unwrap_or(55),
             closed_loop: args.episode.closed_loop,
-            frontier: args.episode.frontier,
+            frontier: args.episode.frontier(),
         };
         (episode(&mut env, &mut adapter, policy.as_mut(), &goal, config, &mut phase2), game.display().to_string())
     } else {
@@ -314,7 +322,7 @@ pub fn run(args: AgentArgs) -> anyhow::Result<ExitCode> {
         let config = EpisodeConfig {
             budget: args.episode.budget.unwrap_or(20),
             closed_loop: args.episode.closed_loop,
-            frontier: args.episode.frontier,
+            frontier: args.episode.frontier(),
         };
         (episode(&mut env, &mut adapter, policy.as_mut(), &goal, config, &mut phase2), format!("{benchmark}/{task}"))
     };

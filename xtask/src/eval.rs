@@ -229,14 +229,14 @@ impl Embodied<'_> {
             EvalTask::Game { path, .. } => {
                 let (mut env, mut adapter, goal) = alfworld(path)?;
                 let budget = args.episode.budget.unwrap_or(55);
-                let config = EpisodeConfig { budget, closed_loop: args.episode.closed_loop, frontier: args.episode.frontier };
+                let config = EpisodeConfig { budget, closed_loop: args.episode.closed_loop, frontier: args.episode.frontier() };
                 (episode(&mut env, &mut adapter, self.policy.as_mut(), &goal, config, &mut self.phase2), budget)
             }
             EvalTask::Virtualhome { id } => {
                 let dir = if suite == Suite::VirtualhomeEai { args.task_dir.as_deref() } else { None };
                 let (mut env, mut adapter, goal) = virtualhome(suite.name(), id, dir)?;
                 let budget = args.episode.budget.unwrap_or(20);
-                let config = EpisodeConfig { budget, closed_loop: args.episode.closed_loop, frontier: args.episode.frontier };
+                let config = EpisodeConfig { budget, closed_loop: args.episode.closed_loop, frontier: args.episode.frontier() };
                 (episode(&mut env, &mut adapter, self.policy.as_mut(), &goal, config, &mut self.phase2), budget)
             }
             EvalTask::Files(files) => anyhow::bail!("{}: not an environment task", files.id),
@@ -357,10 +357,10 @@ fn config(args: &EvalArgs, suite: Suite) -> anyhow::Result<Value> {
             "task_dir": task_dir,
         });
         config.as_object_mut().expect("object").extend(more.as_object().expect("object").clone());
-        // Only where it is set and a model explores (the sweep takes the first place anyway):
-        // the hashes of other runs stay as they were.
-        if let Some(k) = args.episode.frontier.filter(|_| args.episode.explorer != crate::model_spec::ModelSpec::Systematic) {
-            config.as_object_mut().expect("object").insert("frontier".into(), json!(k));
+        // Only where a model explores (the sweep takes the controller's first place whatever
+        // the frontier): the hashes of systematic runs stay as they were.
+        if args.episode.explorer != crate::model_spec::ModelSpec::Systematic {
+            config.as_object_mut().expect("object").insert("frontier".into(), json!(args.episode.frontier));
         }
         // Only where the explorer is served: the hashes of other runs stay as they were.
         if let Some(served) = served_model(args) {

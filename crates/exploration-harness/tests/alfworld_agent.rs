@@ -196,7 +196,14 @@ fn closed_loop_replans_after_a_refused_step() {
                 .expect("a put action");
             Ok(PhaseTwo { actions: std::iter::once(put).chain(plan).collect(), ..PhaseTwo::default() })
         };
-        let episode = run_episode(&mut env, &mut adapter, &mut Systematic, &goal, EpisodeConfig { budget: 55, closed_loop }, &mut planner);
+        let episode = run_episode(
+            &mut env,
+            &mut adapter,
+            &mut Systematic,
+            &goal,
+            EpisodeConfig { budget: 55, closed_loop, frontier: None },
+            &mut planner,
+        );
         if closed_loop {
             assert!(episode.success, "{:?}", episode.failure);
             assert_eq!(episode.handovers, 2);

@@ -163,8 +163,13 @@ proptest::proptest! {
 
     /// Whatever a policy proposes, F_τ is exactly what U makes of the environment's observations
     /// alone: replaying the episode's observations into an empty belief gives the same facts.
+    /// With a frontier, no decision is offered more `goto` skills than it allows.
     #[test]
-    fn proposals_never_change_what_phase_one_establishes(seed in 0u64..10_000, game in 0usize..140) {
+    fn proposals_never_change_what_phase_one_establishes(
+        seed in 0u64..10_000,
+        game in 0usize..140,
+        frontier in proptest::option::of(1usize..4),
+    ) {
         use exploration_harness::phase1::{Adapter, explore};
         let ontology =
             Ontology::from_text(&std::fs::read_to_string(fixtures().join("ontology/alfworld.txt")).unwrap(), "alfworld.txt").unwrap();
@@ -182,7 +187,11 @@ proptest::proptest! {
         let mut adapter = AlfworldAdapter::new(ontology.clone(), domain.clone(), grammar.clone(), env.goal());
         let mut policy = ChatPolicy::new(Box::new(Random { rng: household_sim::PythonRandom::new(seed), usage: Usage::default() }), "random");
         let first = env.reset();
-        let exploration = explore(&mut env, &mut adapter, &mut policy, &goal, &first, 30, None);
+        let exploration = explore(&mut env, &mut adapter, &mut policy, &goal, &first, 30, frontier);
+        for decision in &exploration.record.decisions {
+            let gotos = decision.offered.iter().filter(|s| s.starts_with("goto ")).count();
+            proptest::prop_assert!(gotos <= frontier.unwrap_or(usize::MAX), "{:?} offered {gotos} places", frontier);
+        }
         let mut replay = exploration_harness::Belief::default();
         let mut fresh = AlfworldAdapter::new(ontology, domain, grammar, env.goal());
         fresh.observe(&first, 0, &mut replay);
