@@ -77,7 +77,8 @@ pub struct EpisodeArgs {
     /// Phase I offers a model explorer at most this many `goto` skills at a time, the
     /// controller's most promising places (those it would sweep next); the others come back as
     /// those are inspected. 0 offers every unvisited place, as the paper's K_t (which omits only
-    /// places inspected or not yet grounded). The systematic explorer takes the first either way.
+    /// places inspected or not yet grounded). Not for the systematic explorer, which takes the
+    /// first place either way.
     #[arg(long, default_value_t = 3)]
     pub frontier: usize,
     /// Beyond the paper: when a plan step is not executed, hand over again and replan.
@@ -94,9 +95,11 @@ pub struct EpisodeArgs {
 }
 
 impl EpisodeArgs {
-    /// `--frontier` as [`EpisodeConfig::frontier`]: `None` for 0 (every place).
+    /// `--frontier` as [`EpisodeConfig::frontier`]: `None` for 0 (every place), and for the
+    /// systematic explorer, which takes the controller's first place whatever it is offered
+    /// (its records, K_t included, stay as they were).
     pub fn frontier(&self) -> Option<usize> {
-        (self.frontier > 0).then_some(self.frontier)
+        (self.frontier > 0 && self.explorer != ModelSpec::Systematic).then_some(self.frontier)
     }
 }
 
