@@ -76,7 +76,8 @@ fn served_logprobs_are_close_to_the_local_ones() {
     assert!(top.len() >= 5, "{top:?}");
     // llama.cpp's kernels and ours round differently (it quantizes activations to Q8 before
     // the Q4_1 dot products, keeps keys and values in f16): close, not equal. Measured on this
-    // prompt: at most 0.244 nats (0.18 before attention was rewritten for speed, issue 23).
+    // prompt: at most 0.244 nats (0.18 before attention was rewritten for speed, issue 23);
+    // 0.319 against a llama.cpp built on 2026-12-02.
     let mut worst = 0.0f32;
     for &(id, logprob) in &top {
         let mine = local_logprobs.get(id).expect("in range");
@@ -84,7 +85,14 @@ fn served_logprobs_are_close_to_the_local_ones() {
         assert!((mine - logprob).abs() < 0.4, "token {id}: local {mine}, served {logprob}");
     }
     eprintln!("largest |local - served| over the served top {}: {worst:.3} nats", top.len());
+    // The most likely token is the same, up to a near tie: where the served best is another
+    // token, the local model puts it within the same tolerance of its own best. (A llama.cpp
+    // built on another CPU rounds differently again: built here on 2026-12-02, its best token
+    // on this prompt is one the local model puts 0.339 nats below its own best.)
     let lm::Logprobs::Dense(values) = &local_logprobs else { panic!("a local model is dense") };
-    let best_local = (0..values.len()).max_by(|&a, &b| values[a].total_cmp(&values[b])).map(|i| i as u32);
-    assert_eq!(Some(top[0].0), best_local, "the most likely token is the same");
+    let best_local = (0..values.len()).max_by(|&a, &b| values[a].total_cmp(&values[b])).expect("a vocabulary");
+    let served_best = top[0].0 as usize;
+    let gap = values[best_local] - values[served_best];
+    eprintln!("served best {served_best}, local best {best_local}: {gap:.3} nats apart in the local model");
+    assert!(served_best == best_local || gap < 0.4, "served best {served_best} is {gap} nats below the local best {best_local}");
 }
