@@ -168,6 +168,13 @@ pub struct EpisodeConfig {
     pub frontier: Option<usize>,
 }
 
+impl EpisodeConfig {
+    /// The paper's episode: `budget` steps, open loop, every unvisited place offered.
+    pub fn open_loop(budget: usize) -> EpisodeConfig {
+        EpisodeConfig { budget, closed_loop: false, frontier: None }
+    }
+}
+
 /// Runs one episode (module documentation).
 pub fn run_episode<E: Environment + Judge>(
     env: &mut E,

@@ -54,14 +54,7 @@ fn play(path: &Path, ontology: &Ontology, domain: &pddl_syntax::Domain, grammar:
     let goal = parse_goal(env.goal()).unwrap();
     let mut adapter = AlfworldAdapter::new(ontology.clone(), domain.clone(), grammar.to_string(), env.goal());
     let mut planner = |g: &Grounded| a_star(&g.model).map(|actions| PhaseTwo { actions, ..PhaseTwo::default() });
-    run_episode(
-        &mut env,
-        &mut adapter,
-        &mut Systematic,
-        &goal,
-        EpisodeConfig { budget: 55, closed_loop: false, frontier: None },
-        &mut planner,
-    )
+    run_episode(&mut env, &mut adapter, &mut Systematic, &goal, EpisodeConfig::open_loop(55), &mut planner)
 }
 
 /// The grounded problem checks against ALFWorld's domain.
@@ -153,14 +146,7 @@ fn no_phase_one_skill_of_the_controller_repeats_a_target() {
         let mut adapter = AlfworldAdapter::new(ontology.clone(), domain.clone(), grammar.clone(), env.goal());
         let mut policy = Restless::new(1 + i % 3, i % 2 == 1);
         let mut planner = |_: &Grounded| Err::<PhaseTwo, String>("no Phase II here".into());
-        let episode = run_episode(
-            &mut env,
-            &mut adapter,
-            &mut policy,
-            &goal,
-            EpisodeConfig { budget: 55, closed_loop: false, frontier: None },
-            &mut planner,
-        );
+        let episode = run_episode(&mut env, &mut adapter, &mut policy, &goal, EpisodeConfig::open_loop(55), &mut planner);
         assert_no_target_repeats(&episode, &trial.display().to_string());
         let looks: Vec<&str> = episode.steps.iter().filter(|s| s.phase == "explore").map(|s| s.command.as_str()).collect();
         let examined: Vec<&&str> = looks.iter().filter(|c| c.starts_with("examine ")).collect();

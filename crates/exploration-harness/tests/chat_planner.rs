@@ -57,14 +57,7 @@ fn episode(answer: &dyn Fn(&[String]) -> String, config: &ChatPlannerConfig) -> 
         requests = chat.requests;
         result
     };
-    let ep = run_episode(
-        &mut env,
-        &mut adapter,
-        &mut Systematic,
-        &goal,
-        EpisodeConfig { budget: 55, closed_loop: false, frontier: None },
-        &mut planner,
-    );
+    let ep = run_episode(&mut env, &mut adapter, &mut Systematic, &goal, EpisodeConfig::open_loop(55), &mut planner);
     (ep, requests)
 }
 

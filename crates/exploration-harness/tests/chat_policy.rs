@@ -71,14 +71,7 @@ fn a_chat_policy_explores_and_its_proposals_stay_hypotheses() {
                 .map(|actions| PhaseTwo { actions, ..PhaseTwo::default() })
                 .map_err(|s| format!("{s:?}"))
         };
-        let episode = run_episode(
-            &mut env,
-            &mut adapter,
-            &mut policy,
-            &goal,
-            EpisodeConfig { budget: 55, closed_loop: false, frontier: None },
-            &mut planner,
-        );
+        let episode = run_episode(&mut env, &mut adapter, &mut policy, &goal, EpisodeConfig::open_loop(55), &mut planner);
         won += usize::from(episode.success);
         let usage = episode.phase1_usage;
         assert_eq!(usage.calls as usize, episode.decisions.len() + usize::from(episode.phase1_stop == "done"), "{}", game.display());

@@ -50,14 +50,7 @@ fn play_task(task: VirtualhomeTask, path: &Path, benchmark: &str, ontology: &Ont
         assert!(g.model.validate(&plan).is_ok(), "{}: plan invalid for its grounded problem", path.display());
         Ok(PhaseTwo { actions: plan, ..PhaseTwo::default() })
     };
-    run_episode(
-        &mut env,
-        &mut adapter,
-        &mut Systematic,
-        &goal,
-        EpisodeConfig { budget: 20, closed_loop: false, frontier: None },
-        &mut planner,
-    )
+    run_episode(&mut env, &mut adapter, &mut Systematic, &goal, EpisodeConfig::open_loop(20), &mut planner)
 }
 
 fn tasks(dir: &Path) -> Vec<PathBuf> {
@@ -157,14 +150,7 @@ fn no_phase_one_skill_of_the_controller_repeats_a_target() {
         let mut adapter = VirtualhomeAdapter::new(ontology.clone()).unwrap();
         let mut policy = Restless::new(1 + i % 3, i % 2 == 1);
         let mut planner = |_: &Grounded| Err::<PhaseTwo, String>("no Phase II here".into());
-        let episode = run_episode(
-            &mut env,
-            &mut adapter,
-            &mut policy,
-            &goal,
-            EpisodeConfig { budget: 60, closed_loop: false, frontier: None },
-            &mut planner,
-        );
+        let episode = run_episode(&mut env, &mut adapter, &mut policy, &goal, EpisodeConfig::open_loop(60), &mut planner);
         assert_no_target_repeats(&episode, &path.display().to_string());
     }
 }
@@ -184,14 +170,7 @@ fn phase_one_spending_the_budget_is_an_exploration_failure() {
             called.set(true);
             Err::<PhaseTwo, String>("no plan here".into())
         };
-        let episode = run_episode(
-            &mut env,
-            &mut adapter,
-            &mut Systematic,
-            &goal,
-            EpisodeConfig { budget, closed_loop: false, frontier: None },
-            &mut planner,
-        );
+        let episode = run_episode(&mut env, &mut adapter, &mut Systematic, &goal, EpisodeConfig::open_loop(budget), &mut planner);
         (episode, called.get())
     };
     let (first, _) = run(20);
@@ -214,14 +193,7 @@ fn phase_one_spending_the_budget_is_an_exploration_failure() {
         optimal.set(heuristics::search::optimal_plan_expanding(&g.model, EXPANSIONS).map_or(0, |p| p.len()));
         Ok(PhaseTwo { no_plan: Some("Exhausted: no plan".into()), ..PhaseTwo::default() })
     };
-    let episode = run_episode(
-        &mut env,
-        &mut adapter,
-        &mut Systematic,
-        &goal,
-        EpisodeConfig { budget: k + 1, closed_loop: false, frontier: None },
-        &mut planner,
-    );
+    let episode = run_episode(&mut env, &mut adapter, &mut Systematic, &goal, EpisodeConfig::open_loop(k + 1), &mut planner);
     assert!(optimal.get() > 1, "the optimal plan takes {} steps", optimal.get());
     assert_eq!((episode.precision, episode.recall), (Some(1.0), Some(1.0)));
     assert_eq!(episode.attribution, Some(Attribution::Representation), "{:?}", episode.failure);
@@ -247,14 +219,7 @@ fn a_phase_two_without_a_plan_keeps_its_usage_and_was_told_the_steps_left() {
             ..PhaseTwo::default()
         })
     };
-    let episode = run_episode(
-        &mut env,
-        &mut adapter,
-        &mut Systematic,
-        &goal,
-        EpisodeConfig { budget: 20, closed_loop: false, frontier: None },
-        &mut planner,
-    );
+    let episode = run_episode(&mut env, &mut adapter, &mut Systematic, &goal, EpisodeConfig::open_loop(20), &mut planner);
     assert!(!episode.success);
     assert_eq!((episode.phase2_calls, episode.phase2_tokens), (7, 5));
     assert_eq!(episode.phase2_detail["stop"], "WallClock");
@@ -280,14 +245,7 @@ fn a_plan_step_that_cannot_be_grounded_ends_the_episode_at_grounding() {
         };
         Ok(PhaseTwo { actions: plan[..1].to_vec(), invalid_step: Some("walk to the moon".into()), ..PhaseTwo::default() })
     };
-    let episode = run_episode(
-        &mut env,
-        &mut adapter,
-        &mut Systematic,
-        &goal,
-        EpisodeConfig { budget: 20, closed_loop: false, frontier: None },
-        &mut planner,
-    );
+    let episode = run_episode(&mut env, &mut adapter, &mut Systematic, &goal, EpisodeConfig::open_loop(20), &mut planner);
     assert!(!episode.success && episode.plan_invalid && !episode.no_plan);
     assert_eq!(episode.plan.len(), 1);
     assert_eq!(episode.failure.as_deref(), Some("plan step 2 cannot be grounded: walk to the moon"));

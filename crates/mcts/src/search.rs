@@ -613,19 +613,26 @@ fn spell(stepper: &Stepper<'_>, action: ActionId) -> String {
 mod tests {
     use super::*;
 
-    /// Visits to the root, all valued alike, before PUCB first selects the unlikely child.
-    fn visits_until_unlikely_child(prior_mix: f32) -> Option<u32> {
-        let config = MctsConfig::default();
-        let mut tree = Tree::new(&config);
-        tree.expand(0, &[(1, 0.999), (2, 0.001)], prior_mix);
-        for visit in 0..100_000 {
-            let child = tree.select(0, &config).expect("an open child");
-            if tree.nodes[child].token == 2 {
+    /// Selections at the root (each backed up with -1) before PUCB selects `token`'s child,
+    /// at most `limit`; a closed child is never selected.
+    fn selections_until(tree: &mut Tree, config: &MctsConfig, token: TokenId, limit: u32) -> Option<u32> {
+        for visit in 0..limit {
+            let child = tree.select(0, config).expect("an open child");
+            assert!(!tree.nodes[child].closed(), "a closed child is never selected");
+            if tree.nodes[child].token == token {
                 return Some(visit);
             }
             tree.backup(&[0, child], -1.0);
         }
         None
+    }
+
+    /// Visits to the root, all valued alike, before PUCB first selects the unlikely child.
+    fn visits_until_unlikely_child(prior_mix: f32) -> Option<u32> {
+        let config = MctsConfig::default();
+        let mut tree = Tree::new(&config);
+        tree.expand(0, &[(1, 0.999), (2, 0.001)], prior_mix);
+        selections_until(&mut tree, &config, 2, 100_000)
     }
 
     #[test]
@@ -651,15 +658,7 @@ mod tests {
         tree.close(&[0, 1]);
         tree.backup(&[0, 2], -1.0);
         tree.backup(&[0, 3], -2.0);
-        for visit in 0..1_000_000 {
-            let child = tree.select(0, &config).expect("an open child");
-            assert_ne!(child, 1, "a closed child is never selected");
-            if tree.nodes[child].token == 3 {
-                return Some(visit);
-            }
-            tree.backup(&[0, child], -1.0);
-        }
-        None
+        selections_until(&mut tree, &config, 3, 1_000_000)
     }
 
     #[test]
