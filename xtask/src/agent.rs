@@ -84,6 +84,12 @@ pub struct EpisodeArgs {
     /// Beyond the paper: when a plan step is not executed, hand over again and replan.
     #[arg(long)]
     pub closed_loop: bool,
+    /// Beyond the paper: when a goal fact about an instance the hand-over bound can never hold
+    /// (an unplugged computer without a plug, to be turned on), set that instance aside and
+    /// resume Phase I with the steps left (`true`), or stop at the first Ready as the paper does
+    /// (`false`).
+    #[arg(long, default_value_t = true, action = clap::ArgAction::Set)]
+    pub reexplore: bool,
     /// Keep Phase I's model replies in this file (JSON lines, keyed by the model file's digest
     /// or the server and served model, and the whole request): a request asked again is
     /// answered from it. Runs of Phase II conditions that share an explorer then plan from the
@@ -317,6 +323,7 @@ pub fn run(args: AgentArgs) -> anyhow::Result<ExitCode> {
             budget: args.episode.budget.unwrap_or(55),
             closed_loop: args.episode.closed_loop,
             frontier: args.episode.frontier(),
+            reexplore: args.episode.reexplore,
         };
         (episode(&mut env, &mut adapter, policy.as_mut(), &goal, config, &mut phase2), game.display().to_string())
     } else {
@@ -326,6 +333,7 @@ pub fn run(args: AgentArgs) -> anyhow::Result<ExitCode> {
             budget: args.episode.budget.unwrap_or(20),
             closed_loop: args.episode.closed_loop,
             frontier: args.episode.frontier(),
+            reexplore: args.episode.reexplore,
         };
         (episode(&mut env, &mut adapter, policy.as_mut(), &goal, config, &mut phase2), format!("{benchmark}/{task}"))
     };
@@ -359,6 +367,9 @@ fn print_episode(ep: &Episode) {
         for f in &d.refused {
             println!("    - {f} (proposed, no evidence)");
         }
+    }
+    for x in &ep.set_aside {
+        println!("  set aside: {x} (a goal fact about it can never hold in the hand-over; Phase I went on)");
     }
     if let Some(h) = &ep.handover {
         println!("Grounded problem:\n{}", h.problem);

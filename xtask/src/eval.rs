@@ -229,14 +229,24 @@ impl Embodied<'_> {
             EvalTask::Game { path, .. } => {
                 let (mut env, mut adapter, goal) = alfworld(path)?;
                 let budget = args.episode.budget.unwrap_or(55);
-                let config = EpisodeConfig { budget, closed_loop: args.episode.closed_loop, frontier: args.episode.frontier() };
+                let config = EpisodeConfig {
+                    budget,
+                    closed_loop: args.episode.closed_loop,
+                    frontier: args.episode.frontier(),
+                    reexplore: args.episode.reexplore,
+                };
                 (episode(&mut env, &mut adapter, self.policy.as_mut(), &goal, config, &mut self.phase2), budget)
             }
             EvalTask::Virtualhome { id } => {
                 let dir = if suite == Suite::VirtualhomeEai { args.task_dir.as_deref() } else { None };
                 let (mut env, mut adapter, goal) = virtualhome(suite.name(), id, dir)?;
                 let budget = args.episode.budget.unwrap_or(20);
-                let config = EpisodeConfig { budget, closed_loop: args.episode.closed_loop, frontier: args.episode.frontier() };
+                let config = EpisodeConfig {
+                    budget,
+                    closed_loop: args.episode.closed_loop,
+                    frontier: args.episode.frontier(),
+                    reexplore: args.episode.reexplore,
+                };
                 (episode(&mut env, &mut adapter, self.policy.as_mut(), &goal, config, &mut self.phase2), budget)
             }
             EvalTask::Files(files) => anyhow::bail!("{}: not an environment task", files.id),
@@ -354,6 +364,7 @@ fn config(args: &EvalArgs, suite: Suite) -> anyhow::Result<Value> {
         let more = json!({
             "explorer": args.episode.explorer, "planner": if args.agent == AgentName::Ours { "mcts" } else { "astar" },
             "budget": args.episode.budget, "time_limit": args.episode.time_limit, "closed_loop": args.episode.closed_loop,
+            "reexplore": args.episode.reexplore,
             "task_dir": task_dir,
         });
         config.as_object_mut().expect("object").extend(more.as_object().expect("object").clone());

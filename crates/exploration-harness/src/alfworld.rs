@@ -342,7 +342,9 @@ impl Adapter for AlfworldAdapter {
             .then_some(open)
     }
 
-    fn ready(&self, goal: &ClassGoal, belief: &Belief) -> bool {
+    /// ŝ0 states ALFWorld's goal over classes (`exists`), so no hand-over binds a goal symbol
+    /// to one instance and none is ever set aside: the record does not enter.
+    fn ready(&self, goal: &ClassGoal, belief: &Belief, _record: &Record) -> bool {
         ready(goal, belief, &self.ontology)
     }
 

@@ -25,6 +25,17 @@
 //! `closed_loop` (beyond the paper): when a plan step is not executed, the observations of
 //! the plan's steps have been read into F all along; the agent hands over again from there
 //! and replans, within the same step budget.
+//!
+//! `reexplore` (beyond the paper): a hand-over whose ŝ0 cannot reach the goal because a goal
+//! fact about a bound instance can never hold ([`unreachable_goal_instances`]: grounding keeps
+//! every fact some sequence of actions can make true, so a goal fact it does not know is
+//! false for ever) sets those instances aside ([`crate::phase1::Record::set_aside`]) and Phase
+//! I resumes with the steps left (only before any plan step), its feedback naming them, until
+//! Ready binds other instances.
+//! In VirtualHome, a class-level goal "turn on the computer" met first by a computer that is
+//! unplugged and has no plug (the scene's other computer is the one that can be turned on)
+//! otherwise ends in a dead end that no planner can leave. The judge is not consulted: ŝ0,
+//! F_str and the domain decide.
 
 use std::collections::{BTreeMap, BTreeSet};
 use std::time::Instant;
@@ -36,7 +47,7 @@ use transition_model::{Spelling, TransitionModel};
 
 use crate::evidence::Fact;
 use crate::goal::ClassGoal;
-use crate::phase1::{Adapter, Decision, Exploration, Policy, PolicyUsage, StepRecord, explore};
+use crate::phase1::{Adapter, Decision, Exploration, Policy, PolicyUsage, StepRecord, explore, resume};
 
 /// ŝ0 and β.
 #[derive(Debug, Clone, PartialEq, Eq, Serialize)]
@@ -133,8 +144,12 @@ pub struct Episode {
     pub handover: Option<Handover>,
     /// The plan as sent (perceived names), of the last hand-over.
     pub plan: Vec<String>,
-    /// Hand-overs made (1 open-loop; more when `closed_loop` replanned).
+    /// Hand-overs made (1 open-loop; more when `closed_loop` replanned or `reexplore` set
+    /// instances aside).
     pub handovers: usize,
+    /// The perceived instances hand-overs set aside (`reexplore`), in order.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub set_aside: Vec<String>,
     pub failure: Option<String>,
     /// Phase II's planner returned no plan (it ended without one, or could not run); not set
     /// when the hand-over itself failed.
@@ -166,12 +181,16 @@ pub struct EpisodeConfig {
     /// `Goto` skills Phase I offers at a time, the controller's most promising first
     /// ([`crate::phase1::Skills::frontier`]); `None`: every unvisited place.
     pub frontier: Option<usize>,
+    /// Set aside the instances that make ŝ0's goal unreachable and resume Phase I (module
+    /// documentation).
+    pub reexplore: bool,
 }
 
 impl EpisodeConfig {
-    /// The paper's episode: `budget` steps, open loop, every unvisited place offered.
+    /// The paper's episode: `budget` steps, open loop, every unvisited place offered, Phase I
+    /// once.
     pub fn open_loop(budget: usize) -> EpisodeConfig {
-        EpisodeConfig { budget, closed_loop: false, frontier: None }
+        EpisodeConfig { budget, closed_loop: false, frontier: None, reexplore: false }
     }
 }
 
@@ -200,6 +219,7 @@ pub fn run_episode<E: Environment + Judge>(
         handover: None,
         plan: Vec::new(),
         handovers: 0,
+        set_aside: Vec::new(),
         failure: None,
         no_plan: false,
         plan_invalid: false,
@@ -223,21 +243,52 @@ pub fn run_episode<E: Environment + Judge>(
     let mut not_executed = false;
     loop {
         episode.handovers += 1;
+        // No plan has taken a step yet: a plan that does not fit is exploration's doing.
+        let first_plan = episode.steps.len() == exploration.record.steps.len();
         let t = Instant::now();
         let grounded = match adapter.handover(goal, &exploration, &episode.steps) {
             Ok(g) => Grounded { steps_left: config.budget.saturating_sub(episode.steps.len()), ..g },
             Err(e) => {
                 episode.failure = Some(e);
                 no_handover = true;
+                // Phase I spent the budget without grounding the goal's objects.
+                explored_out = exploration.stop == "budget";
                 break;
             }
         };
         episode.handover = Some(grounded.handover.clone());
+        // Only before any plan step, so that Phase I's steps stay the episode's first ones
+        // (`Decision::steps` index both).
+        if config.reexplore && first_plan && grounded.steps_left > 0 {
+            let refuted: Vec<String> =
+                unreachable_goal_instances(&grounded).into_iter().filter(|x| !exploration.record.set_aside.contains(x)).collect();
+            if !refuted.is_empty() {
+                episode.phase2_ms += t.elapsed().as_secs_f64() * 1e3;
+                let t = Instant::now();
+                exploration.record.set_aside.extend(refuted.iter().cloned());
+                episode.set_aside.extend(refuted.iter().cloned());
+                let feedback = format!(
+                    "The goal cannot be reached with {}: the harness set {} aside; find another.",
+                    refuted.join(", "),
+                    if refuted.len() == 1 { "it" } else { "them" }
+                );
+                let before = exploration.record.steps.len();
+                exploration = resume(env, adapter, policy, goal, exploration, &feedback, config.budget, config.frontier);
+                episode.steps.extend(exploration.record.steps[before..].iter().cloned());
+                episode.phase1_steps = exploration.record.steps.len();
+                episode.phase1_stop = exploration.stop.clone();
+                episode.decisions = exploration.record.decisions.clone();
+                episode.phase1_usage = policy.usage().since(&usage_before);
+                (episode.precision, episode.recall) = score(adapter, goal, &exploration, &env.hidden_atoms());
+                episode.phase1_ms += t.elapsed().as_secs_f64() * 1e3;
+                continue;
+            }
+        }
         if grounded.steps_left == 0 {
             // Phase I spent the budget: no plan could take a step.
             episode.failure = Some("step budget spent before Phase II".into());
             // With closed-loop replanning, earlier plans spent steps too.
-            explored_out = episode.handovers == 1;
+            explored_out = first_plan;
             break;
         }
         let planned = plan(&grounded);
@@ -258,7 +309,7 @@ pub fn run_episode<E: Environment + Judge>(
             episode.failure = Some(format!("no plan: {why}"));
             episode.no_plan = true;
             // No plan of ŝ0 fits in the steps Phase I left: exploration spent them.
-            explored_out = episode.handovers == 1 && no_plan_fits(&grounded.model, grounded.steps_left);
+            explored_out = first_plan && no_plan_fits(&grounded.model, grounded.steps_left);
             break;
         }
         let t = Instant::now();
@@ -278,14 +329,20 @@ pub fn run_episode<E: Environment + Judge>(
             if episode.steps.len() >= config.budget {
                 // The plan needs more steps than exploration left (planners are told how many).
                 episode.failure = Some("step budget spent".into());
-                explored_out = episode.handovers == 1;
+                explored_out = first_plan;
                 break;
             }
             let result = env.step(&command);
             let step = episode.steps.len() + 1;
             adapter.observe(&result.observation, step, &mut exploration.belief);
             let executed = result.event.executed();
-            episode.steps.push(StepRecord { phase: "plan", command: command.clone(), executed, observation: result.observation.text });
+            episode.steps.push(StepRecord {
+                phase: "plan",
+                command: command.clone(),
+                executed,
+                observation: result.observation.text.clone(),
+            });
+            exploration.observation = result.observation;
             if !executed {
                 episode.failure = Some(format!("step {} not executed: {command}", episode.steps.len()));
                 not_executed = true;
@@ -312,7 +369,7 @@ pub fn run_episode<E: Environment + Judge>(
         if episode.failure.is_none() {
             episode.failure = Some("goal not reached".into());
         }
-        let accurate = precision.is_none_or(|p| p >= 1.0) && recall.is_none_or(|r| r >= 1.0);
+        let accurate = episode.precision.is_none_or(|p| p >= 1.0) && episode.recall.is_none_or(|r| r >= 1.0);
         episode.attribution = Some(if !accurate || explored_out {
             Attribution::Representation
         } else if episode.no_plan || no_handover {
@@ -324,6 +381,51 @@ pub fn run_episode<E: Environment + Judge>(
         });
     }
     episode
+}
+
+/// The perceived instances (through β) that a goal fact of ŝ0 names where that fact can never
+/// hold: a positive ground atom of the goal's top-level conjunction that is neither a fluent
+/// fact of the grounded task (grounding keeps only the facts some sequence of actions reaches)
+/// nor a static fact true from the start. The agent itself (VirtualHome's `character`) is never set aside. Goals
+/// stated over variables (ALFWorld's `exists`) name no instance and give none.
+pub fn unreachable_goal_instances(grounded: &Grounded) -> BTreeSet<String> {
+    let mut out = BTreeSet::new();
+    let Ok(problem) = pddl_syntax::parse_problem(&grounded.handover.problem) else { return out };
+    let task = grounded.model.task();
+    let mut atoms = Vec::new();
+    let mut stack: Vec<&pddl_syntax::Condition> = problem.goal.iter().collect();
+    while let Some(c) = stack.pop() {
+        match c {
+            pddl_syntax::Condition::And(parts, _) => stack.extend(parts),
+            pddl_syntax::Condition::Atom(atom) => atoms.push(atom),
+            _ => {}
+        }
+    }
+    for atom in atoms {
+        let constants: Option<Vec<&str>> = atom
+            .args
+            .iter()
+            .map(|t| match t {
+                pddl_syntax::Term::Constant(name) => Some(name.text.as_str()),
+                pddl_syntax::Term::Variable(_) => None,
+            })
+            .collect();
+        let Some(constants) = constants else { continue };
+        let predicate = atom.predicate.text.to_lowercase();
+        let Some(p) = task.predicates.iter().position(|q| q.name == predicate) else { continue };
+        let Some(args) = constants.iter().map(|n| task.object_by_name(n)).collect::<Option<_>>() else { continue };
+        let ground = grounding::Atom { predicate: grounding::PredicateId(p as u32), args };
+        if task.facts.contains(&ground) || task.static_facts.contains(&ground) {
+            continue;
+        }
+        for name in &constants {
+            let perceived = grounded.handover.binding.get(&name.to_lowercase()).cloned().unwrap_or_else(|| (*name).to_string());
+            if perceived != crate::virtualhome::ME {
+                out.insert(perceived);
+            }
+        }
+    }
+    out
 }
 
 /// A* expansions [`no_plan_fits`] may spend: ample for a household task's ŝ0 (A* with LM-cut

@@ -24,6 +24,7 @@
 //! - [`Systematic`] is the control: no model; it takes the sweep's skill (the controller's own
 //!   next inspection, [`Skills::sweep`]) and says Done when there is none.
 
+use std::collections::BTreeSet;
 use std::fmt;
 
 use household_sim::{Environment, Event, Observation};
@@ -235,6 +236,12 @@ impl Policy for Systematic {
 pub struct Record {
     pub decisions: Vec<Decision>,
     pub steps: Vec<StepRecord>,
+    /// Perceived instances a hand-over bound to a goal symbol where ŝ0 proved the goal
+    /// unreachable (a goal fact about them that no sequence of actions can make true, e.g. a
+    /// computer that is unplugged and has no plug to put in): Ready and β pass them over, so
+    /// Phase I goes on to find another instance of the class (`crate::episode`'s
+    /// re-exploration). Empty in the paper's episode, which stops at the first Ready.
+    pub set_aside: BTreeSet<String>,
 }
 
 impl Record {
@@ -261,8 +268,9 @@ pub trait Adapter {
     fn follow_up(&self, _skill: &Skill, _belief: &Belief, _record: &Record) -> Option<String> {
         None
     }
-    /// Ready(F, G).
-    fn ready(&self, goal: &ClassGoal, belief: &Belief) -> bool;
+    /// Ready(F, G): the goal's objects and relations are grounded, by instances not in
+    /// `record.set_aside`.
+    fn ready(&self, goal: &ClassGoal, belief: &Belief, record: &Record) -> bool;
     /// The goal's object classes, as the prompt lists them.
     fn objects_to_find(&self, goal: &ClassGoal) -> Vec<String>;
     /// F_t as the prompt's "Current belief" shows it, one fact a line (default: the facts that
@@ -280,6 +288,8 @@ pub struct Exploration {
     /// Why exploration stopped: `ready`, `done` (the policy), `budget`, `refusals`, or
     /// `policy error: ...`.
     pub stop: String,
+    /// The last observation (the policy's input if Phase I [`resume`]s).
+    pub observation: Observation,
 }
 
 /// Phase I within `budget` environment steps, offering at most `frontier` `Goto` skills at a
@@ -295,15 +305,33 @@ pub fn explore(
 ) -> Exploration {
     let mut belief = Belief::default();
     adapter.observe(first, 0, &mut belief);
-    let mut record = Record::default();
+    let start = Exploration { belief, record: Record::default(), stop: String::new(), observation: first.clone() };
+    resume(env, adapter, policy, goal, start, "This is the first step.", budget, frontier)
+}
+
+/// Phase I again from where `exploration` stopped (its F_t, R_t and last observation), with
+/// `feedback` as the policy's first feedback, until Ready, Done or `budget` steps in all
+/// (counting `exploration`'s own).
+#[allow(clippy::too_many_arguments)]
+pub fn resume(
+    env: &mut dyn Environment,
+    adapter: &mut dyn Adapter,
+    policy: &mut dyn Policy,
+    goal: &ClassGoal,
+    exploration: Exploration,
+    feedback: &str,
+    budget: usize,
+    frontier: Option<usize>,
+) -> Exploration {
+    let Exploration { mut belief, mut record, observation, .. } = exploration;
     let objects = adapter.objects_to_find(goal);
     let sentence = env.goal().sentence.clone();
     let benchmark = env.goal().benchmark.clone();
-    let mut observation = first.clone();
-    let mut feedback = String::from("This is the first step.");
+    let mut observation = observation;
+    let mut feedback = feedback.to_string();
     let mut refusals = 0;
     let stop = loop {
-        if adapter.ready(goal, &belief) {
+        if adapter.ready(goal, &belief, &record) {
             break "ready".to_string();
         }
         if record.steps.len() >= budget {
@@ -441,7 +469,7 @@ pub fn explore(
             feedback: feedback.clone(),
         });
     };
-    Exploration { belief, record, stop }
+    Exploration { belief, record, stop, observation }
 }
 
 #[cfg(test)]

@@ -299,12 +299,13 @@ impl VirtualhomeAdapter {
             && states.iter().all(|l| belief.holds(&l.predicate.to_ascii_uppercase(), &[x]) == Some(!l.negated))
     }
 
-    /// Symbol → the perceived instance β binds it to: a distinct instance of the symbol's class,
+    /// Symbol → the perceived instance β binds it to: a distinct instance of the symbol's class
+    /// and not in `set_aside` (a hand-over proved the goal unreachable with it: [`Record::set_aside`]),
     /// one G does not already describe ([`Self::already_done`]) first, then the lowest id; and
     /// whether every symbol found such an instance (Ready).
-    fn bind(goal: &ClassGoal, belief: &Belief) -> (BTreeMap<String, String>, bool) {
-        let mut instances: Vec<String> = Self::instances(belief).into_iter().collect();
-        instances.extend(belief.places.iter().cloned());
+    fn bind(goal: &ClassGoal, belief: &Belief, set_aside: &BTreeSet<String>) -> (BTreeMap<String, String>, bool) {
+        let mut instances: Vec<String> = Self::instances(belief).into_iter().filter(|x| !set_aside.contains(x)).collect();
+        instances.extend(belief.places.iter().filter(|x| !set_aside.contains(*x)).cloned());
         instances.sort_by_key(|x| split_name(x).map_or(u32::MAX, |(_, id)| id));
         let mut taken = BTreeSet::new();
         let mut out = BTreeMap::new();
@@ -413,8 +414,8 @@ impl Adapter for VirtualhomeAdapter {
             .then(|| format!("[OPEN] <{class}> ({id})"))
     }
 
-    fn ready(&self, goal: &ClassGoal, belief: &Belief) -> bool {
-        Self::bind(goal, belief).1
+    fn ready(&self, goal: &ClassGoal, belief: &Belief, record: &Record) -> bool {
+        Self::bind(goal, belief, &record.set_aside).1
     }
 
     /// The facts that hold about instances of the goal's classes, the containers' CLOSED and
@@ -451,7 +452,7 @@ impl Adapter for VirtualhomeAdapter {
 impl Handing for VirtualhomeAdapter {
     fn handover(&mut self, goal: &ClassGoal, exploration: &Exploration, _steps: &[StepRecord]) -> Result<Grounded, String> {
         let belief = &exploration.belief;
-        let (beta, _) = Self::bind(goal, belief);
+        let (beta, _) = Self::bind(goal, belief, &exploration.record.set_aside);
         let instances = Self::instances(belief);
         let mut names: BTreeSet<String> = instances.clone();
         names.extend(belief.places.iter().cloned());

@@ -187,7 +187,7 @@ fn closed_loop_replans_after_a_refused_step() {
             &mut adapter,
             &mut Systematic,
             &goal,
-            EpisodeConfig { budget: 55, closed_loop, frontier: None },
+            EpisodeConfig { closed_loop, ..EpisodeConfig::open_loop(55) },
             &mut planner,
         );
         if closed_loop {

@@ -264,6 +264,15 @@ fn decisions_html(episode: &Map<String, Value>) -> String {
         episode.get("phase1_stop").map_or_else(|| "—".into(), value_html),
         episode.get("phase1_steps").map_or_else(|| "—".into(), value_html)
     );
+    // `reexplore`: instances a hand-over proved unable to meet the goal, after which Phase I went on.
+    if let Some(aside) = episode.get("set_aside").and_then(Value::as_array).filter(|a| !a.is_empty()) {
+        let names: Vec<String> = aside.iter().map(|x| format!("<code>{}</code>", value_html(x))).collect();
+        let _ = writeln!(
+            out,
+            "<p class=\"meta\">Set aside (a goal fact about it can never hold in the hand-over; Phase I went on): {}.</p>",
+            names.join(", ")
+        );
+    }
     if decisions.is_empty() {
         out.push_str("<p class=\"empty\">No decisions.</p>\n");
         return out;
