@@ -182,7 +182,17 @@ impl LocalChat {
         let sampling = &request.sampling;
         let temperature = sampling.temperature.unwrap_or(0.0);
         let mut random = Random(sampling.seed.unwrap_or(0));
-        let max_tokens = sampling.max_tokens.unwrap_or(DEFAULT_MAX_TOKENS) as usize;
+        // No further than the model's context: the reply ends there, `length`, as a server's
+        // does (the thinking condition asks for 32,768 tokens; SmolLM2's context holds 8,192).
+        let context = self.model.weights().config().context_length;
+        if prompt.len() >= context {
+            return Err(ChatErrorKind::BadInput(format!(
+                "the prompt is {} tokens; {} holds {context}, with room for a reply",
+                prompt.len(),
+                self.endpoint()
+            )));
+        }
+        let max_tokens = (sampling.max_tokens.unwrap_or(DEFAULT_MAX_TOKENS) as usize).min(context.saturating_sub(prompt.len()));
         let vocabulary_size = self.model.vocabulary().len();
         let model_error = |e: LmError| ChatErrorKind::Model(e.to_string());
         let mut sequence = prompt.clone();

@@ -153,3 +153,26 @@ fn smollm2_picks_a_listed_skill() {
     assert_eq!(validate(&reply.value, &schema, "$"), Ok(()), "{}", reply.reply.text);
     assert!(skills.contains(&reply.value["skill"].as_str().expect("skill")));
 }
+
+/// A reply asked for more tokens than the model's context holds (the paper's thinking
+/// condition asks for 32,768; SmolLM2's context is 8,192) ends at the context, finish reason
+/// `length`, as a server's does, instead of failing with a context overflow.
+#[test]
+fn a_reply_longer_than_the_context_stops_at_the_context() {
+    let dir = TempDir::new("local-chat-context");
+    let spec = TinySpec::default();
+    let mut chat = tiny_chat(&dir);
+    let request = ChatRequest::new(vec![Message::user("Write the plan, one action a line.")]);
+    let mut stopped_at_the_context = 0;
+    for seed in 0..8 {
+        let sampling = Sampling { temperature: Some(1.5), seed: Some(seed), max_tokens: Some(32_768), ..Sampling::default() };
+        let reply = chat.chat(&request.clone().with_sampling(sampling)).expect("a reply, not an overflow");
+        let total = reply.usage.prompt_tokens + reply.usage.completion_tokens;
+        assert!(total <= spec.context_length as u64, "{total} tokens in a context of {}", spec.context_length);
+        if reply.finish_reason.as_deref() == Some("length") {
+            assert_eq!(total, spec.context_length as u64);
+            stopped_at_the_context += 1;
+        }
+    }
+    assert!(stopped_at_the_context > 0, "no reply ran to the context");
+}
