@@ -11,7 +11,9 @@
 //!   located instance in F_τ (recall < 1); or exploration left fewer steps of the budget than
 //!   the first plan needs: none at all, fewer than a plan Phase II returned though told the
 //!   steps left (A*'s optimal plan), or Phase II found no plan and A* with LM-cut proves that
-//!   every plan of ŝ0 is longer than the steps left ([`no_plan_fits`]);
+//!   every plan of ŝ0 is longer than the steps left ([`no_plan_fits`]); or Phase I spent the
+//!   whole budget and no hand-over could be made (a goal symbol with no instance to bind, e.g.
+//!   after re-exploration set the only one seen aside);
 //! - `search`: the state is right but Phase II returned no plan within its budget;
 //! - `grounding`: the state is right, yet a plan step was not executed by the environment
 //!   (binding or domain semantics);
