@@ -52,6 +52,9 @@ pub struct ClassGoal {
     pub literals: Vec<ClassLiteral>,
     /// VirtualHome's required actions, in order, each `|`-separated alternatives.
     pub actions: Vec<String>,
+    /// The task sentence as the benchmark states it to the agent, kept as it is (VirtualHome's
+    /// adapter reads the places it names: [`crate::Ontology::sentence_names`]).
+    pub sentence: String,
 }
 
 /// Why a goal annotation cannot be read.
@@ -73,6 +76,7 @@ pub fn parse_goal(annotation: &GoalAnnotation) -> Result<ClassGoal, GoalError> {
         symbols: Vec::new(),
         literals: Vec::new(),
         actions: Vec::new(),
+        sentence: annotation.sentence.clone(),
     };
     if annotation.benchmark.starts_with("alfworld") {
         parse_alfworld(annotation, &mut goal)?;

@@ -11,7 +11,11 @@
 //!   instances have. `canContain` pairs (receptacle class, object class) are the union over the
 //!   split (ALFWorld writes them between class constants).
 //! - VirtualHome ([`virtualhome_from_properties`], over EAI's published `properties_data.json`):
-//!   a class's affordances are its property list, lower-cased (`grabbable`, `can_open`, ...).
+//!   a class's affordances are its property list, lower-cased (`grabbable`, `can_open`, ...);
+//!   [`Ontology::add_equivalences`] adds the evolving graph's published
+//!   `class_name_equivalence.json` (a script's class name → the simulator's names for the same
+//!   class: `living_room` and `home_office` → `livingroom`, `dining_room` → `kitchen`), which
+//!   [`Ontology::sentence_names`] reads a task sentence's places with.
 
 use std::collections::{BTreeMap, BTreeSet};
 
@@ -28,6 +32,9 @@ pub struct Ontology {
     pub can_contain: BTreeSet<(String, String)>,
     /// class → affordances only some of its instances have (left out of `affordances`).
     pub disagreements: BTreeMap<String, BTreeSet<String>>,
+    /// name → other names of the same class (VirtualHome: `class_name_equivalence.json`). Two
+    /// names mean the same class when they are equal or this lists a name for both.
+    pub same_as: BTreeMap<String, BTreeSet<String>>,
 }
 
 impl Ontology {
@@ -35,6 +42,67 @@ impl Ontology {
     /// can be planned with before it is seen.
     pub fn openness_decided(&self, class: &str) -> bool {
         !self.disagreements.get(class).is_some_and(|a| a.contains("openable"))
+    }
+
+    /// Adds the equivalences of a `{name: [other name, ...]}` JSON object (the evolving graph's
+    /// `class_name_equivalence.json`) to [`Ontology::same_as`]; names are lower-cased.
+    pub fn add_equivalences(&mut self, json: &str, origin: &str) -> Result<(), OntologyError> {
+        let bad = |message: String| OntologyError { origin: origin.to_string(), message };
+        let value: serde_json::Value = serde_json::from_str(json).map_err(|e| bad(format!("not JSON: {e}")))?;
+        let map = value.as_object().ok_or_else(|| bad("not an object of names".into()))?;
+        for (name, others) in map {
+            let list = others.as_array().ok_or_else(|| bad(format!("`{name}`: not a list")))?;
+            let set = list
+                .iter()
+                .map(|n| n.as_str().map(str::to_ascii_lowercase).ok_or_else(|| bad(format!("`{name}`: a name that is not a string"))))
+                .collect::<Result<BTreeSet<_>, _>>()?;
+            self.same_as.entry(name.to_ascii_lowercase()).or_default().extend(set);
+        }
+        Ok(())
+    }
+
+    /// Whether two names mean the same class: equal, or [`Ontology::same_as`] lists a name
+    /// for both (`home_office` and `living_room` are both `livingroom`).
+    pub fn same_class(&self, a: &str, b: &str) -> bool {
+        let names = |x: &str| -> BTreeSet<String> {
+            let mut out: BTreeSet<String> = self.same_as.get(x).cloned().unwrap_or_default();
+            out.insert(x.to_string());
+            out
+        };
+        a == b || !names(a).is_disjoint(&names(b))
+    }
+
+    /// Whether the task sentence names `class` (the class of a place the agent perceived, read
+    /// against the instruction it was given). The rule: lower-case the sentence and split it
+    /// into words of letters; a term is a word or two adjacent words joined by `_` or by
+    /// nothing (`living room` → `living_room`, `livingroom`). The sentence names `class` when
+    /// a term means the same class ([`Ontology::same_class`]), or a word is the class's head
+    /// noun (its last `_` part: `office` for `home_office`) and no other name this ontology
+    /// knows has that head (`room` heads `dining_room` and `living_room`, so it names neither).
+    pub fn sentence_names(&self, sentence: &str, class: &str) -> bool {
+        let lower = sentence.to_ascii_lowercase();
+        let words: Vec<&str> = lower.split(|c: char| !c.is_ascii_alphabetic()).filter(|w| !w.is_empty()).collect();
+        let mut terms: Vec<String> = words.iter().map(|w| w.to_string()).collect();
+        for pair in words.windows(2) {
+            terms.push(format!("{}_{}", pair[0], pair[1]));
+            terms.push(format!("{}{}", pair[0], pair[1]));
+        }
+        if terms.iter().any(|t| self.same_class(t, class)) {
+            return true;
+        }
+        let head = class.rsplit('_').next().unwrap_or(class);
+        head != class && words.contains(&head) && self.names_with_head(head) == 1
+    }
+
+    /// How many names this ontology knows (classes, names in `same_as`) have `head` as their
+    /// last `_` part.
+    fn names_with_head(&self, head: &str) -> usize {
+        let mut names: BTreeSet<&str> = self.affordances.keys().map(String::as_str).collect();
+        for (name, others) in &self.same_as {
+            names.insert(name);
+            names.extend(others.iter().map(String::as_str));
+        }
+        names.iter().filter(|n| n.rsplit('_').next() == Some(head)).count()
     }
 }
 
@@ -113,7 +181,7 @@ pub fn virtualhome_from_properties(json: &str, origin: &str) -> Result<Ontology,
 
 impl Ontology {
     /// The committed form: one line per fact, sorted, `affordance CLASS A1 A2 ...`,
-    /// `cancontain RECEPTACLE OBJECT`, `disagree CLASS A1 ...`.
+    /// `cancontain RECEPTACLE OBJECT`, `disagree CLASS A1 ...`, `same NAME OTHER1 ...`.
     pub fn to_text(&self) -> String {
         let mut out = String::new();
         for (class, set) in &self.affordances {
@@ -124,6 +192,9 @@ impl Ontology {
         }
         for (class, set) in &self.disagreements {
             out.push_str(&format!("disagree {class}{}\n", set.iter().map(|a| format!(" {a}")).collect::<String>()));
+        }
+        for (name, set) in &self.same_as {
+            out.push_str(&format!("same {name}{}\n", set.iter().map(|a| format!(" {a}")).collect::<String>()));
         }
         out
     }
@@ -144,6 +215,9 @@ impl Ontology {
                 }
                 ["disagree", class, rest @ ..] => {
                     ontology.disagreements.insert(class.to_string(), rest.iter().map(|s| s.to_string()).collect());
+                }
+                ["same", name, rest @ ..] => {
+                    ontology.same_as.insert(name.to_string(), rest.iter().map(|s| s.to_string()).collect());
                 }
                 _ => return Err(bad()),
             }

@@ -20,7 +20,10 @@
 //!   for one it opened, once; `goto X` for closed containers not yet tried and not yet walked
 //!   to (R_t: a place is inspected once; arriving at X the agent opens it, the skill's
 //!   follow-up, and a walk back would show nothing new), those of a class G names first (the
-//!   plan goes there anyway), then those of the current room; `look` (walk up to the first object a model's
+//!   plan goes there anyway), then those of the current room. The rooms the task sentence
+//!   names (F_str's names of a class: "living room" names `home_office`) come first: a goal
+//!   container in one, the named rooms not yet entered, then the rest in the order above;
+//!   `look` (walk up to the first object a model's
 //!   hypothesis names, for a close view) when there is such a hypothesis and the agent is not
 //!   close to that object already; `done`. Every skill but `look` and `done` thus has a target
 //!   it can take at most once, so no choice of the model's can make Phase I circle. The sweep:
@@ -31,12 +34,14 @@
 //!   it all already hold of an instance (its relations to the character, the agent's pose, do not
 //!   count), the task cannot be asking about
 //!   it (a task asks for a change; EAI's goals are what the expert's run changed), so the agent
-//!   looks on for another (`VirtualhomeAdapter::already_done`).
+//!   looks on for another (`VirtualhomeAdapter::already_done`). Where the task sentence names
+//!   rooms, the instance must be in one of them until every named room has been entered: the
+//!   instruction says where the task is done, and EAI's judge names the instances there.
 //! - ŝ0: the perceived scene as a scene graph (perceived nodes; class properties from F_str, the
 //!   affordances of EAI's `properties_data.json`; perceived states and relations; a character
 //!   node of its own, since the agent never sees its id), with G's symbols bound (β) to distinct
-//!   perceived instances of their classes (those G does not already describe first, then the
-//!   lowest id), written by `vh_pddl::problem`,
+//!   perceived instances of their classes (those G does not already describe first, then those
+//!   in a room the task sentence names, then the lowest id), written by `vh_pddl::problem`,
 //!   which adds what the bound objects are inside. For action goals, every perceived object
 //!   whose class has an affordance the action's verb needs joins the problem. When G has the
 //!   left hand hold something and says nothing of the right, the grabbable objects seen in that
@@ -299,14 +304,29 @@ impl VirtualhomeAdapter {
             && states.iter().all(|l| belief.holds(&l.predicate.to_ascii_uppercase(), &[x]) == Some(!l.negated))
     }
 
+    /// The perceived rooms the task sentence names ([`Ontology::sentence_names`]: "go to the
+    /// living room" names `home_office`, by the benchmark's own table of names).
+    fn named_rooms(&self, goal: &ClassGoal, belief: &Belief) -> BTreeSet<String> {
+        belief.places.iter().filter(|r| self.ontology.sentence_names(&goal.sentence, class_of(r))).cloned().collect()
+    }
+
+    /// Whether `x` is one of `rooms` or was seen in one of them.
+    fn in_rooms(x: &str, rooms: &BTreeSet<String>, belief: &Belief) -> bool {
+        rooms.contains(x) || rooms.iter().any(|r| belief.holds(IN_ROOM, &[x, r]) == Some(true))
+    }
+
     /// Symbol → the perceived instance β binds it to: a distinct instance of the symbol's class
     /// and not in `set_aside` (a hand-over proved the goal unreachable with it: [`Record::set_aside`]),
-    /// one G does not already describe ([`Self::already_done`]) first, then the lowest id; and
-    /// whether every symbol found such an instance (Ready).
-    fn bind(goal: &ClassGoal, belief: &Belief, set_aside: &BTreeSet<String>) -> (BTreeMap<String, String>, bool) {
+    /// one G does not already describe ([`Self::already_done`]) first, then one in a room the
+    /// task sentence names ([`Self::named_rooms`]: the instruction says where the task is done),
+    /// then the lowest id; and whether every symbol found such an instance and, unless every
+    /// named room has been entered, found it in a named room (Ready).
+    fn bind(&self, goal: &ClassGoal, belief: &Belief, set_aside: &BTreeSet<String>) -> (BTreeMap<String, String>, bool) {
+        let named = self.named_rooms(goal, belief);
         let mut instances: Vec<String> = Self::instances(belief).into_iter().filter(|x| !set_aside.contains(x)).collect();
         instances.extend(belief.places.iter().filter(|x| !set_aside.contains(*x)).cloned());
-        instances.sort_by_key(|x| split_name(x).map_or(u32::MAX, |(_, id)| id));
+        instances.sort_by_key(|x| (!Self::in_rooms(x, &named, belief), split_name(x).map_or(u32::MAX, |(_, id)| id)));
+        let named_entered = named.iter().all(|r| self.entered.contains(r));
         let mut taken = BTreeSet::new();
         let mut out = BTreeMap::new();
         let mut ready = true;
@@ -318,7 +338,10 @@ impl VirtualhomeAdapter {
             let Some(class) = &s.class else { continue };
             let free: Vec<&String> = instances.iter().filter(|x| class_of(x) == class && !taken.contains(*x)).collect();
             let pick = match free.iter().find(|x| !Self::already_done(goal, &s.name, x, belief)) {
-                Some(x) => Some(*x),
+                Some(x) => {
+                    ready &= named_entered || Self::in_rooms(x, &named, belief);
+                    Some(*x)
+                }
                 None => {
                     ready = false;
                     free.first().copied()
@@ -363,21 +386,19 @@ impl Adapter for VirtualhomeAdapter {
         }
         let walked = Self::attempted(record, "[WALK] ");
         let goal_classes = self.objects_to_find(goal);
-        let (named, others): (Vec<&String>, Vec<&String>) = closed
+        let named_rooms = self.named_rooms(goal, belief);
+        let here = |x: &&String| Self::in_rooms(x, &named_rooms, belief);
+        let (goal_containers, others): (Vec<&String>, Vec<&String>) = closed
             .iter()
             .map(|(x, _)| x)
             .filter(|x| belief.holds("CLOSE", &[ME, x]) != Some(true) && !walked.contains(*x))
             .partition(|x| goal_classes.iter().any(|c| c == class_of(x)));
-        // A closed container G names first: the plan goes there anyway.
-        for x in named {
-            sweep.get_or_insert(list.len());
-            list.push(Skill::Goto(x.clone()));
-        }
-        for r in belief.places.iter().filter(|r| !self.entered.contains(*r)) {
-            sweep.get_or_insert(list.len());
-            list.push(Skill::Goto(r.clone()));
-        }
-        for x in others {
+        let (goal_containers_named, goal_containers_elsewhere): (Vec<&String>, Vec<&String>) = goal_containers.into_iter().partition(here);
+        let (rooms_named, rooms_other): (Vec<&String>, Vec<&String>) =
+            belief.places.iter().filter(|r| !self.entered.contains(*r)).partition(|r| named_rooms.contains(*r));
+        // A closed container of a class G names first (the plan goes there anyway), the rooms
+        // the task sentence names before the others, and what is in those rooms first.
+        for x in goal_containers_named.into_iter().chain(rooms_named).chain(goal_containers_elsewhere).chain(rooms_other).chain(others) {
             sweep.get_or_insert(list.len());
             list.push(Skill::Goto(x.clone()));
         }
@@ -415,7 +436,7 @@ impl Adapter for VirtualhomeAdapter {
     }
 
     fn ready(&self, goal: &ClassGoal, belief: &Belief, record: &Record) -> bool {
-        Self::bind(goal, belief, &record.set_aside).1
+        self.bind(goal, belief, &record.set_aside).1
     }
 
     /// The facts that hold about instances of the goal's classes, the containers' CLOSED and
@@ -452,7 +473,7 @@ impl Adapter for VirtualhomeAdapter {
 impl Handing for VirtualhomeAdapter {
     fn handover(&mut self, goal: &ClassGoal, exploration: &Exploration, _steps: &[StepRecord]) -> Result<Grounded, String> {
         let belief = &exploration.belief;
-        let (beta, _) = Self::bind(goal, belief, &exploration.record.set_aside);
+        let (beta, _) = self.bind(goal, belief, &exploration.record.set_aside);
         let instances = Self::instances(belief);
         let mut names: BTreeSet<String> = instances.clone();
         names.extend(belief.places.iter().cloned());

@@ -52,12 +52,38 @@ fn the_committed_alfworld_ontology_is_derived_from_the_training_split() {
 #[test]
 fn the_committed_virtualhome_ontology_is_eais_properties() {
     let source = fixtures().join("virtualhome-eai/properties_data.json");
-    let derived = virtualhome_from_properties(&std::fs::read_to_string(&source).unwrap(), "properties_data.json").unwrap();
+    let mut derived = virtualhome_from_properties(&std::fs::read_to_string(&source).unwrap(), "properties_data.json").unwrap();
+    let names = fixtures().join("virtualhome-eai/class_name_equivalence.json");
+    derived.add_equivalences(&std::fs::read_to_string(&names).unwrap(), "class_name_equivalence.json").unwrap();
     let path = fixtures().join("ontology/virtualhome.txt");
     let committed = std::fs::read_to_string(&path).unwrap_or_default();
     assert_eq!(committed, derived.to_text(), "{} is stale: `cargo xtask ontology` writes it again", path.display());
+    assert_eq!(Ontology::from_text(&committed, "virtualhome.txt").unwrap(), derived);
     assert!(derived.affordances["dishwasher"].contains("can_open"));
     assert!(derived.affordances["plate"].contains("grabbable"));
+    assert_eq!(derived.same_as.len(), 129);
+}
+
+/// A task sentence names the rooms of EAI's scenes by the benchmark's own names for them.
+#[test]
+fn a_sentence_names_a_room_by_any_name_of_its_class() {
+    let ontology =
+        Ontology::from_text(&std::fs::read_to_string(fixtures().join("ontology/virtualhome.txt")).unwrap(), "virtualhome.txt").unwrap();
+    let names = |sentence: &str| -> Vec<&str> {
+        ["bathroom", "bedroom", "dining_room", "home_office"].into_iter().filter(|room| ontology.sentence_names(sentence, room)).collect()
+    };
+    // EAI 117_1, 1068_1, 264_1, 232_2, 149_1, 996_2, 446_2: the equivalence table, the class
+    // itself, its head noun, two words joined.
+    assert_eq!(names("Go to the living room. Find the remote."), ["home_office"]);
+    assert_eq!(names("walk to home office ,find computer"), ["home_office"]);
+    assert_eq!(names("Enter office. Go to desk. Pick up phone."), ["home_office"]);
+    assert_eq!(names("I need to turn on the lights in the kitchen so I can make dinner."), ["dining_room"]);
+    assert_eq!(names("stand up, walk to Entrance Hall, walk to table"), ["home_office"]);
+    assert_eq!(names("I go to my bed room and sit on the chair"), ["bedroom"]);
+    assert_eq!(names("Go to kitchen, grab dishes, walk to dining room"), ["dining_room"]);
+    // `room` heads two names, so it names neither; a sentence without a place names none.
+    assert_eq!(names("I would walk to my room where my phone is plugged in"), Vec::<&str>::new());
+    assert_eq!(names("Turn on the TV, sit on the couch, find a show, and watch it."), Vec::<&str>::new());
 }
 
 #[test]
