@@ -351,6 +351,10 @@ fn suite_subset(subset: &str, suite: Suite, agent: AgentName) -> Result<Option<S
 /// The configuration that names a run's records: everything that changes what it finds.
 fn config(args: &EvalArgs, suite: Suite) -> anyhow::Result<Value> {
     let mut config = json!({"agent": args.agent, "benchmark": suite.name(), "subset": suite_subset(&args.subset, suite, args.agent)?});
+    // Every agent but the expert replay runs the exploration harness: its behaviour's version.
+    if args.agent != AgentName::Expert {
+        config.as_object_mut().expect("object").insert("harness".into(), json!(exploration_harness::HARNESS_VERSION));
+    }
     let task_dir = if suite == Suite::VirtualhomeEai { args.task_dir.as_ref().map(|p| p.display().to_string()) } else { None };
     if args.agent == AgentName::Direct {
         let more = json!({

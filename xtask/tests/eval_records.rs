@@ -120,6 +120,8 @@ fn seeds_make_one_run_each() {
         let config: serde_json::Value =
             serde_json::from_str(&std::fs::read_to_string(file.with_extension("config.json")).expect("config beside")).expect("JSON");
         assert!([0, 42].contains(&config["decode"]["seed"].as_u64().expect("a seed")), "{config}");
+        // The agent's behaviour is part of the configuration: an older agent's records are another's.
+        assert_eq!(config["harness"].as_u64(), Some(u64::from(exploration_harness::HARNESS_VERSION)), "{config}");
     }
     let report = std::fs::read_to_string(dir.join("report/report.md")).expect("the report");
     assert!(report.contains("alfworld-seen"), "{report}");

@@ -17,6 +17,13 @@
 //! - [`direct`]: the direct interactive policy baseline (one class-level action per turn from a
 //!   chat model, the environment's feedback, no harness), with its own episode record.
 
+/// The version of what an episode does, for the records of evaluation runs: a configuration
+/// names its records by every setting, and this names the behaviour behind the settings, so
+/// records of an older agent are never resumed or merged into a newer one's. Bump it with every
+/// change that alters an episode some existing configuration runs.
+/// 1: up to 180974f; 2: the rooms the task sentence names come first (VirtualHome).
+pub const HARNESS_VERSION: u32 = 2;
+
 pub mod alfworld;
 pub mod chat_planner;
 pub mod chat_policy;
