@@ -20,9 +20,11 @@
 //!   for one it opened, once; `goto X` for closed containers not yet tried and not yet walked
 //!   to (R_t: a place is inspected once; arriving at X the agent opens it, the skill's
 //!   follow-up, and a walk back would show nothing new), those of a class G names first (the
-//!   plan goes there anyway), then those of the current room. The rooms the task sentence
-//!   names (F_str's names of a class: "living room" names `home_office`) come first: a goal
-//!   container in one, the named rooms not yet entered, then the rest in the order above;
+//!   plan goes there anyway), then those of the current room. The places the task
+//!   sentence names (F_str's names of a class: "living room" names `home_office`) come first:
+//!   a goal container in a named room, the named rooms not yet entered, the other goal
+//!   containers, the other containers in named rooms, then the rest in the order above; among containers, those of a class the
+//!   sentence names ("a cup from the cupboard") first;
 //!   `look` (walk up to the first object a model's
 //!   hypothesis names, for a close view) when there is such a hypothesis and the agent is not
 //!   close to that object already; `done`. Every skill but `look` and `done` thus has a target
@@ -42,8 +44,10 @@
 //!   node of its own, since the agent never sees its id), with G's symbols bound (β) to distinct
 //!   perceived instances of their classes (those G does not already describe first, then those
 //!   in a room the task sentence names, then the lowest id), written by `vh_pddl::problem`,
-//!   which adds what the bound objects are inside. For action goals, every perceived object
-//!   whose class has an affordance the action's verb needs joins the problem. When G has the
+//!   which adds what the bound objects are inside. For an action goal (a group of alternative
+//!   verbs), every perceived object whose class has an affordance a verb of the group needs
+//!   joins the problem, unless an object G binds already has one (for a verb of one object: not
+//!   POUR). When G has the
 //!   left hand hold something and says nothing of the right, the grabbable objects seen in that
 //!   object's room join it too: GRAB fills the right hand first.
 //! - Plan steps are the executor's script lines with the perceived ids
@@ -394,11 +398,25 @@ impl Adapter for VirtualhomeAdapter {
             .filter(|x| belief.holds("CLOSE", &[ME, x]) != Some(true) && !walked.contains(*x))
             .partition(|x| goal_classes.iter().any(|c| c == class_of(x)));
         let (goal_containers_named, goal_containers_elsewhere): (Vec<&String>, Vec<&String>) = goal_containers.into_iter().partition(here);
+        let (mut others_named, mut others_elsewhere): (Vec<&String>, Vec<&String>) = others.into_iter().partition(here);
+        // A container whose class the sentence names ("a cup from the cupboard") first.
+        for list in [&mut others_named, &mut others_elsewhere] {
+            list.sort_by_key(|x| !self.ontology.sentence_names(&goal.sentence, class_of(x)));
+        }
         let (rooms_named, rooms_other): (Vec<&String>, Vec<&String>) =
             belief.places.iter().filter(|r| !self.entered.contains(*r)).partition(|r| named_rooms.contains(*r));
-        // A closed container of a class G names first (the plan goes there anyway), the rooms
-        // the task sentence names before the others, and what is in those rooms first.
-        for x in goal_containers_named.into_iter().chain(rooms_named).chain(goal_containers_elsewhere).chain(rooms_other).chain(others) {
+        // A closed container of a class G names first (the plan goes there anyway), those in a
+        // room the task sentence names before the named rooms, the others after them (one
+        // seen where no room is known yet may be in one); what is in the named rooms before
+        // the other rooms and theirs.
+        for x in goal_containers_named
+            .into_iter()
+            .chain(rooms_named)
+            .chain(goal_containers_elsewhere)
+            .chain(others_named)
+            .chain(rooms_other)
+            .chain(others_elsewhere)
+        {
             sweep.get_or_insert(list.len());
             list.push(Skill::Goto(x.clone()));
         }
@@ -530,14 +548,24 @@ impl Handing for VirtualhomeAdapter {
             "init_graph": {"nodes": nodes, "edges": edges},
         });
         let task = VirtualhomeTask::from_json(&task_json.to_string(), "the perceived scene").map_err(|e| e.to_string())?;
-        // Action goals: the perceived objects whose class affords a verb of them.
-        let verbs: Vec<String> = goal.actions.iter().flat_map(|a| a.split('|')).map(|v| v.to_uppercase().replace(' ', "")).collect();
+        // Action goals: the perceived objects whose class affords a verb of them, for each group
+        // of alternatives that no object G binds already affords (a remote control G has the
+        // agent hold can be touched; every movable object of the scene would ground a million
+        // actions, EAI 188_1).
+        let affords = |x: &str, verb: &str| {
+            VERB_AFFORDANCES.iter().find(|(v, _)| *v == verb).is_none_or(|(_, needs)| needs.iter().any(|n| self.has(x, n)))
+                || (verb == "TYPE" && class_of(x) == "keyboard")
+        };
+        let bound_objects: Vec<&String> = goal.symbols.iter().filter(|s| s.kind != "character").filter_map(|s| beta.get(&s.name)).collect();
         let mut classes: BTreeSet<String> = BTreeSet::new();
-        for x in &instances {
-            let wanted = verbs
-                .iter()
-                .any(|v| VERB_AFFORDANCES.iter().find(|(verb, _)| verb == v).is_none_or(|(_, needs)| needs.iter().any(|n| self.has(x, n))));
-            if wanted || (verbs.iter().any(|v| v == "TYPE") && class_of(x) == "keyboard") {
+        for group in &goal.actions {
+            let verbs: Vec<String> = group.split('|').map(|v| v.to_uppercase().replace(' ', "")).collect();
+            // POUR takes two objects (what is poured, where to): one bound object is not enough.
+            let known = |v: &String| v != "POUR" && VERB_AFFORDANCES.iter().any(|(verb, _)| verb == v);
+            if verbs.iter().all(known) && bound_objects.iter().any(|x| verbs.iter().any(|v| affords(x, v))) {
+                continue;
+            }
+            for x in instances.iter().filter(|x| verbs.iter().any(|v| affords(x, v))) {
                 classes.insert(class_of(x).to_string());
             }
         }
