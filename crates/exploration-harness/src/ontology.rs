@@ -47,16 +47,8 @@ impl Ontology {
     /// Adds the equivalences of a `{name: [other name, ...]}` JSON object (the evolving graph's
     /// `class_name_equivalence.json`) to [`Ontology::same_as`]; names are lower-cased.
     pub fn add_equivalences(&mut self, json: &str, origin: &str) -> Result<(), OntologyError> {
-        let bad = |message: String| OntologyError { origin: origin.to_string(), message };
-        let value: serde_json::Value = serde_json::from_str(json).map_err(|e| bad(format!("not JSON: {e}")))?;
-        let map = value.as_object().ok_or_else(|| bad("not an object of names".into()))?;
-        for (name, others) in map {
-            let list = others.as_array().ok_or_else(|| bad(format!("`{name}`: not a list")))?;
-            let set = list
-                .iter()
-                .map(|n| n.as_str().map(str::to_ascii_lowercase).ok_or_else(|| bad(format!("`{name}`: a name that is not a string"))))
-                .collect::<Result<BTreeSet<_>, _>>()?;
-            self.same_as.entry(name.to_ascii_lowercase()).or_default().extend(set);
+        for (name, others) in string_lists(json, origin, "name")? {
+            self.same_as.entry(name.to_ascii_lowercase()).or_default().extend(others);
         }
         Ok(())
     }
@@ -164,19 +156,25 @@ pub fn alfworld_from_problems<'a>(problems: impl IntoIterator<Item = (&'a str, &
 
 /// VirtualHome's ontology from EAI's `properties_data.json` (`{class: [PROPERTY, ...]}`).
 pub fn virtualhome_from_properties(json: &str, origin: &str) -> Result<Ontology, OntologyError> {
+    Ok(Ontology { affordances: string_lists(json, origin, "property")?, ..Ontology::default() })
+}
+
+/// A `{key: [item, ...]}` JSON object (EAI's `properties_data.json`, the evolving graph's
+/// `class_name_equivalence.json`), items lower-cased; errors name the key and call an item `what`.
+fn string_lists(json: &str, origin: &str, what: &str) -> Result<BTreeMap<String, BTreeSet<String>>, OntologyError> {
     let bad = |message: String| OntologyError { origin: origin.to_string(), message };
     let value: serde_json::Value = serde_json::from_str(json).map_err(|e| bad(format!("not JSON: {e}")))?;
-    let map = value.as_object().ok_or_else(|| bad("not an object of classes".into()))?;
-    let mut ontology = Ontology::default();
-    for (class, properties) in map {
-        let list = properties.as_array().ok_or_else(|| bad(format!("`{class}`: not a list")))?;
+    let map = value.as_object().ok_or_else(|| bad(format!("not an object of {what} lists")))?;
+    let mut out = BTreeMap::new();
+    for (key, items) in map {
+        let list = items.as_array().ok_or_else(|| bad(format!("`{key}`: not a list")))?;
         let set = list
             .iter()
-            .map(|p| p.as_str().map(str::to_ascii_lowercase).ok_or_else(|| bad(format!("`{class}`: a property that is not a string"))))
+            .map(|p| p.as_str().map(str::to_ascii_lowercase).ok_or_else(|| bad(format!("`{key}`: a {what} that is not a string"))))
             .collect::<Result<BTreeSet<_>, _>>()?;
-        ontology.affordances.insert(class.clone(), set);
+        out.insert(key.clone(), set);
     }
-    Ok(ontology)
+    Ok(out)
 }
 
 impl Ontology {
