@@ -87,6 +87,18 @@ fn a_sentence_names_a_room_by_any_name_of_its_class() {
 }
 
 #[test]
+fn bad_equivalences_name_the_file_and_the_name() {
+    let mut ontology = Ontology::default();
+    let error = ontology.add_equivalences(r#"{"couch": ["sofa"], "tv": "television"}"#, "names.json").unwrap_err();
+    assert_eq!((error.origin.as_str(), error.message.as_str()), ("names.json", "`tv`: not a list"));
+    let error = ontology.add_equivalences(r#"{"couch": [3]}"#, "names.json").unwrap_err();
+    assert_eq!(error.message, "`couch`: a name that is not a string");
+    assert!(ontology.add_equivalences("[", "names.json").unwrap_err().message.starts_with("not JSON"));
+    ontology.add_equivalences(r#"{"Couch": ["SOFA"]}"#, "names.json").unwrap();
+    assert!(ontology.same_class("couch", "sofa"));
+}
+
+#[test]
 fn bad_ontology_text_names_the_line() {
     let error = Ontology::from_text("affordance mug pickupable\ncancontain fridge\n", "x.txt").unwrap_err();
     assert_eq!(error.origin, "x.txt:2");
