@@ -72,29 +72,79 @@ impl Ontology {
     /// noun (its last `_` part: `office` for `home_office`) and no other name this ontology
     /// knows has that head (`room` heads `dining_room` and `living_room`, so it names neither).
     pub fn sentence_names(&self, sentence: &str, class: &str) -> bool {
-        let lower = sentence.to_ascii_lowercase();
-        let words: Vec<&str> = lower.split(|c: char| !c.is_ascii_alphabetic()).filter(|w| !w.is_empty()).collect();
-        let mut terms: Vec<String> = words.iter().map(|w| w.to_string()).collect();
-        for pair in words.windows(2) {
-            terms.push(format!("{}_{}", pair[0], pair[1]));
-            terms.push(format!("{}{}", pair[0], pair[1]));
+        self.names(&SentenceTerms::new(sentence), class)
+    }
+
+    /// Every class of this ontology ([`Ontology::affordances`]' keys) the task sentence names,
+    /// the sentence read once, by the rule of [`Ontology::sentence_names`] with one more: two
+    /// adjacent words that join into a name this ontology knows are that name alone, not also
+    /// their words ("the food egg" names `food_egg`, not `food_food` by the head noun `food`;
+    /// "the coffee table" names `coffee_table` and its names, not `coffee`).
+    pub fn sentence_classes(&self, sentence: &str) -> BTreeSet<String> {
+        let known = self.known_names();
+        let all = SentenceTerms::new(sentence);
+        let mut words = Vec::new();
+        let mut terms = Vec::new();
+        let mut i = 0;
+        while i < all.words.len() {
+            if let Some(next) = all.words.get(i + 1) {
+                let joined = [format!("{}_{next}", all.words[i]), format!("{}{next}", all.words[i])];
+                if joined.iter().any(|j| known.contains(j.as_str())) {
+                    terms.extend(joined);
+                    i += 2;
+                    continue;
+                }
+            }
+            words.push(all.words[i].clone());
+            terms.push(all.words[i].clone());
+            i += 1;
         }
-        if terms.iter().any(|t| self.same_class(t, class)) {
+        let terms = SentenceTerms { words, terms };
+        self.affordances.keys().filter(|c| self.names(&terms, c)).cloned().collect()
+    }
+
+    fn names(&self, sentence: &SentenceTerms, class: &str) -> bool {
+        if sentence.terms.iter().any(|t| self.same_class(t, class)) {
             return true;
         }
         let head = class.rsplit('_').next().unwrap_or(class);
-        head != class && words.contains(&head) && self.names_with_head(head) == 1
+        head != class && sentence.words.iter().any(|w| w == head) && self.names_with_head(head) == 1
     }
 
     /// How many names this ontology knows (classes, names in `same_as`) have `head` as their
     /// last `_` part.
     fn names_with_head(&self, head: &str) -> usize {
+        self.known_names().iter().filter(|n| n.rsplit('_').next() == Some(head)).count()
+    }
+
+    /// Every name this ontology knows: its classes and the names in `same_as`.
+    fn known_names(&self) -> BTreeSet<&str> {
         let mut names: BTreeSet<&str> = self.affordances.keys().map(String::as_str).collect();
         for (name, others) in &self.same_as {
             names.insert(name);
             names.extend(others.iter().map(String::as_str));
         }
-        names.iter().filter(|n| n.rsplit('_').next() == Some(head)).count()
+        names
+    }
+}
+
+/// A sentence's words (lower case, letters only) and terms (the words, and each two adjacent
+/// words joined by `_` and by nothing), as [`Ontology::sentence_names`] reads them.
+struct SentenceTerms {
+    words: Vec<String>,
+    terms: Vec<String>,
+}
+
+impl SentenceTerms {
+    fn new(sentence: &str) -> SentenceTerms {
+        let lower = sentence.to_ascii_lowercase();
+        let words: Vec<String> = lower.split(|c: char| !c.is_ascii_alphabetic()).filter(|w| !w.is_empty()).map(str::to_string).collect();
+        let mut terms = words.clone();
+        for pair in words.windows(2) {
+            terms.push(format!("{}_{}", pair[0], pair[1]));
+            terms.push(format!("{}{}", pair[0], pair[1]));
+        }
+        SentenceTerms { words, terms }
     }
 }
 

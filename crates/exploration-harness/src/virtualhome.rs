@@ -38,12 +38,16 @@
 //!   it (a task asks for a change; EAI's goals are what the expert's run changed), so the agent
 //!   looks on for another (`VirtualhomeAdapter::already_done`). Where the task sentence names
 //!   rooms, the instance must be in one of them until every named room has been entered: the
-//!   instruction says where the task is done, and EAI's judge names the instances there.
+//!   instruction says where the task is done, and EAI's judge names the instances there. Where
+//!   it names no room but names other objects (classes of context: "watching TV from sofa"),
+//!   the instance must be in a room where one of them was seen until every room has been
+//!   entered: the instruction says what the task is done among.
 //! - ŝ0: the perceived scene as a scene graph (perceived nodes; class properties from F_str, the
 //!   affordances of EAI's `properties_data.json`; perceived states and relations; a character
 //!   node of its own, since the agent never sees its id), with G's symbols bound (β) to distinct
 //!   perceived instances of their classes (those G does not already describe first, then those
-//!   in a room the task sentence names, then the lowest id), written by `vh_pddl::problem`,
+//!   in a room the task sentence names, then those in the room where the most classes of context
+//!   were seen, then the lowest id), written by `vh_pddl::problem`,
 //!   which adds what the bound objects are inside. For an action goal (a group of alternative
 //!   verbs), every perceived object whose class has an affordance a verb of the group needs
 //!   joins the problem, unless an object G binds already has one (for a verb of one object: not
@@ -226,6 +230,8 @@ pub struct VirtualhomeAdapter {
     last: Option<(VhProblem, VirtualhomeTask)>,
     /// Rooms the agent has stood in.
     entered: BTreeSet<String>,
+    /// The task sentence and the classes of context it names ([`Self::context_classes`]).
+    context: std::cell::OnceCell<(String, BTreeSet<String>)>,
 }
 
 impl std::fmt::Debug for VirtualhomeAdapter {
@@ -237,7 +243,7 @@ impl std::fmt::Debug for VirtualhomeAdapter {
 impl VirtualhomeAdapter {
     pub fn new(ontology: Ontology) -> Result<VirtualhomeAdapter, String> {
         let domain = pddl_syntax::parse_domain(SOUND_DOMAIN).map_err(|e| format!("the sound VirtualHome domain: {e:?}"))?;
-        Ok(VirtualhomeAdapter { ontology, domain, last: None, entered: BTreeSet::new() })
+        Ok(VirtualhomeAdapter { ontology, domain, last: None, entered: BTreeSet::new(), context: std::cell::OnceCell::new() })
     }
 
     fn has(&self, name: &str, affordance: &str) -> bool {
@@ -314,6 +320,43 @@ impl VirtualhomeAdapter {
         belief.places.iter().filter(|r| self.ontology.sentence_names(&goal.sentence, class_of(r))).cloned().collect()
     }
 
+    /// The classes of context the task sentence names: F_str's classes it names
+    /// ([`Ontology::sentence_classes`]) other than body parts and G's own classes under any of
+    /// their names ("the pot" names `pot` and, by EAI's table, `sauce_pan`; "watching TV from
+    /// the sofa" names the sofa). Read once per sentence.
+    fn context_classes(&self, goal: &ClassGoal) -> BTreeSet<String> {
+        let compute = || {
+            let own = self.objects_to_find(goal);
+            let mut classes = self.ontology.sentence_classes(&goal.sentence);
+            classes.retain(|c| !own.iter().any(|o| self.ontology.same_class(o, c)) && !self.has(c, "body_part"));
+            classes
+        };
+        let (sentence, classes) = self.context.get_or_init(|| (goal.sentence.clone(), compute()));
+        if *sentence == goal.sentence { classes.clone() } else { compute() }
+    }
+
+    /// How many of the `context` classes have an instance seen in the room `x` was seen in (or
+    /// is): the objects a sentence places the task among ("from the sofa") say which of two
+    /// televisions it means.
+    fn context_score(x: &str, context: &BTreeSet<String>, belief: &Belief) -> usize {
+        if context.is_empty() {
+            return 0;
+        }
+        let Some(room) = (if belief.places.iter().any(|r| r == x) {
+            Some(x.to_string())
+        } else {
+            belief.places.iter().find(|r| belief.holds(IN_ROOM, &[x, r]) == Some(true)).cloned()
+        }) else {
+            return 0;
+        };
+        let here: BTreeSet<&String> = Self::instances(belief)
+            .iter()
+            .filter(|y| belief.holds(IN_ROOM, &[y, &room]) == Some(true))
+            .filter_map(|y| context.get(class_of(y)))
+            .collect();
+        here.len()
+    }
+
     /// Whether `x` is one of `rooms` or was seen in one of them.
     fn in_rooms(x: &str, rooms: &BTreeSet<String>, belief: &Belief) -> bool {
         rooms.contains(x) || rooms.iter().any(|r| belief.holds(IN_ROOM, &[x, r]) == Some(true))
@@ -323,14 +366,24 @@ impl VirtualhomeAdapter {
     /// and not in `set_aside` (a hand-over proved the goal unreachable with it: [`Record::set_aside`]),
     /// one G does not already describe ([`Self::already_done`]) first, then one in a room the
     /// task sentence names ([`Self::named_rooms`]: the instruction says where the task is done),
-    /// then the lowest id; and whether every symbol found such an instance and, unless every
-    /// named room has been entered, found it in a named room (Ready).
+    /// then one in the room with the most classes of context the sentence names
+    /// ([`Self::context_classes`], [`Self::context_score`]: the things it says the task is done
+    /// among), then the lowest id; and whether every symbol found such an instance and, unless
+    /// every named room has been entered, found it in a named room, and, where the sentence
+    /// names no room, unless every room has been entered, found it where some class of context
+    /// was seen (Ready; with named rooms the sweep would open their containers first, looking
+    /// for context a container may hide).
     fn bind(&self, goal: &ClassGoal, belief: &Belief, set_aside: &BTreeSet<String>) -> (BTreeMap<String, String>, bool) {
         let named = self.named_rooms(goal, belief);
+        let context = self.context_classes(goal);
         let mut instances: Vec<String> = Self::instances(belief).into_iter().filter(|x| !set_aside.contains(x)).collect();
         instances.extend(belief.places.iter().filter(|x| !set_aside.contains(*x)).cloned());
-        instances.sort_by_key(|x| (!Self::in_rooms(x, &named, belief), split_name(x).map_or(u32::MAX, |(_, id)| id)));
+        instances.sort_by_cached_key(|x| {
+            let score = Self::context_score(x, &context, belief);
+            (!Self::in_rooms(x, &named, belief), std::cmp::Reverse(score), split_name(x).map_or(u32::MAX, |(_, id)| id))
+        });
         let named_entered = named.iter().all(|r| self.entered.contains(r));
+        let all_entered = belief.places.iter().all(|r| self.entered.contains(r));
         let mut taken = BTreeSet::new();
         let mut out = BTreeMap::new();
         let mut ready = true;
@@ -344,6 +397,7 @@ impl VirtualhomeAdapter {
             let pick = match free.iter().find(|x| !Self::already_done(goal, &s.name, x, belief)) {
                 Some(x) => {
                     ready &= named_entered || Self::in_rooms(x, &named, belief);
+                    ready &= !named.is_empty() || all_entered || context.is_empty() || Self::context_score(x, &context, belief) > 0;
                     Some(*x)
                 }
                 None => {

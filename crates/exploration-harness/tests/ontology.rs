@@ -86,6 +86,32 @@ fn a_sentence_names_a_room_by_any_name_of_its_class() {
     assert_eq!(names("Turn on the TV, sit on the couch, find a show, and watch it."), Vec::<&str>::new());
 }
 
+/// The classes a task sentence names, read once.
+#[test]
+fn a_sentence_names_the_classes_of_its_objects() {
+    let ontology =
+        Ontology::from_text(&std::fs::read_to_string(fixtures().join("ontology/virtualhome.txt")).unwrap(), "virtualhome.txt").unwrap();
+    // EAI 342_2 and 225_2: `couch` is one of the names of `couch`/`sofa`; a two-word name.
+    let couch = ontology.sentence_classes("Turn on the TV, sit on the couch, find a show, and watch it.");
+    assert!(couch.contains("couch"), "{couch:?}");
+    assert!(couch.contains("television"), "{couch:?}");
+    let table = ontology.sentence_classes("Sit down, turn on the TV with the remote control that is on the coffee table.");
+    assert!(table.contains("remote_control") && table.contains("coffee_table"), "{table:?}");
+    assert!(!table.contains("coffee"), "{table:?}");
+    // Two words that join into a known name are that name alone: "food egg" is `food_egg`,
+    // and the word `food` does not also name `food_food` (its head noun).
+    let egg = ontology.sentence_classes("Put the food egg in the microwave, close it and switch it on.");
+    assert!(egg.contains("food_egg") && egg.contains("microwave"), "{egg:?}");
+    assert!(!egg.contains("food_food"), "{egg:?}");
+    assert!(ontology.sentence_names("the food", "food_food"));
+    // Otherwise the same rule as `sentence_names`.
+    for class in ontology.affordances.keys() {
+        let sentence = "Turn on the TV, sit on the couch, find a show, and watch it.";
+        assert_eq!(ontology.sentence_classes(sentence).contains(class), ontology.sentence_names(sentence, class), "{class}");
+    }
+    assert!(ontology.sentence_classes("").is_empty());
+}
+
 #[test]
 fn bad_equivalences_name_the_file_and_the_name() {
     let mut ontology = Ontology::default();

@@ -143,6 +143,32 @@ fn the_rooms_the_task_sentence_names_decide_which_instance_is_meant() {
     assert_ne!(table(&untold).as_deref(), Some("table (226)"));
 }
 
+/// EAI 134_1, "watching TV from sofa": the scene has two televisions, the kitchen's (248, the
+/// first the sweep sees) and the living room's (410, by the sofa), and EAI's goal names 410.
+/// The sentence names no room but names the sofa, a class of context: Ready waits for a
+/// television in a room where a sofa was seen (or for every room), and β binds it. Told only
+/// "Watch TV.", the agent binds the first television it perceived and the judge says not won.
+#[test]
+fn the_objects_the_task_sentence_names_decide_which_instance_is_meant() {
+    let path = fixtures().join("virtualhome-eai/graphs/1004_2.json.gz");
+    let goal = serde_json::json!({"actions": ["LOOKAT|WATCH"], "goal": [
+        {"id": 410, "class_name": "television", "state": "ON"},
+        {"from_id": 65, "relation_type": "FACING", "to_id": 410}]});
+    let television = |episode: &Episode| episode.handover.as_ref().and_then(|h| h.binding.get("television").cloned());
+
+    let mut told = scene_1004_2_with_goal(goal.clone());
+    told.description = "watching TV from sofa".to_string();
+    let told = play_task(told, &path, "virtualhome-eai", &ontology());
+    assert!(told.success, "{:?}; plan {:?}", told.failure, told.plan);
+    assert_eq!(television(&told).as_deref(), Some("television (410)"));
+
+    let mut untold = scene_1004_2_with_goal(goal);
+    untold.description = "Watch TV.".to_string();
+    let untold = play_task(untold, &path, "virtualhome-eai", &ontology());
+    assert!(!untold.success, "plan {:?}", untold.plan);
+    assert_eq!(television(&untold).as_deref(), Some("television (248)"));
+}
+
 /// EAI's scene of 1004_2 with `goal` as its `vh_goal`.
 fn scene_1004_2_with_goal(goal: serde_json::Value) -> VirtualhomeTask {
     let path = fixtures().join("virtualhome-eai/graphs/1004_2.json.gz");
