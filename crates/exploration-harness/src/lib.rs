@@ -25,8 +25,9 @@
 /// 3: containers in named rooms before other rooms, action goals a bound object affords add no
 /// other objects, turn_to never targets a goal step (aec1f60); 4: the objects the task sentence
 /// names (VirtualHome's classes of context) decide between instances, and where it names no room,
-/// Ready waits for an instance among them until every room has been entered.
-pub const HARNESS_VERSION: u32 = 4;
+/// Ready waits for an instance among them until every room has been entered (82ddd31); 5: a
+/// head noun alone names no class of context.
+pub const HARNESS_VERSION: u32 = 5;
 
 pub mod alfworld;
 pub mod chat_planner;

@@ -76,14 +76,15 @@ impl Ontology {
     }
 
     /// Every class of this ontology ([`Ontology::affordances`]' keys) the task sentence names,
-    /// the sentence read once, by the rule of [`Ontology::sentence_names`] with one more: two
-    /// adjacent words that join into a name this ontology knows are that name alone, not also
-    /// their words ("the food egg" names `food_egg`, not `food_food` by the head noun `food`;
-    /// "the coffee table" names `coffee_table` and its names, not `coffee`).
+    /// the sentence read once: a term that means the same class, as in
+    /// [`Ontology::sentence_names`], where two adjacent words that join into a name this
+    /// ontology knows are that name alone, not also their words ("the coffee table" names
+    /// `coffee_table` and its names, not `coffee`). A head noun alone names no class here:
+    /// objects are named by their names, and a word such as "can" ("so that I can use it") is
+    /// the head of `garbage_can`.
     pub fn sentence_classes(&self, sentence: &str) -> BTreeSet<String> {
         let known = self.known_names();
         let all = SentenceTerms::new(sentence);
-        let mut words = Vec::new();
         let mut terms = Vec::new();
         let mut i = 0;
         while i < all.words.len() {
@@ -95,12 +96,10 @@ impl Ontology {
                     continue;
                 }
             }
-            words.push(all.words[i].clone());
             terms.push(all.words[i].clone());
             i += 1;
         }
-        let terms = SentenceTerms { words, terms };
-        self.affordances.keys().filter(|c| self.names(&terms, c)).cloned().collect()
+        self.affordances.keys().filter(|c| terms.iter().any(|t| self.same_class(t, c))).cloned().collect()
     }
 
     fn names(&self, sentence: &SentenceTerms, class: &str) -> bool {
