@@ -335,26 +335,30 @@ impl VirtualhomeAdapter {
         if *sentence == goal.sentence { classes.clone() } else { compute() }
     }
 
-    /// How many of the `context` classes have an instance seen in the room `x` was seen in (or
-    /// is): the objects a sentence places the task among ("from the sofa") say which of two
-    /// televisions it means.
-    fn context_score(x: &str, context: &BTreeSet<String>, belief: &Belief) -> usize {
+    /// Room → how many of the `context` classes have an instance seen in it: the objects a
+    /// sentence places the task among ("from the sofa") say which of two televisions it means.
+    fn context_rooms(context: &BTreeSet<String>, belief: &Belief) -> BTreeMap<String, usize> {
         if context.is_empty() {
-            return 0;
+            return BTreeMap::new();
         }
-        let Some(room) = (if belief.places.iter().any(|r| r == x) {
-            Some(x.to_string())
+        let mut classes: BTreeMap<String, BTreeSet<&String>> = BTreeMap::new();
+        for y in Self::instances(belief) {
+            let Some(class) = context.get(class_of(&y)) else { continue };
+            for r in belief.places.iter().filter(|r| belief.holds(IN_ROOM, &[&y, r]) == Some(true)) {
+                classes.entry(r.clone()).or_default().insert(class);
+            }
+        }
+        classes.into_iter().map(|(r, c)| (r, c.len())).collect()
+    }
+
+    /// The [`Self::context_rooms`] count of the room `x` is (a place) or was seen in.
+    fn context_score(x: &str, rooms: &BTreeMap<String, usize>, belief: &Belief) -> usize {
+        let room = if belief.places.iter().any(|r| r == x) {
+            Some(x)
         } else {
-            belief.places.iter().find(|r| belief.holds(IN_ROOM, &[x, r]) == Some(true)).cloned()
-        }) else {
-            return 0;
+            belief.places.iter().find(|r| belief.holds(IN_ROOM, &[x, r]) == Some(true)).map(String::as_str)
         };
-        let here: BTreeSet<&String> = Self::instances(belief)
-            .iter()
-            .filter(|y| belief.holds(IN_ROOM, &[y, &room]) == Some(true))
-            .filter_map(|y| context.get(class_of(y)))
-            .collect();
-        here.len()
+        room.and_then(|r| rooms.get(r)).copied().unwrap_or(0)
     }
 
     /// Whether `x` is one of `rooms` or was seen in one of them.
@@ -367,7 +371,7 @@ impl VirtualhomeAdapter {
     /// one G does not already describe ([`Self::already_done`]) first, then one in a room the
     /// task sentence names ([`Self::named_rooms`]: the instruction says where the task is done),
     /// then one in the room with the most classes of context the sentence names
-    /// ([`Self::context_classes`], [`Self::context_score`]: the things it says the task is done
+    /// ([`Self::context_classes`], [`Self::context_rooms`]: the things it says the task is done
     /// among), then the lowest id; and whether every symbol found such an instance and, unless
     /// every named room has been entered, found it in a named room, and, where the sentence
     /// names no room, unless every room has been entered, found it where some class of context
@@ -376,10 +380,11 @@ impl VirtualhomeAdapter {
     fn bind(&self, goal: &ClassGoal, belief: &Belief, set_aside: &BTreeSet<String>) -> (BTreeMap<String, String>, bool) {
         let named = self.named_rooms(goal, belief);
         let context = self.context_classes(goal);
+        let context_rooms = Self::context_rooms(&context, belief);
         let mut instances: Vec<String> = Self::instances(belief).into_iter().filter(|x| !set_aside.contains(x)).collect();
         instances.extend(belief.places.iter().filter(|x| !set_aside.contains(*x)).cloned());
         instances.sort_by_cached_key(|x| {
-            let score = Self::context_score(x, &context, belief);
+            let score = Self::context_score(x, &context_rooms, belief);
             (!Self::in_rooms(x, &named, belief), std::cmp::Reverse(score), split_name(x).map_or(u32::MAX, |(_, id)| id))
         });
         let named_entered = named.iter().all(|r| self.entered.contains(r));
@@ -397,7 +402,7 @@ impl VirtualhomeAdapter {
             let pick = match free.iter().find(|x| !Self::already_done(goal, &s.name, x, belief)) {
                 Some(x) => {
                     ready &= named_entered || Self::in_rooms(x, &named, belief);
-                    ready &= !named.is_empty() || all_entered || context.is_empty() || Self::context_score(x, &context, belief) > 0;
+                    ready &= !named.is_empty() || all_entered || context.is_empty() || Self::context_score(x, &context_rooms, belief) > 0;
                     Some(*x)
                 }
                 None => {
@@ -455,7 +460,7 @@ impl Adapter for VirtualhomeAdapter {
         let (mut others_named, mut others_elsewhere): (Vec<&String>, Vec<&String>) = others.into_iter().partition(here);
         // A container whose class the sentence names ("a cup from the cupboard") first.
         for list in [&mut others_named, &mut others_elsewhere] {
-            list.sort_by_key(|x| !self.ontology.sentence_names(&goal.sentence, class_of(x)));
+            list.sort_by_cached_key(|x| !self.ontology.sentence_names(&goal.sentence, class_of(x)));
         }
         let (rooms_named, rooms_other): (Vec<&String>, Vec<&String>) =
             belief.places.iter().filter(|r| !self.entered.contains(*r)).partition(|r| named_rooms.contains(*r));
