@@ -14,7 +14,9 @@
 //! - VirtualHome (`formula` is `household_sim::vh_class_level_goal`'s JSON): one symbol per class
 //!   named by a node goal or an edge goal, shared by every goal that names the class, except that
 //!   an edge goal repeated k times stands for k instances of its `from` class (`plate`,
-//!   `plate_2`); the acting character is the symbol `character`. A node goal `{class, state}` is
+//!   `plate_2`), and a node goal repeated k times for k instances of its class ("turn on the
+//!   lights": `on(light)`, `on(light_2)`; the k-th repeat of a state goes to the k-th instance,
+//!   so each instance keeps all its states); the acting character is the symbol `character`. A node goal `{class, state}` is
 //!   the literal `state(class)` in lower case (`closed(dishwasher)`); an edge goal is
 //!   `relation(from, to)` (`inside(plate, dishwasher)`); `actions` are kept in order, each a set
 //!   of alternatives (`WATCH|LOOKAT`).
@@ -217,26 +219,33 @@ fn parse_virtualhome(annotation: &GoalAnnotation, goal: &mut ClassGoal) -> Resul
         goal.symbols.push(Symbol { name: class.to_string(), kind: kind.to_string(), class: Some(class.to_string()) });
         class.to_string()
     }
+    // The k-th instance of a class (k from 0): the shared symbol, then `class_2`, `class_3`, ...
+    fn nth(goal: &mut ClassGoal, class: &str, k: usize) -> String {
+        if k == 0 {
+            return shared(goal, class);
+        }
+        let name = format!("{class}_{}", k + 1);
+        if !goal.symbols.iter().any(|s| s.name == name) {
+            goal.symbols.push(Symbol { name: name.clone(), kind: "object".into(), class: Some(class.to_string()) });
+        }
+        name
+    }
+    let mut seen_states: Vec<(String, String)> = Vec::new();
     let mut seen_edges: Vec<(String, String, String)> = Vec::new();
     for entry in entries {
         if entry.get("state").is_some() {
-            let class = text(entry, "class_name")?;
-            let symbol = shared(goal, &class);
-            goal.literals.push(ClassLiteral { predicate: text(entry, "state")?.to_lowercase(), args: vec![symbol], negated: false });
+            let (class, state) = (text(entry, "class_name")?, text(entry, "state")?);
+            let key = (class.clone(), state.clone());
+            let repeat = seen_states.iter().filter(|e| **e == key).count();
+            seen_states.push(key);
+            let symbol = nth(goal, &class, repeat);
+            goal.literals.push(ClassLiteral { predicate: state.to_lowercase(), args: vec![symbol], negated: false });
         } else {
             let (from, relation, to) = (text(entry, "from")?, text(entry, "relation_type")?, text(entry, "to")?);
             let key = (from.clone(), relation.clone(), to.clone());
             let repeat = seen_edges.iter().filter(|e| **e == key).count();
             seen_edges.push(key);
-            let from_symbol = if repeat == 0 {
-                shared(goal, &from)
-            } else {
-                let name = format!("{from}_{}", repeat + 1);
-                if !goal.symbols.iter().any(|s| s.name == name) {
-                    goal.symbols.push(Symbol { name: name.clone(), kind: "object".into(), class: Some(from.clone()) });
-                }
-                name
-            };
+            let from_symbol = nth(goal, &from, repeat);
             let to_symbol = shared(goal, &to);
             goal.literals.push(ClassLiteral { predicate: relation.to_lowercase(), args: vec![from_symbol, to_symbol], negated: false });
         }

@@ -26,8 +26,9 @@
 /// other objects, turn_to never targets a goal step (aec1f60); 4: the objects the task sentence
 /// names (VirtualHome's classes of context) decide between instances, and where it names no room,
 /// Ready waits for an instance among them until every room has been entered (82ddd31); 5: a
-/// head noun alone names no class of context.
-pub const HARNESS_VERSION: u32 = 5;
+/// head noun alone names no class of context; 6: a repeated VirtualHome node goal stands for
+/// another instance of its class ("turn on the lights": two lights, not one).
+pub const HARNESS_VERSION: u32 = 6;
 
 pub mod alfworld;
 pub mod chat_planner;

@@ -97,3 +97,26 @@ fn instance_identifiers_and_other_connectives_are_refused() {
     let garbage = parse_goal(&annotation("virtualhome", "not json"));
     assert!(matches!(garbage, Err(exploration_harness::GoalError::Unreadable { .. })), "{garbage:?}");
 }
+
+/// EAI 120_1, "turn on the lights" of the kitchen and the living room: its goal gives two lights
+/// each `ON` and `PLUGGED_IN`. A node goal repeated at class level stands for another instance,
+/// as a repeated edge goal does, so G asks for two lights, each with both states.
+#[test]
+fn a_repeated_node_goal_stands_for_another_instance_of_its_class() {
+    let annotation = household_sim::GoalAnnotation {
+        benchmark: "virtualhome-eai".into(),
+        sentence: "Go to the kitchen and living room and turn on the lights.".into(),
+        formula: r#"{"goal": [{"class_name": "light", "state": "ON"}, {"class_name": "light", "state": "PLUGGED_IN"},
+            {"class_name": "light", "state": "ON"}, {"class_name": "light", "state": "PLUGGED_IN"},
+            {"from": "character", "relation_type": "FACING", "to": "light"}], "actions": []}"#
+            .into(),
+        family: "Turn on light".into(),
+    };
+    let goal = parse_goal(&annotation).unwrap();
+    check_laws("120_1", &goal);
+    assert_eq!(
+        goal.to_string(),
+        "light: object light, light_2: object light, character: character character | on(light), plugged_in(light), on(light_2), \
+         plugged_in(light_2), facing(character, light)"
+    );
+}

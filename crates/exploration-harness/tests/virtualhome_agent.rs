@@ -2,7 +2,7 @@
 //! problem written from what it perceived: every task of the rearrangement set and every EAI
 //! fixture task, each episode judged by `VirtualhomeEnv`'s goal check within the paper's 20 steps.
 
-use std::collections::BTreeMap;
+use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
 
 use exploration_harness::virtualhome::VirtualhomeAdapter;
@@ -171,12 +171,45 @@ fn the_objects_the_task_sentence_names_decide_which_instance_is_meant() {
 
 /// EAI's scene of 1004_2 with `goal` as its `vh_goal`.
 fn scene_1004_2_with_goal(goal: serde_json::Value) -> VirtualhomeTask {
+    scene_1004_2_edited(|task| task["vh_goal"] = goal)
+}
+
+/// EAI's scene of 1004_2 (its task file as JSON), edited.
+fn scene_1004_2_edited(edit: impl FnOnce(&mut serde_json::Value)) -> VirtualhomeTask {
     let path = fixtures().join("virtualhome-eai/graphs/1004_2.json.gz");
     let mut text = String::new();
     std::io::Read::read_to_string(&mut flate2::read::GzDecoder::new(std::fs::File::open(&path).unwrap()), &mut text).unwrap();
     let mut task: serde_json::Value = serde_json::from_str(&text).unwrap();
-    task["vh_goal"] = goal;
-    VirtualhomeTask::from_json(&task.to_string(), "1004_2 with another goal").unwrap()
+    edit(&mut task);
+    VirtualhomeTask::from_json(&task.to_string(), "1004_2 edited").unwrap()
+}
+
+/// EAI 120_1, "Go to the kitchen and living room and turn on the lights.": the scene's four
+/// lights are off, and EAI's goal gives two of them (245 in the kitchen, 411 in the living room)
+/// `ON` and `PLUGGED_IN`. At class level that is a node goal repeated, so G asks for two lights
+/// (`light`, `light_2`, in the problem `light_1` and `light_2`); β binds one in each room the sentence names, and the plan turns both
+/// on. (Read as one light, the agent turned on one and the judge said not won.)
+#[test]
+fn a_repeated_node_goal_binds_and_changes_as_many_instances() {
+    let path = fixtures().join("virtualhome-eai/graphs/1004_2.json.gz");
+    let task = scene_1004_2_edited(|task| {
+        for node in task["init_graph"]["nodes"].as_array_mut().unwrap() {
+            if node["class_name"] == "light" {
+                node["states"] = serde_json::json!(["PLUGGED_IN", "OFF", "CLEAN"]);
+            }
+        }
+        task["vh_goal"] = serde_json::json!({"actions": [], "goal": [
+            {"id": 245, "class_name": "light", "state": "ON"}, {"id": 245, "class_name": "light", "state": "PLUGGED_IN"},
+            {"id": 411, "class_name": "light", "state": "ON"}, {"id": 411, "class_name": "light", "state": "PLUGGED_IN"}]});
+        task["description"] = "Go to the kitchen and living room and turn on the lights.".into();
+    });
+    let episode = play_task(task, &path, "virtualhome-eai", &ontology());
+    assert!(episode.success, "{:?}; plan {:?}", episode.failure, episode.plan);
+    let binding = &episode.handover.as_ref().unwrap().binding;
+    let lights: BTreeSet<&str> = binding.values().map(String::as_str).filter(|v| v.starts_with("light (")).collect();
+    assert_eq!(lights, BTreeSet::from(["light (245)", "light (411)"]), "{binding:?}");
+    let switched = episode.steps.iter().filter(|s| s.command.starts_with("[SWITCHON] <light>")).count();
+    assert_eq!(switched, 2, "{:?}", episode.steps);
 }
 
 /// An action goal (`LOOKAT|WATCH`) brings every perceived object that affords one of its verbs
