@@ -216,13 +216,34 @@ impl PhaseTwoRunner {
         }
         let (Some(lm), Some(vocab)) = (self.lm.as_mut(), self.vocab.as_ref()) else { return Err("no language model".into()) };
         let initial = model.initial_state();
-        let prompt = planning_prompt(model, &grounded.spelling, &initial, &self.decode.prompt_options());
-        let text = prompt.render(lm.as_ref()).map_err(|e| format!("rendering the prompt: {e}"))?;
-        let tokens = lm.tokenizer().encode_prompt(&text).map_err(|e| format!("tokenizing the prompt: {e}"))?;
         let mut config = self.decode.config(self.time_limit).map_err(|e| e.to_string())?;
         // N_plan: no plan longer than the episode's steps left (each action sends at most one
         // command), so the search goes on past a goal plan that could not finish.
         config.budget.max_actions = config.budget.max_actions.min(grounded.steps_left);
+        // Constrained MCTS returns only plans the transition model accepts, of at most
+        // `max_actions` actions. Where LM-cut (admissible with unit costs) says the goal needs
+        // more, no such plan reaches it, and the search would spend its whole budget (60 s) to
+        // find that out: say so at once. (EAI 826_1: sixteen objects to put on the dishwasher,
+        // at least 32 actions, in 20 steps.)
+        if config.mode.constrained && matches!(config.mode.strategy, mcts::Strategy::Mcts(_)) && model.task().has_unit_costs() {
+            use heuristics::Heuristic;
+            if let Some(bound) = heuristics::LmCut::new(model).evaluate(&initial)
+                && bound as usize > config.budget.max_actions
+            {
+                let max_actions = config.budget.max_actions;
+                return Ok(PhaseTwo {
+                    no_plan: Some(format!("OverBound: no plan within {max_actions} actions (LM-cut: at least {bound})")),
+                    detail: json!({
+                        "planner": "mcts", "mode": self.decode.mode.to_string(), "stop": "OverBound",
+                        "lower_bound": bound, "max_actions": max_actions,
+                    }),
+                    ..PhaseTwo::default()
+                });
+            }
+        }
+        let prompt = planning_prompt(model, &grounded.spelling, &initial, &self.decode.prompt_options());
+        let text = prompt.render(lm.as_ref()).map_err(|e| format!("rendering the prompt: {e}"))?;
+        let tokens = lm.tokenizer().encode_prompt(&text).map_err(|e| format!("tokenizing the prompt: {e}"))?;
         let mut decoder =
             Decoder::with_end_policy(model, &grounded.spelling, Arc::clone(vocab), self.decode.value(), self.decode.end_policy());
         let outcome = decoder.decode(lm.as_mut(), &tokens, &initial, &config).map_err(|e| format!("decoding: {e}"))?;

@@ -383,6 +383,26 @@ fn agent_wins_a_game_and_writes_commands_the_engine_can_replay() {
     assert_eq!(bad.status.code(), Some(2));
 }
 
+/// EAI 826_1 puts sixteen objects on the dishwasher: LM-cut needs more actions than the steps
+/// Phase I leaves, so Phase II says there is no plan without searching (constrained MCTS would
+/// spend its 60 s), and the judge's attribution is exploration's (the budget).
+#[test]
+fn agent_reports_at_once_that_no_plan_fits_in_the_steps_left() {
+    let output = xtask(&["agent", "--benchmark", "virtualhome-eai", "--task", "826_1", "--json"]);
+    assert_eq!(output.status.code(), Some(1), "{}", String::from_utf8_lossy(&output.stderr));
+    let value: serde_json::Value = serde_json::from_str(&stdout(&output)).expect("one JSON object");
+    let episode = &value["episode"];
+    assert_eq!(episode["success"], false);
+    assert_eq!(episode["no_plan"], true);
+    let detail = &episode["phase2_detail"];
+    assert_eq!(detail["stop"], "OverBound", "{detail}");
+    let steps = episode["steps"].as_array().unwrap().len() as u64;
+    assert_eq!(detail["max_actions"].as_u64(), Some(20 - steps), "{detail}");
+    assert!(detail["lower_bound"].as_u64().unwrap() > 20 - steps, "{detail}");
+    assert!(episode["failure"].as_str().unwrap().contains("LM-cut: at least"), "{episode}");
+    assert_eq!(episode["attribution"], "representation");
+}
+
 #[test]
 fn agent_solves_a_virtualhome_rearrangement_task_with_a_trace() {
     let trace = scratch("agent-trace.json", "");
