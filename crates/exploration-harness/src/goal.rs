@@ -16,8 +16,9 @@
 //!   an edge goal repeated k times stands for k instances of its `from` class (`plate`,
 //!   `plate_2`), and a node goal repeated k times for k instances of its class ("turn on the
 //!   lights": `on(light)`, `on(light_2)`; the k-th repeat of a state goes to the k-th instance,
-//!   so each instance keeps all its states); the acting character is the symbol `character`. A node goal `{class, state}` is
-//!   the literal `state(class)` in lower case (`closed(dishwasher)`); an edge goal is
+//!   so each instance keeps all its states); the acting character is the symbol `character`. A
+//!   node goal `{class, state}` is the literal `state(class)` in lower case
+//!   (`closed(dishwasher)`); an edge goal is
 //!   `relation(from, to)` (`inside(plate, dishwasher)`); `actions` are kept in order, each a set
 //!   of alternatives (`WATCH|LOOKAT`).
 

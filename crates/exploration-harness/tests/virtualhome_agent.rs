@@ -187,8 +187,9 @@ fn scene_1004_2_edited(edit: impl FnOnce(&mut serde_json::Value)) -> Virtualhome
 /// EAI 120_1, "Go to the kitchen and living room and turn on the lights.": the scene's four
 /// lights are off, and EAI's goal gives two of them (245 in the kitchen, 411 in the living room)
 /// `ON` and `PLUGGED_IN`. At class level that is a node goal repeated, so G asks for two lights
-/// (`light`, `light_2`, in the problem `light_1` and `light_2`); β binds one in each room the sentence names, and the plan turns both
-/// on. (Read as one light, the agent turned on one and the judge said not won.)
+/// (`light`, `light_2`; in the problem `light_1` and `light_2`); β binds one in each room the
+/// sentence names, and the plan turns both on. (Read as one light, the agent turned on one and
+/// the judge said not won.)
 #[test]
 fn a_repeated_node_goal_binds_and_changes_as_many_instances() {
     let path = fixtures().join("virtualhome-eai/graphs/1004_2.json.gz");
