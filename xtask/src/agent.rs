@@ -16,7 +16,7 @@ use exploration_harness::chat_planner::{ChatPlannerConfig, plan_by_chat};
 use exploration_harness::chat_policy::ChatPolicy;
 use exploration_harness::virtualhome::VirtualhomeAdapter;
 use exploration_harness::{
-    ClassGoal, Episode, EpisodeConfig, Grounded, Handing, Ontology, PhaseTwo, Policy, Systematic, parse_goal, run_episode,
+    ClassGoal, Episode, EpisodeConfig, Frontier, Grounded, Handing, Ontology, PhaseTwo, Policy, Systematic, parse_goal, run_episode,
 };
 use heuristics::search::SearchStatus;
 use household_sim::{AlfworldEnv, Environment, Judge, VirtualhomeEnv};
@@ -81,6 +81,12 @@ pub struct EpisodeArgs {
     /// first place either way.
     #[arg(long, default_value_t = 3)]
     pub frontier: usize,
+    /// Beyond the paper: the frontier narrows by one place each time the model passes over
+    /// the controller's first place for another, down to that place alone, and widens back
+    /// once the model takes it (`true`); or stays `--frontier` wide (`false`). Not for the
+    /// systematic explorer.
+    #[arg(long, default_value_t = false, action = clap::ArgAction::Set)]
+    pub narrowing: bool,
     /// Beyond the paper: when a plan step is not executed, hand over again and replan.
     #[arg(long)]
     pub closed_loop: bool,
@@ -104,8 +110,9 @@ impl EpisodeArgs {
     /// `--frontier` as [`EpisodeConfig::frontier`]: `None` for 0 (every place), and for the
     /// systematic explorer, which takes the controller's first place whatever it is offered
     /// (its records, K_t included, stay as they were).
-    pub fn frontier(&self) -> Option<usize> {
-        (self.frontier > 0 && self.explorer != ModelSpec::Systematic).then_some(self.frontier)
+    pub fn frontier(&self) -> Option<Frontier> {
+        (self.frontier > 0 && self.explorer != ModelSpec::Systematic)
+            .then_some(Frontier { width: self.frontier, narrowing: self.narrowing })
     }
 }
 

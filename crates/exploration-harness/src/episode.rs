@@ -49,7 +49,7 @@ use transition_model::{Spelling, TransitionModel};
 
 use crate::evidence::Fact;
 use crate::goal::ClassGoal;
-use crate::phase1::{Adapter, Decision, Exploration, Policy, PolicyUsage, StepRecord, explore, resume};
+use crate::phase1::{Adapter, Decision, Exploration, Frontier, Policy, PolicyUsage, StepRecord, explore, resume};
 
 /// ŝ0 and β.
 #[derive(Debug, Clone, PartialEq, Eq, Serialize)]
@@ -180,9 +180,9 @@ pub struct EpisodeConfig {
     /// Environment steps for the whole episode (ALFWorld 55, VirtualHome 20).
     pub budget: usize,
     pub closed_loop: bool,
-    /// `Goto` skills Phase I offers at a time, the controller's most promising first
-    /// ([`crate::phase1::Skills::frontier`]); `None`: every unvisited place.
-    pub frontier: Option<usize>,
+    /// How Phase I offers places to a model ([`crate::phase1::Frontier`]); `None`: every
+    /// unvisited place.
+    pub frontier: Option<Frontier>,
     /// Set aside the instances that make ŝ0's goal unreachable and resume Phase I (module
     /// documentation).
     pub reexplore: bool,

@@ -48,4 +48,4 @@ pub use episode::{Attribution, Episode, EpisodeConfig, Grounded, Handing, Handov
 pub use evidence::{Belief, Fact, Percept, perceive_alfworld};
 pub use goal::{ClassGoal, ClassLiteral, GoalError, Symbol, parse_goal};
 pub use ontology::{Ontology, OntologyError};
-pub use phase1::{Adapter, Policy, PolicyUsage, Skill, Skills, Systematic};
+pub use phase1::{Adapter, Frontier, Policy, PolicyUsage, Skill, Skills, Systematic};

@@ -161,7 +161,7 @@ proptest::proptest! {
     fn proposals_never_change_what_phase_one_establishes(
         seed in 0u64..10_000,
         game in 0usize..140,
-        frontier in proptest::option::of(1usize..4),
+        frontier in proptest::option::of((1usize..4, proptest::bool::ANY)),
     ) {
         use exploration_harness::phase1::{Adapter, explore};
         let ontology =
@@ -180,10 +180,11 @@ proptest::proptest! {
         let mut adapter = AlfworldAdapter::new(ontology.clone(), domain.clone(), grammar.clone(), env.goal());
         let mut policy = ChatPolicy::new(Box::new(Random { rng: household_sim::PythonRandom::new(seed), usage: Usage::default() }), "random");
         let first = env.reset();
+        let frontier = frontier.map(|(width, narrowing)| exploration_harness::Frontier { width, narrowing });
         let exploration = explore(&mut env, &mut adapter, &mut policy, &goal, &first, 30, frontier);
         for decision in &exploration.record.decisions {
             let gotos = decision.offered.iter().filter(|s| s.starts_with("goto ")).count();
-            proptest::prop_assert!(gotos <= frontier.unwrap_or(usize::MAX), "{:?} offered {gotos} places", frontier);
+            proptest::prop_assert!(gotos <= frontier.map_or(usize::MAX, |f| f.width), "{:?} offered {gotos} places", frontier);
         }
         let mut replay = exploration_harness::Belief::default();
         let mut fresh = AlfworldAdapter::new(ontology, domain, grammar, env.goal());
@@ -193,4 +194,58 @@ proptest::proptest! {
         }
         proptest::prop_assert_eq!(exploration.belief.facts(), replay.facts());
     }
+}
+
+/// Always takes the last `goto` skill it is offered: a model that keeps passing over the
+/// controller's first place.
+struct LastPlace;
+
+impl exploration_harness::Policy for LastPlace {
+    fn name(&self) -> String {
+        "last-place".into()
+    }
+
+    fn choose(&mut self, input: &exploration_harness::phase1::PolicyInput<'_>) -> Result<exploration_harness::phase1::PolicyReply, String> {
+        use exploration_harness::Skill;
+        let skill = input.skills.list.iter().rev().find(|s| matches!(s, Skill::Goto(_))).cloned().unwrap_or(Skill::Done);
+        Ok(exploration_harness::phase1::PolicyReply { proposed: Vec::new(), skill, done: false })
+    }
+
+    fn usage(&self) -> exploration_harness::PolicyUsage {
+        exploration_harness::PolicyUsage::default()
+    }
+}
+
+/// A narrowing frontier offers one place fewer each time the model passes over the
+/// controller's first place, down to that place alone, and all of them again once it is
+/// taken; without narrowing the offer stays as wide as the frontier.
+#[test]
+fn a_narrowing_frontier_closes_in_on_the_place_a_model_keeps_passing_over() {
+    use exploration_harness::Frontier;
+    use exploration_harness::phase1::explore;
+    let ontology =
+        Ontology::from_text(&std::fs::read_to_string(fixtures().join("ontology/alfworld.txt")).unwrap(), "alfworld.txt").unwrap();
+    let domain = pddl_syntax::parse_domain(&std::fs::read_to_string(fixtures().join("alfworld/alfred.pddl")).unwrap()).unwrap();
+    let grammar = std::fs::read_to_string(fixtures().join("alfworld/alfred.twl2")).unwrap();
+    // The box is in none of the first places the controller ranks.
+    let game = fixtures().join("alfworld/valid_seen/pick_and_place_simple-Box-None-Dresser-224/trial_T20190907_164104_229696/game.tw-pddl");
+    let places_offered = |narrowing: bool| {
+        let mut env = AlfworldEnv::from_game_file(&game).unwrap();
+        let goal = parse_goal(env.goal()).unwrap();
+        let mut adapter = AlfworldAdapter::new(ontology.clone(), domain.clone(), grammar.clone(), env.goal());
+        let first = env.reset();
+        let frontier = Some(Frontier { width: 3, narrowing });
+        let exploration = explore(&mut env, &mut adapter, &mut LastPlace, &goal, &first, 12, frontier);
+        let decisions = &exploration.record.decisions;
+        assert!(decisions.len() >= 4, "{decisions:?}");
+        let gotos = |d: &exploration_harness::phase1::Decision| d.offered.iter().filter(|s| s.starts_with("goto ")).count();
+        // The first place offered each time, and whether the model took it.
+        let took_first: Vec<bool> = decisions.iter().map(|d| d.offered.iter().find(|s| s.starts_with("goto ")) == Some(&d.skill)).collect();
+        (decisions.iter().map(gotos).collect::<Vec<usize>>(), took_first)
+    };
+    let (wide, _) = places_offered(false);
+    assert!(wide.iter().all(|&n| n == 3), "{wide:?}");
+    let (narrowing, took_first) = places_offered(true);
+    assert_eq!(narrowing[..4], [3, 2, 1, 3], "passed over twice, then taken");
+    assert_eq!(took_first[..4], [false, false, true, false]);
 }
