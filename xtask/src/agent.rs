@@ -83,9 +83,9 @@ pub struct EpisodeArgs {
     pub frontier: usize,
     /// Beyond the paper: the frontier narrows by one place each time the model passes over
     /// the controller's first place for another, down to that place alone, and widens back
-    /// once the model takes it (`true`); or stays `--frontier` wide (`false`). Not for the
-    /// systematic explorer.
-    #[arg(long, default_value_t = false, action = clap::ArgAction::Set)]
+    /// once the model takes it (`true`); or stays `--frontier` wide (`false`, as before
+    /// HARNESS_VERSION 8). Not for the systematic explorer.
+    #[arg(long, default_value_t = true, action = clap::ArgAction::Set)]
     pub narrowing: bool,
     /// Beyond the paper: when a plan step is not executed, hand over again and replan.
     #[arg(long)]

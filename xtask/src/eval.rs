@@ -376,9 +376,7 @@ fn config(args: &EvalArgs, suite: Suite) -> anyhow::Result<Value> {
         // the frontier): the hashes of systematic runs stay as they were.
         if args.episode.explorer != crate::model_spec::ModelSpec::Systematic {
             config.as_object_mut().expect("object").insert("frontier".into(), json!(args.episode.frontier));
-            if args.episode.narrowing {
-                config.as_object_mut().expect("object").insert("narrowing".into(), json!(true));
-            }
+            config.as_object_mut().expect("object").insert("narrowing".into(), json!(args.episode.narrowing));
         }
         // Only where the explorer is served: the hashes of other runs stay as they were.
         if let Some(served) = served_model(args) {
