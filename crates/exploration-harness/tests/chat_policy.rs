@@ -49,12 +49,18 @@ fn fixtures() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../../fixtures")
 }
 
-#[test]
-fn a_chat_policy_explores_and_its_proposals_stay_hypotheses() {
+/// What an ALFWorld adapter is built from: F_str, the domain and the command grammar.
+fn alfworld_parts() -> (Ontology, pddl_syntax::Domain, String) {
     let ontology =
         Ontology::from_text(&std::fs::read_to_string(fixtures().join("ontology/alfworld.txt")).unwrap(), "alfworld.txt").unwrap();
     let domain = pddl_syntax::parse_domain(&std::fs::read_to_string(fixtures().join("alfworld/alfred.pddl")).unwrap()).unwrap();
     let grammar = std::fs::read_to_string(fixtures().join("alfworld/alfred.twl2")).unwrap();
+    (ontology, domain, grammar)
+}
+
+#[test]
+fn a_chat_policy_explores_and_its_proposals_stay_hypotheses() {
+    let (ontology, domain, grammar) = alfworld_parts();
     let root = fixtures().join("alfworld/valid_seen");
     let mut families: Vec<PathBuf> = std::fs::read_dir(&root).unwrap().map(|f| f.unwrap().path()).collect();
     families.sort();
@@ -96,10 +102,7 @@ fn a_chat_policy_explores_and_its_proposals_stay_hypotheses() {
 #[test]
 fn the_phase_one_prompt_of_a_first_step() {
     use exploration_harness::phase1::explore;
-    let ontology =
-        Ontology::from_text(&std::fs::read_to_string(fixtures().join("ontology/alfworld.txt")).unwrap(), "alfworld.txt").unwrap();
-    let domain = pddl_syntax::parse_domain(&std::fs::read_to_string(fixtures().join("alfworld/alfred.pddl")).unwrap()).unwrap();
-    let grammar = std::fs::read_to_string(fixtures().join("alfworld/alfred.twl2")).unwrap();
+    let (ontology, domain, grammar) = alfworld_parts();
     let game = fixtures()
         .join("alfworld/valid_seen/pick_clean_then_place_in_recep-Mug-None-CoffeeMachine-26/trial_T20190907_233056_022802/game.tw-pddl");
     let mut env = AlfworldEnv::from_game_file(&game).unwrap();
@@ -164,10 +167,7 @@ proptest::proptest! {
         frontier in proptest::option::of((1usize..4, proptest::bool::ANY)),
     ) {
         use exploration_harness::phase1::{Adapter, explore};
-        let ontology =
-            Ontology::from_text(&std::fs::read_to_string(fixtures().join("ontology/alfworld.txt")).unwrap(), "alfworld.txt").unwrap();
-        let domain = pddl_syntax::parse_domain(&std::fs::read_to_string(fixtures().join("alfworld/alfred.pddl")).unwrap()).unwrap();
-        let grammar = std::fs::read_to_string(fixtures().join("alfworld/alfred.twl2")).unwrap();
+        let (ontology, domain, grammar) = alfworld_parts();
         let mut games = Vec::new();
         for family in std::fs::read_dir(fixtures().join("alfworld/valid_seen")).unwrap() {
             for trial in std::fs::read_dir(family.unwrap().path()).unwrap() {
@@ -223,10 +223,7 @@ impl exploration_harness::Policy for LastPlace {
 fn a_narrowing_frontier_closes_in_on_the_place_a_model_keeps_passing_over() {
     use exploration_harness::Frontier;
     use exploration_harness::phase1::explore;
-    let ontology =
-        Ontology::from_text(&std::fs::read_to_string(fixtures().join("ontology/alfworld.txt")).unwrap(), "alfworld.txt").unwrap();
-    let domain = pddl_syntax::parse_domain(&std::fs::read_to_string(fixtures().join("alfworld/alfred.pddl")).unwrap()).unwrap();
-    let grammar = std::fs::read_to_string(fixtures().join("alfworld/alfred.twl2")).unwrap();
+    let (ontology, domain, grammar) = alfworld_parts();
     // The box is in none of the first places the controller ranks.
     let game = fixtures().join("alfworld/valid_seen/pick_and_place_simple-Box-None-Dresser-224/trial_T20190907_164104_229696/game.tw-pddl");
     let places_offered = |narrowing: bool| {
