@@ -403,6 +403,31 @@ fn agent_reports_at_once_that_no_plan_fits_in_the_steps_left() {
     assert_eq!(episode["attribution"], "representation");
 }
 
+/// EAI 229_1 with a budget of 11: the sweep's Phase I takes 4 steps and leaves 7; LM-cut at
+/// ŝ0 says 7, but the optimal plan takes 8. A* within 7 actions proves that none fits, so Phase
+/// II says so without searching (constrained MCTS would spend its whole time limit), and the
+/// failure is exploration's. With 12, the plan is found.
+#[test]
+fn agent_proves_by_a_star_that_no_plan_fits_where_lm_cut_cannot() {
+    let run = |budget: &str| {
+        let output = xtask(&["agent", "--benchmark", "virtualhome-eai", "--task", "229_1", "--budget", budget, "--json"]);
+        let value: serde_json::Value = serde_json::from_str(&stdout(&output)).expect("one JSON object");
+        (output.status.code(), value["episode"].clone())
+    };
+    let (code, episode) = run("11");
+    assert_eq!(code, Some(1), "{episode}");
+    assert_eq!((episode["phase1_steps"].as_u64(), episode["no_plan"].as_bool()), (Some(4), Some(true)), "{episode}");
+    let detail = &episode["phase2_detail"];
+    assert_eq!((detail["stop"].as_str(), detail["proved_by"].as_str()), (Some("OverBound"), Some("astar")), "{detail}");
+    assert_eq!(detail["max_actions"].as_u64(), Some(7), "{detail}");
+    assert!(detail.get("simulations").is_none(), "no search ran: {detail}");
+    assert_eq!(episode["failure"], "no plan: OverBound: no plan within 7 actions (A* with LM-cut)");
+    assert_eq!(episode["attribution"], "representation");
+    let (code, episode) = run("12");
+    assert_eq!(code, Some(0), "{episode}");
+    assert_eq!(episode["plan"].as_array().map(Vec::len), Some(8), "{episode}");
+}
+
 #[test]
 fn agent_solves_a_virtualhome_rearrangement_task_with_a_trace() {
     let trace = scratch("agent-trace.json", "");

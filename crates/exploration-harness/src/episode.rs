@@ -434,18 +434,48 @@ pub fn unreachable_goal_instances(grounded: &Grounded) -> BTreeSet<String> {
 /// proves the bound on ALFWorld's hand-overs in a few thousand), and a cap on the check's time.
 const FIT_EXPANSIONS: u64 = 200_000;
 
-/// Whether A* with LM-cut proves that ŝ0 has plans, but none of at most `steps` actions (unit
-/// costs only: otherwise a cost says nothing of a length). An exhausted budget proves nothing.
-fn no_plan_fits(model: &transition_model::TransitionModel, steps: usize) -> bool {
+/// What A* with LM-cut, bounded by a number of actions, says of the plans of ŝ0.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum PlanFit {
+    /// An optimal plan of this many actions, within the bound.
+    Fits(usize),
+    /// Plans exist, but every one is longer than the bound: the space within it was searched.
+    NoneFits,
+    /// Nothing proved: the expansions ran out, ŝ0 has no plan at all, or the costs are not
+    /// unit (a cost then says nothing of a length).
+    Unknown,
+}
+
+/// A* with LM-cut (admissible) on ŝ0 for plans of at most `steps` actions, within
+/// `max_expansions` and, where given, `time_limit` (without one, the same answer on any
+/// machine, however loaded). Phase II's planner asks it before a search
+/// ([`PlanFit::NoneFits`]: no search can find a plan that finishes), the episode after a
+/// failed one (the attribution).
+pub fn plan_fit(
+    model: &transition_model::TransitionModel,
+    steps: usize,
+    max_expansions: u64,
+    time_limit: Option<std::time::Duration>,
+) -> PlanFit {
     if !model.task().has_unit_costs() {
-        return false;
+        return PlanFit::Unknown;
     }
     let mut config = heuristics::search::SearchConfig::new(heuristics::search::Algorithm::AStar);
     config.max_cost = Some(steps as u64);
-    config.max_expansions = Some(FIT_EXPANSIONS);
-    // `OverBound`: plans exist only beyond the bound. (`Unsolvable`, none at all, is not the
-    // steps' fault.)
-    heuristics::search::optimal_plan_with(model, &config) == Err(heuristics::search::SearchStatus::OverBound)
+    config.max_expansions = Some(max_expansions);
+    config.time_limit = time_limit;
+    match heuristics::search::optimal_plan_with(model, &config) {
+        Ok(plan) => PlanFit::Fits(plan.len()),
+        // `OverBound`: plans exist only beyond the bound. (`Unsolvable`, none at all, is not
+        // the steps' fault.)
+        Err(heuristics::search::SearchStatus::OverBound) => PlanFit::NoneFits,
+        Err(_) => PlanFit::Unknown,
+    }
+}
+
+/// Whether A* with LM-cut proves that ŝ0 has plans, but none of at most `steps` actions.
+fn no_plan_fits(model: &transition_model::TransitionModel, steps: usize) -> bool {
+    plan_fit(model, steps, FIT_EXPANSIONS, None) == PlanFit::NoneFits
 }
 
 /// Precision and recall of F_τ against the hidden state (module documentation); `None` where

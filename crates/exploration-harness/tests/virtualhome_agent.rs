@@ -362,6 +362,34 @@ fn phase_one_spending_the_budget_is_an_exploration_failure() {
     assert_eq!(episode.attribution, Some(Attribution::Representation), "{:?}", episode.failure);
 }
 
+/// `plan_fit` on EAI 229_1's hand-over (coffee: the sweep's Phase I takes 4 steps, the optimal
+/// plan 8, LM-cut at ŝ0 says 7): LM-cut alone cannot tell that 7 steps are too few; A* within
+/// 7 proves it, within 8 finds the plan, and with one expansion proves nothing.
+#[test]
+fn a_star_within_the_steps_left_proves_that_no_plan_fits_where_lm_cut_cannot() {
+    use exploration_harness::{PlanFit, plan_fit};
+    use heuristics::Heuristic;
+    let path = fixtures().join("virtualhome-eai/graphs/229_1.json.gz");
+    let mut env = VirtualhomeEnv::new(VirtualhomeTask::load(&path).unwrap(), "virtualhome-eai");
+    let goal = parse_goal(env.goal()).unwrap();
+    let mut adapter = VirtualhomeAdapter::new(ontology()).unwrap();
+    let fits = std::cell::RefCell::new(Vec::new());
+    let mut planner = |g: &Grounded| {
+        let lm_cut = heuristics::LmCut::new(&g.model).evaluate(&g.model.initial_state());
+        fits.borrow_mut().push((
+            lm_cut,
+            plan_fit(&g.model, 7, 200_000, None),
+            plan_fit(&g.model, 8, 200_000, None),
+            plan_fit(&g.model, 7, 1, None),
+        ));
+        a_star(g).map(|actions| PhaseTwo { actions, ..PhaseTwo::default() })
+    };
+    let episode = run_episode(&mut env, &mut adapter, &mut Systematic, &goal, EpisodeConfig::open_loop(20), &mut planner);
+    assert!(episode.success, "{:?}", episode.failure);
+    assert_eq!(episode.plan.len(), 8);
+    assert_eq!(fits.into_inner(), vec![(Some(7), PlanFit::NoneFits, PlanFit::Fits(8), PlanFit::Unknown)]);
+}
+
 /// A search that ends without a plan still counts: its model calls, tokens and detail are in
 /// the record, and the failure is Phase II's (`search`) when Phase I's state was right. The
 /// planner is told how many steps the plan may take.
