@@ -385,7 +385,7 @@ fn agent_wins_a_game_and_writes_commands_the_engine_can_replay() {
 
 /// EAI 826_1 puts sixteen objects on the dishwasher: LM-cut needs more actions than the steps
 /// Phase I leaves, so Phase II says there is no plan without searching (constrained MCTS would
-/// spend its 60 s), and the judge's attribution is exploration's (the budget).
+/// spend its whole time limit), and the judge's attribution is exploration's (the budget).
 #[test]
 fn agent_reports_at_once_that_no_plan_fits_in_the_steps_left() {
     let output = xtask(&["agent", "--benchmark", "virtualhome-eai", "--task", "826_1", "--json"]);
