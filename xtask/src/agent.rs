@@ -306,7 +306,7 @@ impl PhaseTwoRunner {
 const FIT_PRECHECK_EXPANSIONS: u64 = 20_000;
 
 /// The check's time: at most a twentieth of the search's and at most this. On the EAI sweep
-/// (all 342 hand-overs) it added 40 s of Phase II time to 78 s with the 60 s limit, changing no
+/// (all 342 hand-overs, one thread, idle) it adds 55 s of Phase II time to 73 s, changing no
 /// plan; unbounded it took 90 s on 783_1 alone (a hand-over of many plates, where A* with LM-cut
 /// is slow and MCTS with the uniform prior needs 5 s).
 const FIT_PRECHECK_TIME: Duration = Duration::from_secs(3);
