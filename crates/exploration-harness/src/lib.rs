@@ -32,8 +32,9 @@
 /// without the 60 s search); 8: the frontier a model explorer is offered narrows while the model
 /// passes over the controller's first place (`phase1::Frontier`); 9: nor where A* with LM-cut,
 /// within the steps left, proves it ([`plan_fit`], before the search; the same verdicts), and
-/// Phase II's default time limit is the paper's 250 s (60 s before).
-pub const HARNESS_VERSION: u32 = 9;
+/// Phase II's default time limit is the paper's 250 s (60 s before); 10: VirtualHome's Phase I
+/// offers no closed appliance that is on as a place to open (EAI's executor refuses it).
+pub const HARNESS_VERSION: u32 = 10;
 
 pub mod alfworld;
 pub mod chat_planner;

@@ -15,8 +15,9 @@
 //!   whether the character sits or lies (`goto` then stands up first).
 //!   Names are as perceived: class and the id the observation shows.
 //! - K_t ([`VirtualhomeAdapter`]'s `skills`): `goto R` for rooms not yet entered; `open X` for a
-//!   container (F_str: `can_open` and `containers`) the agent is close to and saw closed, not yet
-//!   tried to open (a failed attempt, such as a freezer that is on, would fail again); `close X`
+//!   container (F_str: `can_open` and `containers`) the agent is close to and saw closed and not
+//!   on (EAI's executor opens no appliance that is on, and no skill switches one off), not yet
+//!   tried to open (a failed attempt would fail again); `close X`
 //!   for one it opened, once; `goto X` for closed containers not yet tried and not yet walked
 //!   to (R_t: a place is inspected once; arriving at X the agent opens it, the skill's
 //!   follow-up, and a walk back would show nothing new), those of a class G names first (the
@@ -283,14 +284,24 @@ impl VirtualhomeAdapter {
         belief.hypotheses().flat_map(|h| h.args.iter()).find(|a| instances.contains(*a)).cloned()
     }
 
-    /// Containers seen closed that Phase I has not opened, with whether they are in the room now.
+    /// A container (F_str) seen closed and not on: EAI's executor refuses to open an appliance
+    /// that is on ("is still on"), and Phase I has no skill that switches one off, so one seen
+    /// on is no place to inspect.
+    fn openable(&self, x: &str, belief: &Belief) -> bool {
+        self.has(x, "can_open")
+            && self.has(x, "containers")
+            && belief.holds("CLOSED", &[x]) == Some(true)
+            && belief.holds("ON", &[x]) != Some(true)
+    }
+
+    /// Containers seen closed (and not on) that Phase I has not tried to open, with whether
+    /// they are in the room now.
     fn closed_containers(&self, belief: &Belief, record: &Record) -> Vec<(String, bool)> {
         let opened = Self::attempted(record, "[OPEN] ");
         let room = Self::room_now(belief);
         let mut out: Vec<(String, bool)> = Self::instances(belief)
             .into_iter()
-            .filter(|x| self.has(x, "can_open") && self.has(x, "containers"))
-            .filter(|x| belief.holds("CLOSED", &[x]) == Some(true) && !opened.contains(x))
+            .filter(|x| self.openable(x, belief) && !opened.contains(x))
             .map(|x| {
                 let in_room = room.as_ref().is_some_and(|r| belief.holds(IN_ROOM, &[&x, r]) == Some(true));
                 (x, in_room)
@@ -507,8 +518,7 @@ impl Adapter for VirtualhomeAdapter {
     fn follow_up(&self, skill: &Skill, belief: &Belief, record: &Record) -> Option<String> {
         let Skill::Goto(x) = skill else { return None };
         let (class, id) = split_name(x)?;
-        let closed = belief.holds("CLOSED", &[x]) == Some(true) && belief.holds("CLOSE", &[ME, x]) == Some(true);
-        (closed && self.has(x, "can_open") && self.has(x, "containers") && !Self::attempted(record, "[OPEN] ").contains(x))
+        (belief.holds("CLOSE", &[ME, x]) == Some(true) && self.openable(x, belief) && !Self::attempted(record, "[OPEN] ").contains(x))
             .then(|| format!("[OPEN] <{class}> ({id})"))
     }
 

@@ -76,6 +76,7 @@ fn play_set(dir: &Path, benchmark: &str) -> (usize, usize, BTreeMap<String, usiz
         // Plans are executable by construction: a step the environment refuses from a state
         // Phase I got right would be a soundness bug of the hand-over.
         assert_ne!(episode.attribution, Some(Attribution::Grounding), "{}: {:?}", path.display(), episode.failure);
+        assert_phase_one_never_refused(&episode, &path.display().to_string());
         if episode.success {
             won += 1;
         } else {
@@ -315,6 +316,16 @@ fn no_phase_one_skill_of_the_controller_repeats_a_target() {
         let mut planner = |_: &Grounded| Err::<PhaseTwo, String>("no Phase II here".into());
         let episode = run_episode(&mut env, &mut adapter, &mut policy, &goal, EpisodeConfig::open_loop(60), &mut planner);
         assert_no_target_repeats(&episode, &path.display().to_string());
+        assert_phase_one_never_refused(&episode, &path.display().to_string());
+    }
+}
+
+/// K_t offers only what the executor accepts from what was perceived: no Phase I command is
+/// refused. (The sweep walked to the rearrangement set's fridge-043 freezer, which is on, and
+/// tried to open it; EAI's executor refuses that, "is still on", and so does ours.)
+fn assert_phase_one_never_refused(episode: &Episode, what: &str) {
+    for s in episode.steps.iter().filter(|s| s.phase == "explore") {
+        assert!(s.executed, "{what}: Phase I's {} was refused: {}", s.command, s.observation);
     }
 }
 
