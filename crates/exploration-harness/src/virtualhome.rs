@@ -18,7 +18,7 @@
 //!   container (F_str: `can_open` and `containers`) the agent is close to and saw closed and not
 //!   on (EAI's executor opens no appliance that is on, and no skill switches one off), not yet
 //!   tried to open (a failed attempt would fail again); `close X`
-//!   for one it opened, once; `goto X` for closed containers not yet tried and not yet walked
+//!   for one it opened, once; `goto X` for closed containers not on, not yet tried and not yet walked
 //!   to (R_t: a place is inspected once; arriving at X the agent opens it, the skill's
 //!   follow-up, and a walk back would show nothing new), those of a class G names first (the
 //!   plan goes there anyway), then those of the current room. The places the task
