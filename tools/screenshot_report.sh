@@ -26,7 +26,9 @@ fi
 report=$(cd "$report" && pwd)
 mkdir -p "$out"
 out=$(cd "$out" && pwd)
-episode=${3:-$(cd "$report" && find episodes -name '*.html' | sort | head -n 1)}
+# (awk, not head: head exits after one line, and with thousands of pages sort then dies of
+# SIGPIPE, which pipefail and set -e turn into a silent exit of this script)
+episode=${3:-$(cd "$report" && find episodes -name '*.html' | sort | awk 'NR == 1')}
 if [[ -z $episode || ! -f $report/$episode ]]; then
     echo "error: no episode page ${episode:-(none found)} under $report" >&2
     exit 2
@@ -55,6 +57,6 @@ shoot "$report/$episode" "$out/episode.png" 1280,2000
 for svg in "$report"/*.svg; do
     [[ -f $svg ]] || continue
     name=$(basename "$svg" .svg)
-    height=$(sed -n 's/.*<svg [^>]*height="\([0-9.]*\)".*/\1/p' "$svg" | head -n 1)
+    height=$(sed -n 's/.*<svg [^>]*height="\([0-9.]*\)".*/\1/p' "$svg" | awk 'NR == 1')
     shoot "$svg" "$out/figure-$name.png" "1000,${height%.*}"
 done

@@ -50,10 +50,11 @@ fn table_7_numbers_are_the_statistics_modules() {
         100.0 * interval.upper
     );
     let markdown = fixture_report().markdown;
-    let row = markdown.lines().find(|l| l.starts_with("| Constrained sampling | uniform prior | 2 |")).expect("Table 7's row");
+    let row = markdown.lines().find(|l| l.starts_with("| Constrained sampling | sweep / uniform prior | 2 |")).expect("Table 7's row");
     assert!(row.ends_with(&cell), "{row} does not end with {cell}");
     // Table 10: against both seeds, the larger exact p (seed 42 differs from ours on one task).
-    let ablation = markdown.lines().find(|l| l.starts_with("| Ours (uniform prior) vs. Constrained sampling")).expect("Table 10's row");
+    let ablation =
+        markdown.lines().find(|l| l.starts_with("| Ours (sweep / uniform prior) vs. Constrained sampling")).expect("Table 10's row");
     let p = stats::mcnemar_exact_max_p_over_runs(
         &[true, true, true, true, true, false],
         &[[true, false, true, true, false, false], [true, true, false, true, true, false]],
@@ -308,6 +309,73 @@ fn tasks_without_an_expert_plan_are_left_out_and_said() {
 
 /// A run of a subset (`eval --subset default` gives each benchmark its own) is a column of its
 /// own, named by the subset; the subset does not make another condition.
+/// A copy of the fixture record set `stem` under `dir` with its configuration changed by
+/// `edit`, renamed and re-stamped with the new configuration's hash, as `eval` would write it.
+fn variant(dir: &Path, stem: &str, edit: impl FnOnce(&mut serde_json::Value)) {
+    let mut config: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(fixtures().join(format!("{stem}.config.json"))).unwrap()).unwrap();
+    edit(&mut config);
+    let hash = eval_harness::records::config_hash(&config);
+    let prefix = stem.rsplit_once('-').unwrap().0;
+    let new_stem = format!("{prefix}-{hash}");
+    std::fs::write(dir.join(format!("{new_stem}.config.json")), serde_json::to_string_pretty(&config).unwrap()).unwrap();
+    // The set's records, its shard files joined.
+    let mut files: Vec<PathBuf> = std::fs::read_dir(fixtures())
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.file_name().unwrap().to_str().unwrap().starts_with(stem) && p.extension().is_some_and(|e| e == "jsonl"))
+        .collect();
+    files.sort();
+    let records: Vec<String> = files
+        .iter()
+        .flat_map(|f| std::fs::read_to_string(f).unwrap().lines().map(str::to_string).collect::<Vec<_>>())
+        .map(|line| {
+            let mut record: serde_json::Value = serde_json::from_str(&line).unwrap();
+            record["config"] = hash.clone().into();
+            record.to_string()
+        })
+        .collect();
+    std::fs::write(dir.join(format!("{new_stem}.jsonl")), records.join("\n") + "\n").unwrap();
+}
+
+#[test]
+fn the_model_column_names_each_phase_where_they_differ() {
+    let dir = scratch("model-column");
+    let ours = "alfworld-seen-ours-86924780c5c0";
+    copy_fixture(ours, &dir);
+    variant(&dir, ours, |c| {
+        c["explorer"] = "smollm2".into();
+        c["lm"]["lm"] = "smollm2".into();
+    });
+    variant(&dir, ours, |c| c["lm"]["lm"] = "smollm2".into());
+    let planner = "virtualhome-rearrange-planner-1a1f05079ed4";
+    for shard in ["shard-1-of-2", "shard-2-of-2"] {
+        let file = format!("{planner}.{shard}.jsonl");
+        std::fs::copy(fixtures().join(&file), dir.join(&file)).unwrap();
+    }
+    std::fs::copy(fixtures().join(format!("{planner}.config.json")), dir.join(format!("{planner}.config.json"))).unwrap();
+    variant(&dir, planner, |c| c["explorer"] = "smollm2".into());
+    let sets: Vec<_> = record_paths(&[dir]).unwrap().iter().map(|p| load(p).unwrap()).collect();
+    let markdown = build(&sets, &ReportOptions::default()).unwrap().markdown;
+    let table_1 = section_of(&markdown, "## Task success");
+    for row in [
+        "| Constrained sampling | SmolLM2-135M |",
+        "| Constrained sampling | sweep / SmolLM2-135M |",
+        "| Constrained sampling | sweep / uniform prior |",
+        "| Planner (A*) | SmolLM2-135M |",
+        "| Planner (A*) | — |",
+    ] {
+        assert_eq!(table_1.lines().filter(|l| l.starts_with(row)).count(), 1, "{row} in\n{table_1}");
+    }
+}
+
+/// The Markdown from `heading` to the next `## `.
+fn section_of<'a>(markdown: &'a str, heading: &str) -> &'a str {
+    let start = markdown.find(heading).expect(heading);
+    let rest = &markdown[start + heading.len()..];
+    &markdown[start..start + heading.len() + rest.find("\n## ").unwrap_or(rest.len())]
+}
+
 #[test]
 fn a_subset_names_a_column_not_a_condition() {
     let dir = scratch("subset");

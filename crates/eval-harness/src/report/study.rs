@@ -184,14 +184,27 @@ fn model_name(spec: &str, served: Option<&str>) -> String {
     }
 }
 
-/// The paper's "Model" column: a `model` setting (the direct policy's), else Phase II's
-/// language model, else a dash (the planner and the expert use none).
+/// The paper's "Model" column. The paper's agent uses one model in both phases; here Phase I's
+/// explorer and Phase II's language model are set apart, so the column names both, `Phase I /
+/// Phase II`, where they differ (`sweep` for the systematic explorer, which uses none): a row
+/// planned with SmolLM2 from the sweep's state must not read as SmolLM2 in both phases. A
+/// `model` setting (the direct policy's) is the one model; the planner names its explorer only;
+/// a dash where no model is used (the expert, the planner after the sweep).
 fn model(flat: &BTreeMap<String, Value>) -> String {
     let text = |key: &str| flat.get(key).and_then(Value::as_str);
     let served = text("lm.served_model").or(text("served_model"));
-    match text("model").or(text("lm.lm")).or(text("lm")) {
-        Some(spec) => model_name(spec, served),
-        None => "—".into(),
+    let phase2 = text("model").or(text("lm.lm")).or(text("lm")).map(|spec| model_name(spec, served));
+    let phase1 = match text("model").map_or(text("explorer"), |_| None) {
+        Some("systematic") => Some("sweep".to_string()),
+        Some(spec) => Some(model_name(spec, served)),
+        None => None,
+    };
+    match (phase1, phase2) {
+        (Some(one), Some(two)) if one == two => one,
+        (Some(one), Some(two)) => format!("{one} / {two}"),
+        (Some(one), None) if one != "sweep" => one,
+        (None, Some(two)) => two,
+        _ => "—".into(),
     }
 }
 

@@ -101,7 +101,8 @@ fn success_table(study: &Study<'_>) -> Result<Table, ReportError> {
         "success",
         "Task success (%) (Table 1)",
         "Task success (%) per condition and benchmark: the mean over runs of each run's success rate; n = tasks per run (× runs). \
-         Best per column in bold.",
+         Model: the model of both phases, or Phase I's / Phase II's where they differ (sweep: the systematic explorer, which uses \
+         none). Best per column in bold.",
         "No records.",
     );
     let with_setting = has_setting(&study.conditions);
