@@ -307,8 +307,6 @@ fn tasks_without_an_expert_plan_are_left_out_and_said() {
     assert!(markdown.contains("- left out: Expert plan on alfworld-seen: 1 task(s) with no plan to replay"), "{markdown}");
 }
 
-/// A run of a subset (`eval --subset default` gives each benchmark its own) is a column of its
-/// own, named by the subset; the subset does not make another condition.
 /// A copy of the fixture record set `stem` under `dir` with its configuration changed by
 /// `edit`, renamed and re-stamped with the new configuration's hash, as `eval` would write it.
 fn variant(dir: &Path, stem: &str, edit: impl FnOnce(&mut serde_json::Value)) {
@@ -376,27 +374,14 @@ fn section_of<'a>(markdown: &'a str, heading: &str) -> &'a str {
     &markdown[start..start + heading.len() + rest.find("\n## ").unwrap_or(rest.len())]
 }
 
+/// A run of a subset (`eval --subset default` gives each benchmark its own) is a column of its
+/// own, named by the subset; the subset does not make another condition.
 #[test]
 fn a_subset_names_a_column_not_a_condition() {
     let dir = scratch("subset");
     let stem = "alfworld-seen-ours-86924780c5c0";
     copy_fixture(stem, &dir);
-    let mut config: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(fixtures().join(format!("{stem}.config.json"))).unwrap()).unwrap();
-    config["subset"] = "alfworld-seen-6".into();
-    let hash = eval_harness::records::config_hash(&config);
-    let subset_stem = format!("alfworld-seen-ours-{hash}");
-    std::fs::write(dir.join(format!("{subset_stem}.config.json")), serde_json::to_string_pretty(&config).unwrap()).unwrap();
-    let records: Vec<String> = std::fs::read_to_string(fixtures().join(format!("{stem}.jsonl")))
-        .unwrap()
-        .lines()
-        .map(|line| {
-            let mut record: serde_json::Value = serde_json::from_str(line).unwrap();
-            record["config"] = hash.clone().into();
-            record.to_string()
-        })
-        .collect();
-    std::fs::write(dir.join(format!("{subset_stem}.jsonl")), records.join("\n") + "\n").unwrap();
+    variant(&dir, stem, |c| c["subset"] = "alfworld-seen-6".into());
     let sets: Vec<_> = record_paths(&[dir]).unwrap().iter().map(|p| load(p).unwrap()).collect();
     let markdown = build(&sets, &ReportOptions::default()).unwrap().markdown;
     assert!(markdown.contains("| Approach | Model | alfworld-seen | alfworld-seen-6 |"), "{markdown}");

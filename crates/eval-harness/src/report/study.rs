@@ -194,11 +194,9 @@ fn model(flat: &BTreeMap<String, Value>) -> String {
     let text = |key: &str| flat.get(key).and_then(Value::as_str);
     let served = text("lm.served_model").or(text("served_model"));
     let phase2 = text("model").or(text("lm.lm")).or(text("lm")).map(|spec| model_name(spec, served));
-    let phase1 = match text("model").map_or(text("explorer"), |_| None) {
-        Some("systematic") => Some("sweep".to_string()),
-        Some(spec) => Some(model_name(spec, served)),
-        None => None,
-    };
+    // A `model` setting is the direct policy's one model: it has no separate explorer.
+    let explorer = if text("model").is_some() { None } else { text("explorer") };
+    let phase1 = explorer.map(|spec| if spec == "systematic" { "sweep".to_string() } else { model_name(spec, served) });
     match (phase1, phase2) {
         (Some(one), Some(two)) if one == two => one,
         (Some(one), Some(two)) => format!("{one} / {two}"),
