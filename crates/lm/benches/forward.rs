@@ -1,5 +1,6 @@
-//! Criterion benches of the local forward pass: prefill, one decode step, and a sibling branch
-//! after a shared prefix. On the fetched SmolLM2 file when it is in the model cache (see
+//! Criterion benches of the local forward pass: prefill (a short prompt, and one as long as a
+//! VirtualHome Phase I prompt, where attention is most of the time), one decode step, and a
+//! sibling branch after a shared prefix. On the fetched SmolLM2 file when it is in the model cache (see
 //! `cargo xtask fetch-model`), else on the tiny random-weight model, so that the bench always runs.
 
 use std::hint::black_box;
@@ -15,7 +16,7 @@ fn model_path() -> (PathBuf, &'static str) {
         return (smollm2, "smollm2");
     }
     let tiny = std::env::temp_dir().join(format!("lm-bench-tiny-{}.gguf", std::process::id()));
-    write_tiny_gguf(&tiny, &TinySpec { context_length: 1024, ..TinySpec::default() }).expect("tiny model");
+    write_tiny_gguf(&tiny, &TinySpec { context_length: 2048, ..TinySpec::default() }).expect("tiny model");
     (tiny, "tiny")
 }
 
@@ -32,6 +33,17 @@ fn forward(c: &mut Criterion) {
             black_box(model.next_logprobs(&prefix).expect("runs"));
         })
     });
+    // A Phase I prompt on VirtualHome is 1,000 to 1,600 tokens (the room's objects listed).
+    let long: Vec<u32> = base.iter().copied().cycle().take(1024).collect();
+    let mut group = c.benchmark_group(name);
+    group.sample_size(10);
+    group.bench_function("prefill_1024", |b| {
+        b.iter(|| {
+            model.clear_cache();
+            black_box(model.next_logprobs(&long).expect("runs"));
+        })
+    });
+    group.finish();
     let mut decode = prefix.clone();
     model.next_logprobs(&decode).expect("runs");
     decode.push(base[0]);
