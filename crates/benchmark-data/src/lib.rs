@@ -140,6 +140,22 @@ pub fn load_alfworld_game(path: &Path, benchmark: Benchmark, id: String) -> Resu
     })
 }
 
+/// The fixtures folder to use: `compiled` (the build's checkout) when it is a folder, else the
+/// first `fixtures/` holding `subsets/` in `cwd` or a folder above it, else `compiled` (so that
+/// the error names it). The compiled path alone goes stale when the checkout moves: a build
+/// cache shared between two checkouts keeps the first one's path (cargo's fingerprints are
+/// relative to the workspace, so the same sources built from another path are not rebuilt),
+/// and a binary copied elsewhere keeps its build's.
+pub fn locate_fixtures(compiled: &Path, cwd: &Path) -> PathBuf {
+    if compiled.is_dir() {
+        return compiled.to_path_buf();
+    }
+    cwd.ancestors()
+        .map(|folder| folder.join("fixtures"))
+        .find(|candidate| candidate.join("subsets").is_dir())
+        .unwrap_or_else(|| compiled.to_path_buf())
+}
+
 /// Where the benchmark files are: a folder laid out as this repository's `fixtures/`
 /// (`alfworld/valid_seen`, `alfworld/valid_train`, `virtualhome-eai`, `ipc`, `subsets`). A
 /// caller that ships or moves the data passes its own root ([`Fixtures::at`]); the free
@@ -159,9 +175,12 @@ impl Fixtures {
     }
 
     /// The `fixtures/` folder of the checkout this crate was built from (a path fixed at
-    /// compile time: right for the workspace's own tests and tools, not for a moved binary).
+    /// compile time) when it is there; else the `fixtures/` of the working directory or the
+    /// nearest folder above it that has one (see [`locate_fixtures`]).
     pub fn checkout() -> Fixtures {
-        Fixtures::at(Path::new(env!("CARGO_MANIFEST_DIR")).join("../../fixtures"))
+        let compiled = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../fixtures");
+        let cwd = std::env::current_dir().unwrap_or_default();
+        Fixtures::at(locate_fixtures(&compiled, &cwd))
     }
 
     /// `$NSEA_FIXTURES` when it is set and not empty, else [`Fixtures::checkout`].

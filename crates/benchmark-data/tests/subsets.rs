@@ -149,3 +149,22 @@ fn rearrangement_subsets_are_every_kth_task() {
         assert_eq!(listed, expected, "{name}: every {step}th id");
     }
 }
+
+/// The build's checkout is used while it is there; when it is gone (a moved checkout, a build
+/// cache filled from another path), the `fixtures/` of the working directory or a folder above
+/// it; with neither, the build's path, so that the error names it.
+#[test]
+fn fixtures_are_found_above_the_working_directory_when_the_build_path_is_gone() {
+    let root = std::env::temp_dir().join(format!("nsea-fixtures-locate-{}", std::process::id()));
+    let found = root.join("checkout").join("fixtures");
+    let deep = root.join("checkout").join("crates").join("xtask");
+    std::fs::create_dir_all(found.join("subsets")).expect("temp dir");
+    std::fs::create_dir_all(&deep).expect("temp dir");
+    let gone = root.join("moved-away").join("fixtures");
+    assert_eq!(benchmark_data::locate_fixtures(&gone, &deep), found);
+    assert_eq!(benchmark_data::locate_fixtures(&gone, &root.join("checkout")), found);
+    let built = benchmark_data::Fixtures::checkout();
+    assert_eq!(benchmark_data::locate_fixtures(built.root(), &deep), built.root(), "the build's checkout comes first");
+    assert_eq!(benchmark_data::locate_fixtures(&gone, &root), gone, "nothing above: the build's path");
+    std::fs::remove_dir_all(&root).ok();
+}
