@@ -777,6 +777,36 @@ mod tests {
     /// The attention kernel against the definition computed in f64, on random inputs: a
     /// prefill from position 0, one decode step and a three-token step over a cache; head sizes
     /// of 64 and 128 (the vectorised kernel) and 40 and 20 (not a multiple of 64, or of 8).
+    /// A one-layer configuration for the attention tests.
+    fn attention_config(hd: usize, heads: usize, kv_heads: usize) -> ModelConfig {
+        ModelConfig {
+            architecture: Architecture::Llama,
+            layers: 1,
+            embedding: heads * hd,
+            heads,
+            kv_heads,
+            head_dim: hd,
+            feed_forward: 1,
+            context_length: 1000,
+            rms_eps: 1e-5,
+            rope: RopeConfig { base: 10000.0, dimensions: hd, linear_scale: 1.0, neox: false },
+        }
+    }
+
+    /// Deterministic pseudo-random queries, keys and values for `n` new rows after `start`
+    /// cached ones: queries and keys in [-2, 2), values in [-0.5, 0.5).
+    fn attention_inputs(cfg: &ModelConfig, start: usize, n: usize, state: &mut u64) -> (Vec<f32>, Vec<f32>, Vec<f32>) {
+        let mut random = || {
+            *state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            (*state >> 40) as f32 / (1u64 << 24) as f32 - 0.5
+        };
+        let (q_dim, kv_dim, total) = (cfg.heads * cfg.head_dim, cfg.kv_heads * cfg.head_dim, start + n);
+        let q = (0..n * q_dim).map(|_| random() * 4.0).collect();
+        let k = (0..total * kv_dim).map(|_| random() * 4.0).collect();
+        let v = (0..total * kv_dim).map(|_| random()).collect();
+        (q, k, v)
+    }
+
     #[test]
     fn attention_is_causal_softmax_attention() {
         for hd in [64, 128, 40, 20] {
@@ -785,29 +815,11 @@ mod tests {
     }
 
     fn attention_is_causal_softmax_attention_with(hd: usize) {
-        let cfg = ModelConfig {
-            architecture: Architecture::Llama,
-            layers: 1,
-            embedding: 9 * hd,
-            heads: 9,
-            kv_heads: 3,
-            head_dim: hd,
-            feed_forward: 1,
-            context_length: 100,
-            rms_eps: 1e-5,
-            rope: RopeConfig { base: 10000.0, dimensions: hd, linear_scale: 1.0, neox: false },
-        };
+        let cfg = attention_config(hd, 9, 3);
         let mut state = 1u64;
-        let mut random = || {
-            state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-            (state >> 40) as f32 / (1u64 << 24) as f32 - 0.5
-        };
         let (heads, kv_dim) = (9, 3 * hd);
         for (start, n) in [(0usize, 5usize), (30, 1), (30, 3), (600, 1)] {
-            let total = start + n;
-            let q: Vec<f32> = (0..n * heads * hd).map(|_| random() * 4.0).collect();
-            let k: Vec<f32> = (0..total * kv_dim).map(|_| random() * 4.0).collect();
-            let v: Vec<f32> = (0..total * kv_dim).map(|_| random()).collect();
+            let (q, k, v) = attention_inputs(&cfg, start, n, &mut state);
             let ours = attention(&cfg, &q, &k, &v, start, n);
             for row in 0..n {
                 for head in 0..heads {
@@ -858,29 +870,11 @@ mod tests {
     #[test]
     fn blocked_attention_equals_one_query_at_a_time_bit_for_bit() {
         let mut state = 7u64;
-        let mut random = || {
-            state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-            (state >> 40) as f32 / (1u64 << 24) as f32 - 0.5
-        };
         for (hd, heads, kv_heads) in [(64, 9, 3), (128, 4, 2), (40, 9, 3), (20, 2, 2)] {
-            let cfg = ModelConfig {
-                architecture: Architecture::Llama,
-                layers: 1,
-                embedding: heads * hd,
-                heads,
-                kv_heads,
-                head_dim: hd,
-                feed_forward: 1,
-                context_length: 400,
-                rms_eps: 1e-5,
-                rope: RopeConfig { base: 10000.0, dimensions: hd, linear_scale: 1.0, neox: false },
-            };
+            let cfg = attention_config(hd, heads, kv_heads);
             let (group, kv_dim, scale) = (heads / kv_heads, kv_heads * hd, 1.0 / (hd as f32).sqrt());
             for (start, n) in [(0usize, 1usize), (0, 37), (0, 150), (100, 1), (130, 20), (200, 65)] {
-                let total = start + n;
-                let q: Vec<f32> = (0..n * heads * hd).map(|_| random() * 4.0).collect();
-                let k: Vec<f32> = (0..total * kv_dim).map(|_| random() * 4.0).collect();
-                let v: Vec<f32> = (0..total * kv_dim).map(|_| random()).collect();
+                let (q, k, v) = attention_inputs(&cfg, start, n, &mut state);
                 let blocked = attention(&cfg, &q, &k, &v, start, n);
                 for row in 0..n {
                     for head in 0..heads {
