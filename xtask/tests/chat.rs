@@ -6,33 +6,32 @@ mod common;
 
 use std::io::{Read, Write};
 use std::net::TcpListener;
-use std::path::PathBuf;
 use std::process::Output;
 
 use common::xtask;
 
 use serde_json::{Value, json};
+use tempfile::TempDir;
 
-fn scratch_dir() -> PathBuf {
-    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(format!("xtask-chat-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).expect("temp dir");
-    dir
+/// A test's scratch folder, removed when dropped.
+fn scratch_dir() -> TempDir {
+    tempfile::Builder::new().prefix("xtask-chat-").tempdir().expect("temp dir")
 }
 
-fn scratch(name: &str, bytes: &[u8]) -> String {
-    let path = scratch_dir().join(name);
+fn scratch(dir: &TempDir, name: &str, bytes: &[u8]) -> String {
+    let path = dir.path().join(name);
     std::fs::write(&path, bytes).expect("write");
     path.display().to_string()
 }
 
-fn skill_schema() -> String {
+fn skill_schema(dir: &TempDir) -> String {
     let schema = json!({
         "type": "object",
         "properties": { "skill": { "enum": ["Goto(fridge 1)", "Open(fridge 1)", "Done"] } },
         "required": ["skill"],
         "additionalProperties": false
     });
-    scratch("skill.schema.json", schema.to_string().as_bytes())
+    scratch(dir, "skill.schema.json", schema.to_string().as_bytes())
 }
 
 fn stdout_json(output: &Output) -> Value {
@@ -41,11 +40,20 @@ fn stdout_json(output: &Output) -> Value {
 
 #[test]
 fn a_local_model_replies_with_schema_valid_json() {
+    let tmp = scratch_dir();
     // The tiny model's weights are random: only the schema makes its reply JSON.
-    let model = scratch_dir().join("tiny.gguf");
+    let model = tmp.path().join("tiny.gguf");
     lm::tiny::write_tiny_gguf(&model, &lm::tiny::TinySpec::default()).expect("tiny model");
-    let output =
-        xtask(&["chat", "--model", &model.display().to_string(), "--prompt", "Which skill next?", "--schema", &skill_schema(), "--json"]);
+    let output = xtask(&[
+        "chat",
+        "--model",
+        &model.display().to_string(),
+        "--prompt",
+        "Which skill next?",
+        "--schema",
+        &skill_schema(&tmp),
+        "--json",
+    ]);
     assert_eq!(output.status.code(), Some(0), "{}", String::from_utf8_lossy(&output.stderr));
     let summary = stdout_json(&output);
     let skill = summary["json"]["skill"].as_str().expect("a skill");
@@ -55,7 +63,7 @@ fn a_local_model_replies_with_schema_valid_json() {
     assert!(summary["usage"]["prompt_tokens"].as_u64().expect("count") > 0);
 
     // A local model reads text only.
-    let image = scratch("pixel.png", b"\x89PNG\r\n\x1a\n\0\0\0\rIHDR");
+    let image = scratch(&tmp, "pixel.png", b"\x89PNG\r\n\x1a\n\0\0\0\rIHDR");
     let output = xtask(&["chat", "--model", &model.display().to_string(), "--prompt", "What is this?", "--image", &image]);
     assert_eq!(output.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&output.stderr).contains("text only"), "{}", String::from_utf8_lossy(&output.stderr));
@@ -63,6 +71,7 @@ fn a_local_model_replies_with_schema_valid_json() {
 
 #[test]
 fn a_served_model_gets_the_image_and_its_reply_is_printed() {
+    let tmp = scratch_dir();
     let listener = TcpListener::bind("127.0.0.1:0").expect("bind");
     let address = listener.local_addr().expect("address");
     let server = std::thread::spawn(move || {
@@ -96,7 +105,7 @@ fn a_served_model_gets_the_image_and_its_reply_is_printed() {
         stream.write_all(response.as_bytes()).expect("write");
         request
     });
-    let image = scratch("photo.jpg", &[0xff, 0xd8, 0xff, 0xe0, 1, 2, 3]);
+    let image = scratch(&tmp, "photo.jpg", &[0xff, 0xd8, 0xff, 0xe0, 1, 2, 3]);
     let url = format!("openai:http://{address}/v1");
     let output = xtask(&[
         "chat",
@@ -109,7 +118,7 @@ fn a_served_model_gets_the_image_and_its_reply_is_printed() {
         "--image",
         &image,
         "--schema",
-        &skill_schema(),
+        &skill_schema(&tmp),
         "--json",
     ]);
     assert_eq!(output.status.code(), Some(0), "{}", String::from_utf8_lossy(&output.stderr));
@@ -127,6 +136,7 @@ fn a_served_model_gets_the_image_and_its_reply_is_printed() {
 
 #[test]
 fn bad_input_exits_2_and_a_failing_server_exits_1() {
+    let tmp = scratch_dir();
     // A port nothing listens on any more.
     let port = TcpListener::bind("127.0.0.1:0").expect("bind").local_addr().expect("address").port();
     let url = &format!("openai:http://127.0.0.1:{port}/v1");
@@ -136,13 +146,13 @@ fn bad_input_exits_2_and_a_failing_server_exits_1() {
         assert_eq!(output.status.code(), Some(code), "{args:?}: {stderr}");
         assert!(stderr.contains(message), "{args:?}: `{stderr}` should mention `{message}`");
     };
-    let missing = scratch_dir().join("missing.png").display().to_string();
+    let missing = tmp.path().join("missing.png").display().to_string();
     check(&["chat", "--model", url, "--prompt", "x", "--image", &missing], 2, "cannot read");
-    let gif = scratch("anim.gif", b"GIF89a....");
+    let gif = scratch(&tmp, "anim.gif", b"GIF89a....");
     check(&["chat", "--model", url, "--prompt", "x", "--image", &gif], 2, "not a PNG or JPEG image");
-    let not_json = scratch("bad.schema.json", b"{ type: object }");
+    let not_json = scratch(&tmp, "bad.schema.json", b"{ type: object }");
     check(&["chat", "--model", url, "--prompt", "x", "--schema", &not_json], 2, "not JSON");
-    let bad_type = scratch("type.schema.json", br#"{"type": "dict"}"#);
+    let bad_type = scratch(&tmp, "type.schema.json", br#"{"type": "dict"}"#);
     check(&["chat", "--model", url, "--prompt", "x", "--schema", &bad_type], 2, "unknown type \"dict\"");
     check(&["chat", "--model", "openai:ftp://host/v1", "--prompt", "x"], 2, "bad URL");
     check(&["chat", "--model", url, "--prompt", "x", "--api-key-env", "XTASK_CHAT_TEST_NO_SUCH_KEY"], 2, "XTASK_CHAT_TEST_NO_SUCH_KEY");

@@ -6,16 +6,20 @@ use std::path::{Path, PathBuf};
 
 use common::xtask;
 use std::process::Output;
+use tempfile::TempDir;
 
 fn fixtures() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../fixtures")
 }
 
-fn scratch(name: &str, text: &str) -> PathBuf {
-    // Under the target directory (cargo's scratch space for integration tests), so runs leave nothing in /tmp.
-    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(format!("xtask-cli-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).expect("temp dir");
-    let path = dir.join(name);
+/// A test's scratch folder, removed when dropped (also when the test fails).
+fn scratch_dir() -> TempDir {
+    tempfile::Builder::new().prefix("xtask-cli-").tempdir().expect("temp dir")
+}
+
+/// Writes `text` to `name` in `dir`.
+fn scratch(dir: &TempDir, name: &str, text: &str) -> PathBuf {
+    let path = dir.path().join(name);
     std::fs::write(&path, text).expect("write");
     path
 }
@@ -43,8 +47,10 @@ fn ground_prints_one_json_object() {
 
 #[test]
 fn validate_reports_valid_invalid_and_bad_input_with_exit_codes() {
+    let tmp = scratch_dir();
     let (domain, problem) = household();
     let good = scratch(
+        &tmp,
         "good.plan",
         "(grab wineglass kitchentable)\n(walk kitchentable dishwasher)\n(putin wineglass dishwasher)\n; cost = 4 (general cost)\n",
     );
@@ -53,7 +59,8 @@ fn validate_reports_valid_invalid_and_bad_input_with_exit_codes() {
     assert!(stdout(&output).starts_with("valid"), "{}", stdout(&output));
     assert!(stdout(&output).contains("cost 4"));
 
-    let swapped = scratch("swapped.plan", "(grab wineglass kitchentable)\n(putin wineglass dishwasher)\n(walk kitchentable dishwasher)\n");
+    let swapped =
+        scratch(&tmp, "swapped.plan", "(grab wineglass kitchentable)\n(putin wineglass dishwasher)\n(walk kitchentable dishwasher)\n");
     let output = xtask(&["validate", "--domain", &domain, "--problem", &problem, "--plan", &swapped.display().to_string()]);
     assert_eq!(output.status.code(), Some(1));
     assert_eq!(
@@ -61,13 +68,13 @@ fn validate_reports_valid_invalid_and_bad_input_with_exit_codes() {
         "invalid: step 2: `(putin wineglass dishwasher)` ((putin wineglass dishwasher)) is not applicable: unmet (at dishwasher)"
     );
 
-    let short = scratch("short.plan", "(grab wineglass kitchentable)\n");
+    let short = scratch(&tmp, "short.plan", "(grab wineglass kitchentable)\n");
     let output = xtask(&["validate", "--domain", &domain, "--problem", &problem, "--plan", &short.display().to_string()]);
     assert_eq!(output.status.code(), Some(1));
     assert!(stdout(&output).starts_with("invalid: goal"), "{}", stdout(&output));
     assert!(stdout(&output).contains("(on wineglass dishwasher)"));
 
-    let unknown = scratch("unknown.plan", "(grab wineglass kitchentable)\n(teleport dishwasher)\n");
+    let unknown = scratch(&tmp, "unknown.plan", "(grab wineglass kitchentable)\n(teleport dishwasher)\n");
     let output = xtask(&["validate", "--domain", &domain, "--problem", &problem, "--plan", &unknown.display().to_string()]);
     assert_eq!(output.status.code(), Some(1));
     assert!(stdout(&output).starts_with("invalid: step 2: `(teleport dishwasher)`"), "{}", stdout(&output));
@@ -79,7 +86,7 @@ fn validate_reports_valid_invalid_and_bad_input_with_exit_codes() {
     let stderr = String::from_utf8_lossy(&output.stderr);
     assert!(stderr.contains("unclosed-paren.domain.pddl:7:13: error[unclosed-paren]"), "{stderr}");
 
-    let missing = scratch("exists.plan", "");
+    let missing = scratch(&tmp, "exists.plan", "");
     let output = xtask(&["validate", "--domain", &domain, "--problem", "no/such/problem.pddl", "--plan", &missing.display().to_string()]);
     assert_eq!(output.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&output.stderr).contains("no/such/problem.pddl: cannot read"));
@@ -87,12 +94,13 @@ fn validate_reports_valid_invalid_and_bad_input_with_exit_codes() {
 
 #[test]
 fn validate_reads_alfworld_commands_from_a_game() {
+    let tmp = scratch_dir();
     let game = fixtures().join("alfworld/valid_seen/look_at_obj_in_light-AlarmClock-None-DeskLamp-323");
     let trial = std::fs::read_dir(&game).expect("game folder").next().expect("a trial").expect("entry").path();
-    let plan = scratch("walkthrough.txt", "go to desk 1\nuse desklamp 1\ntake alarmclock 2 from desk 1\n");
+    let plan = scratch(&tmp, "walkthrough.txt", "go to desk 1\nuse desklamp 1\ntake alarmclock 2 from desk 1\n");
     let output = xtask(&["validate", "--game", &trial.display().to_string(), "--plan", &plan.display().to_string()]);
     assert_eq!(output.status.code(), Some(0), "{}{}", stdout(&output), String::from_utf8_lossy(&output.stderr));
-    let plan = scratch("wrong.txt", "use desklamp 1\n");
+    let plan = scratch(&tmp, "wrong.txt", "use desklamp 1\n");
     let output = xtask(&["validate", "--game", &trial.display().to_string(), "--plan", &plan.display().to_string()]);
     assert_eq!(output.status.code(), Some(1));
     assert!(stdout(&output).starts_with("invalid: step 1: `use desklamp 1`"), "{}", stdout(&output));
@@ -100,9 +108,10 @@ fn validate_reads_alfworld_commands_from_a_game() {
 
 #[test]
 fn plan_writes_a_fast_downward_plan_and_heuristic_prints_every_value() {
+    let tmp = scratch_dir();
     let domain = fixtures().join("ipc/blocks/domain.pddl").display().to_string();
     let problem = fixtures().join("ipc/blocks/instance-1.pddl").display().to_string();
-    let out = scratch("blocks-1.plan", "");
+    let out = scratch(&tmp, "blocks-1.plan", "");
     let output = xtask(&[
         "plan",
         "--domain",
@@ -145,8 +154,10 @@ fn plan_writes_a_fast_downward_plan_and_heuristic_prints_every_value() {
 
 #[test]
 fn plan_reports_unsolvable_tasks() {
+    let tmp = scratch_dir();
     let domain = fixtures().join("pddl-valid/household/domain.pddl").display().to_string();
     let problem = scratch(
+        &tmp,
         "stuck.pddl",
         "(define (problem stuck) (:domain household) (:objects kitchentable - place dishwasher - container wineglass - item)
          (:init (at kitchentable) (on wineglass kitchentable)) (:goal (on wineglass dishwasher)))",
@@ -188,7 +199,8 @@ fn bench_mask_reports_the_issue_figures_and_agrees_with_llguidance() {
 
 #[test]
 fn phase2_writes_records_resumes_and_plan_mcts_prints_json() {
-    let out = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(format!("xtask-phase2-{}", std::process::id()));
+    let tmp = scratch_dir();
+    let out = tmp.path().join("records");
     let out_text = out.display().to_string();
     let args = [
         "phase2",
@@ -286,7 +298,6 @@ fn phase2_writes_records_resumes_and_plan_mcts_prints_json() {
     let record: serde_json::Value =
         serde_json::from_str(std::fs::read_to_string(&unsolvable_path).expect("records").trim()).expect("record");
     assert_eq!((record["solvable"].as_bool(), record["stop"].as_str()), (Some(false), Some("dead-end")));
-    std::fs::remove_dir_all(&out).ok();
 
     let (domain, problem) = household();
     let plan = xtask(&["plan", "--domain", &domain, "--problem", &problem, "--planner", "mcts", "--mode", "constrained-mcts", "--json"]);
@@ -328,12 +339,13 @@ fn env_prints_the_engines_lines_byte_for_byte() {
 
 #[test]
 fn env_virtualhome_prints_json_lines_and_the_verdict() {
+    let tmp = scratch_dir();
     // EAI's gold program of task 201_1 (wash a plate with the dishwasher).
     let program = "[WALK] <dining_room> (201)\n[WALK] <dishwasher> (1000)\n[FIND] <dishwasher> (1000)\n[OPEN] <dishwasher> (1000)\n\
                    [FIND] <plate> (1001)\n[GRAB] <plate> (1001)\n[PUTBACK] <plate> (1001) <dishwasher> (1000)\n[FIND] <dish_soap> (1002)\n\
                    [GRAB] <dish_soap> (1002)\n[PUTBACK] <dish_soap> (1002) <dishwasher> (1000)\n[CLOSE] <dishwasher> (1000)\n\
                    [SWITCHON] <dishwasher> (1000)\n";
-    let plan = scratch("vh-201_1.txt", program);
+    let plan = scratch(&tmp, "vh-201_1.txt", program);
     let output = xtask(&["env", "--benchmark", "virtualhome-eai", "--task", "201_1", "--commands", &plan.display().to_string(), "--json"]);
     assert_eq!(output.status.code(), Some(0), "{}", String::from_utf8_lossy(&output.stderr));
     let lines: Vec<serde_json::Value> = stdout(&output).lines().map(|l| serde_json::from_str(l).expect("JSON line")).collect();
@@ -342,7 +354,7 @@ fn env_virtualhome_prints_json_lines_and_the_verdict() {
     assert!(lines[1..13].iter().all(|l| l["executed"] == true));
     assert_eq!(lines[13]["goal_reached"], true);
     // Without its last step the dishwasher is off: not reached, exit 1, the unmet goal named.
-    let short = scratch("vh-201_1-short.txt", &program.lines().take(11).collect::<Vec<_>>().join("\n"));
+    let short = scratch(&tmp, "vh-201_1-short.txt", &program.lines().take(11).collect::<Vec<_>>().join("\n"));
     let output = xtask(&["env", "--benchmark", "virtualhome-eai", "--task", "201_1", "--commands", &short.display().to_string(), "--json"]);
     assert_eq!(output.status.code(), Some(1));
     let last: serde_json::Value = serde_json::from_str(stdout(&output).lines().last().expect("verdict")).expect("JSON");
@@ -355,8 +367,9 @@ fn env_virtualhome_prints_json_lines_and_the_verdict() {
 
 #[test]
 fn agent_wins_a_game_and_writes_commands_the_engine_can_replay() {
+    let tmp = scratch_dir();
     let game = "fixtures/alfworld/valid_seen/pick_clean_then_place_in_recep-Mug-None-CoffeeMachine-26/trial_T20190907_233056_022802";
-    let commands = scratch("agent-commands.txt", "");
+    let commands = scratch(&tmp, "agent-commands.txt", "");
     // The defaults: systematic explorer, constrained MCTS with the uniform prior.
     let output = xtask(&["agent", "--game", game, "--commands-out", commands.to_str().unwrap(), "--json"]);
     assert_eq!(output.status.code(), Some(0), "{}", String::from_utf8_lossy(&output.stderr));
@@ -430,7 +443,8 @@ fn agent_proves_by_a_star_that_no_plan_fits_where_lm_cut_cannot() {
 
 #[test]
 fn agent_solves_a_virtualhome_rearrangement_task_with_a_trace() {
-    let trace = scratch("agent-trace.json", "");
+    let tmp = scratch_dir();
+    let trace = scratch(&tmp, "agent-trace.json", "");
     let output = xtask(&["agent", "--benchmark", "virtualhome-rearrange", "--task", "fridge-003", "--trace", trace.to_str().unwrap()]);
     assert_eq!(output.status.code(), Some(0), "{}{}", stdout(&output), String::from_utf8_lossy(&output.stderr));
     let value: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&trace).unwrap()).expect("JSON trace");
@@ -443,7 +457,8 @@ fn agent_solves_a_virtualhome_rearrangement_task_with_a_trace() {
 
 #[test]
 fn soundness_plans_fixture_tasks_and_they_reach_their_goals() {
-    let out = scratch("soundness.jsonl", "");
+    let tmp = scratch_dir();
+    let out = scratch(&tmp, "soundness.jsonl", "");
     let output = xtask(&["soundness", "--limit", "3", "--out", out.to_str().unwrap()]);
     assert_eq!(output.status.code(), Some(0), "{}", String::from_utf8_lossy(&output.stderr));
     let rows: Vec<serde_json::Value> = std::fs::read_to_string(&out).unwrap().lines().map(|l| serde_json::from_str(l).unwrap()).collect();

@@ -6,10 +6,12 @@ mod common;
 
 use common::xtask;
 
-fn out(name: &str) -> std::path::PathBuf {
-    let dir = std::path::PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(format!("eval-direct-{name}-{}", std::process::id()));
-    std::fs::remove_dir_all(&dir).ok();
-    dir
+/// A records folder that does not exist, inside a temporary folder that is removed when the
+/// returned guard is dropped, also when the test fails.
+fn out(name: &str) -> (tempfile::TempDir, std::path::PathBuf) {
+    let tmp = tempfile::Builder::new().prefix("eval-direct-").tempdir().expect("temporary folder");
+    let dir = tmp.path().join(name);
+    (tmp, dir)
 }
 
 /// `cargo xtask eval ARGS --limit 1 --out DIR`, which must exit 2; its stderr.
@@ -25,7 +27,7 @@ fn refused(args: &[&str], dir: &std::path::Path) -> String {
 
 #[test]
 fn an_unknown_model_is_bad_input() {
-    let dir = out("unknown");
+    let (_tmp_dir, dir) = out("unknown");
     let stderr = refused(&["--agent", "direct", "--explorer", "no-such-model.gguf", "--benchmark", "alfworld-seen"], &dir);
     assert!(stderr.contains("no-such-model.gguf"), "{stderr}");
     assert!(!dir.exists(), "no records for a run that never started");
@@ -33,7 +35,7 @@ fn an_unknown_model_is_bad_input() {
 
 #[test]
 fn the_direct_agent_needs_a_chat_model() {
-    let dir = out("systematic");
+    let (_tmp_dir, dir) = out("systematic");
     let output =
         xtask(&["eval", "--agent", "direct", "--explorer", "systematic", "--benchmark", "alfworld-seen", "--out", dir.to_str().unwrap()]);
     let stderr = String::from_utf8_lossy(&output.stderr);
@@ -47,7 +49,7 @@ fn the_direct_agent_needs_a_chat_model() {
 
 #[test]
 fn a_reply_cache_inside_the_records_folder_is_refused() {
-    let dir = out("cache");
+    let (_tmp_dir, dir) = out("cache");
     let cache = dir.join("phase1-replies.jsonl");
     let stderr = refused(&["--explorer", "no-such-model.gguf", "--chat-cache", cache.to_str().unwrap()], &dir);
     assert!(stderr.contains("keep the reply file out of the records folder"), "{stderr}");

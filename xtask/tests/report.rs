@@ -11,16 +11,18 @@ fn fixtures() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../crates/eval-harness/tests/fixtures/report")
 }
 
-fn scratch(name: &str) -> PathBuf {
-    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(format!("xtask-report-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).expect("scratch folder");
-    dir
+/// A scratch folder of its own for each test (`dir`, created), inside a temporary folder that is
+/// removed when the returned guard is dropped, also when the test fails.
+fn scratch(name: &str) -> (tempfile::TempDir, PathBuf) {
+    let tmp = tempfile::Builder::new().prefix("xtask-report-").tempdir().expect("temporary folder");
+    let dir = tmp.path().join(name);
+    std::fs::create_dir(&dir).expect("scratch folder");
+    (tmp, dir)
 }
 
 #[test]
 fn report_writes_tables_figures_and_a_page_per_episode() {
-    let out = scratch("out");
+    let (_tmp_out, out) = scratch("out");
     let output = xtask(&["report", &fixtures().display().to_string(), "--out", &out.display().to_string(), "--replicates", "200"]);
     assert!(output.status.success(), "{}", String::from_utf8_lossy(&output.stderr));
     assert!(String::from_utf8_lossy(&output.stdout).contains("11 record file(s), 60 record(s)"));
@@ -48,7 +50,7 @@ fn report_writes_tables_figures_and_a_page_per_episode() {
 
 #[test]
 fn input_that_is_not_records_exits_2_naming_file_and_line() {
-    let dir = scratch("bad");
+    let (_tmp_dir, dir) = scratch("bad");
     let stem = "alfworld-seen-expert-8ab1a4359acc";
     std::fs::copy(fixtures().join(format!("{stem}.config.json")), dir.join(format!("{stem}.config.json"))).expect("copy");
     let records = std::fs::read_to_string(fixtures().join(format!("{stem}.jsonl"))).expect("records");

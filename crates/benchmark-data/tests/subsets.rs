@@ -77,8 +77,8 @@ fn the_rule_spreads_picks_over_a_family_and_never_repeats_one() {
 
 #[test]
 fn an_unknown_or_repeated_id_is_reported_at_its_line() {
-    let dir = std::env::temp_dir().join(format!("benchmark-data-subsets-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).expect("temp dir");
+    let tmp = tempfile::Builder::new().prefix("benchmark-data-subsets-").tempdir().expect("temp dir");
+    let dir = tmp.path();
     let unknown = dir.join("unknown.txt");
     std::fs::write(&unknown, "# header\n384_1\n\nno_such_task\n").expect("write");
     let error = load_subset(Benchmark::VirtualhomeEai, unknown.to_str().expect("utf-8 path")).expect_err("unknown id");
@@ -88,7 +88,6 @@ fn an_unknown_or_repeated_id_is_reported_at_its_line() {
     std::fs::write(&repeated, "384_1\n384_1\n").expect("write");
     let error = load_subset(Benchmark::VirtualhomeEai, repeated.to_str().expect("utf-8 path")).expect_err("repeated id");
     assert!(matches!(&error, DataError::DuplicateSubsetTask { line: 2, .. }), "{error}");
-    std::fs::remove_dir_all(&dir).ok();
 }
 
 #[test]
@@ -108,7 +107,8 @@ fn the_alfworld_heldout_subset_is_the_rule_over_the_tasks_outside_the_fifty() {
 /// subsets resolve against it, and a root without the data is an error naming the path.
 #[test]
 fn fixtures_load_from_a_root_the_caller_passes() {
-    let root = std::env::temp_dir().join(format!("nsea-fixtures-root-{}", std::process::id()));
+    let tmp = tempfile::Builder::new().prefix("nsea-fixtures-root-").tempdir().expect("temp dir");
+    let root = tmp.path();
     let domain = root.join("ipc").join("blocks");
     std::fs::create_dir_all(&domain).expect("temp dir");
     std::fs::create_dir_all(root.join("subsets")).expect("temp dir");
@@ -117,17 +117,16 @@ fn fixtures_load_from_a_root_the_caller_passes() {
         std::fs::copy(checkout.root().join("ipc/blocks").join(file), domain.join(file)).expect("copy");
     }
     std::fs::write(root.join("subsets").join("mine.txt"), "# one task\nblocks/instance-10\n").expect("subset");
-    let fixtures = benchmark_data::Fixtures::at(&root);
+    let fixtures = benchmark_data::Fixtures::at(root);
     let tasks = fixtures.load(Benchmark::Ipc).expect("loads");
     assert_eq!(tasks.iter().map(|t| t.id.as_str()).collect::<Vec<_>>(), ["blocks/instance-10"]);
-    assert!(tasks[0].problem_path.starts_with(&root));
+    assert!(tasks[0].problem_path.starts_with(root));
     let original = benchmark_data::load(Benchmark::Ipc).expect("checkout loads");
     let same = original.iter().find(|t| t.id == "blocks/instance-10").expect("in the checkout");
     assert_eq!(tasks[0].problem, same.problem);
     assert_eq!(fixtures.load_subset(Benchmark::Ipc, "mine").expect("subset").len(), 1);
     let missing = benchmark_data::Fixtures::at(root.join("nowhere")).load(Benchmark::Ipc).expect_err("no data there");
     assert!(missing.to_string().contains("nowhere"), "{missing}");
-    std::fs::remove_dir_all(&root).ok();
 }
 
 /// The rearrangement set's subsets: every k-th task id in sorted order from the first (the rule
@@ -155,7 +154,8 @@ fn rearrangement_subsets_are_every_kth_task() {
 /// it; with neither, the build's path, so that the error names it.
 #[test]
 fn fixtures_are_found_above_the_working_directory_when_the_build_path_is_gone() {
-    let root = std::env::temp_dir().join(format!("nsea-fixtures-locate-{}", std::process::id()));
+    let tmp = tempfile::Builder::new().prefix("nsea-fixtures-locate-").tempdir().expect("temp dir");
+    let root = tmp.path();
     let found = root.join("checkout").join("fixtures");
     let deep = root.join("checkout").join("crates").join("xtask");
     std::fs::create_dir_all(found.join("subsets")).expect("temp dir");
@@ -165,6 +165,5 @@ fn fixtures_are_found_above_the_working_directory_when_the_build_path_is_gone() 
     assert_eq!(benchmark_data::locate_fixtures(&gone, &root.join("checkout")), found);
     let built = benchmark_data::Fixtures::checkout();
     assert_eq!(benchmark_data::locate_fixtures(built.root(), &deep), built.root(), "the build's checkout comes first");
-    assert_eq!(benchmark_data::locate_fixtures(&gone, &root), gone, "nothing above: the build's path");
-    std::fs::remove_dir_all(&root).ok();
+    assert_eq!(benchmark_data::locate_fixtures(&gone, root), gone, "nothing above: the build's path");
 }

@@ -6,10 +6,12 @@ use std::path::PathBuf;
 use eval_harness::records::{RecordError, RecordFile, Shard, config_hash, merge};
 use serde_json::{Value, json};
 
-fn scratch(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("eval-records-{name}-{}", std::process::id()));
-    std::fs::remove_dir_all(&dir).ok();
-    dir
+/// A records folder that does not exist yet, inside a temporary folder that is removed when the
+/// returned guard is dropped, also when the test fails.
+fn scratch(name: &str) -> (tempfile::TempDir, PathBuf) {
+    let tmp = tempfile::Builder::new().prefix("eval-records-").tempdir().expect("temporary folder");
+    let dir = tmp.path().join(name);
+    (tmp, dir)
 }
 
 fn tasks(file: &RecordFile) -> Vec<String> {
@@ -18,7 +20,7 @@ fn tasks(file: &RecordFile) -> Vec<String> {
 
 #[test]
 fn records_resume_and_carry_their_configuration() {
-    let dir = scratch("resume");
+    let (_tmp_dir, dir) = scratch("resume");
     let config = json!({"agent": "expert", "benchmark": "alfworld-seen", "seed": 0});
     let mut file = RecordFile::open(&dir, "alfworld-seen-expert", &config, None, false).expect("opens");
     assert!(file.path().ends_with(format!("alfworld-seen-expert-{}.jsonl", config_hash(&config))));
@@ -44,7 +46,7 @@ fn records_resume_and_carry_their_configuration() {
 
 #[test]
 fn one_run_at_a_time_writes_a_record_file() {
-    let dir = scratch("busy");
+    let (_tmp_dir, dir) = scratch("busy");
     let config = json!({"agent": "ours", "benchmark": "alfworld-seen"});
     let mut first = RecordFile::open(&dir, "alfworld-seen-ours", &config, None, false).expect("opens");
     first.append(0, &json!({"task": "a", "success": true})).expect("appends");
@@ -69,7 +71,7 @@ fn one_run_at_a_time_writes_a_record_file() {
 
 #[test]
 fn a_record_cut_short_is_cut_off_and_its_task_runs_again() {
-    let dir = scratch("torn");
+    let (_tmp_dir, dir) = scratch("torn");
     let config = json!({"agent": "expert"});
     let mut file = RecordFile::open(&dir, "run", &config, None, false).expect("opens");
     file.append(0, &json!({"task": "a"})).expect("appends");
@@ -89,7 +91,7 @@ fn a_record_cut_short_is_cut_off_and_its_task_runs_again() {
 
 #[test]
 fn damage_other_than_a_cut_is_an_error_naming_the_line() {
-    let dir = scratch("damage");
+    let (_tmp_dir, dir) = scratch("damage");
     let config = json!({"agent": "expert"});
     let path = RecordFile::open(&dir, "run", &config, None, false).expect("opens").path().to_path_buf();
     let hash = config_hash(&config);
@@ -109,7 +111,7 @@ fn damage_other_than_a_cut_is_an_error_naming_the_line() {
 
 #[test]
 fn shards_merge_into_what_one_run_writes() {
-    let dir = scratch("shards");
+    let (_tmp_dir, dir) = scratch("shards");
     let config = json!({"agent": "expert", "benchmark": "ipc"});
     let names = ["t0", "t1", "t2", "t3", "t4", "t5", "t6"];
     let mut whole = RecordFile::open(&dir.join("whole"), "run", &config, None, false).expect("opens");

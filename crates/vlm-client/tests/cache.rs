@@ -30,10 +30,12 @@ impl ChatModel for Counting {
     }
 }
 
-fn scratch(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("vlm-client-cache-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    dir.join("replies.jsonl")
+/// A reply file in a folder that does not exist yet, inside a temporary folder that is removed
+/// when the returned guard is dropped, also when the test fails.
+fn scratch(name: &str) -> (tempfile::TempDir, PathBuf) {
+    let tmp = tempfile::Builder::new().prefix("vlm-client-cache-").tempdir().expect("temporary folder");
+    let path = tmp.path().join(name).join("replies.jsonl");
+    (tmp, path)
 }
 
 fn ask(text: &str) -> ChatRequest {
@@ -47,7 +49,7 @@ fn cached(path: &std::path::Path, identity: &str) -> (CachedChat, Rc<Cell<u64>>)
 
 #[test]
 fn a_request_asked_again_is_answered_from_the_file() {
-    let path = scratch("again");
+    let (_tmp_path, path) = scratch("again");
     let (mut chat, calls) = cached(&path, "model sha256:aa");
     let first = chat.chat(&ask("where is the mug?")).expect("reply");
     assert!(!first.cached && first.attempts == 1);
@@ -80,7 +82,7 @@ fn a_request_asked_again_is_answered_from_the_file() {
 
 #[test]
 fn a_torn_last_line_is_dropped_and_a_damaged_line_is_named() {
-    let path = scratch("torn");
+    let (_tmp_path, path) = scratch("torn");
     let (mut chat, _) = cached(&path, "m");
     chat.chat(&ask("one")).expect("reply");
     chat.chat(&ask("two")).expect("reply");

@@ -11,24 +11,16 @@ use candle_core::quantized::QTensor;
 use candle_core::quantized::gguf_file::{self, Content, Value};
 use lm::tiny::{TinySpec, tiny_gguf_bytes};
 
-/// A folder removed when dropped.
-pub struct TempDir(pub PathBuf);
+/// A temporary folder of its own, removed when dropped (also when the test fails).
+pub struct TempDir(tempfile::TempDir);
 
 impl TempDir {
     pub fn new(name: &str) -> Self {
-        let dir = std::env::temp_dir().join(format!("lm-test-{name}-{}", std::process::id()));
-        std::fs::create_dir_all(&dir).expect("temp dir");
-        TempDir(dir)
+        TempDir(tempfile::Builder::new().prefix(&format!("lm-test-{name}-")).tempdir().expect("temp dir"))
     }
 
     pub fn file(&self, name: &str) -> PathBuf {
-        self.0.join(name)
-    }
-}
-
-impl Drop for TempDir {
-    fn drop(&mut self) {
-        std::fs::remove_dir_all(&self.0).ok();
+        self.0.path().join(name)
     }
 }
 

@@ -38,27 +38,23 @@ pub fn sample(benchmark: Benchmark, count: usize) -> Vec<Loaded> {
     all.iter().step_by(step).take(count).map(load).collect()
 }
 
-/// A directory removed on drop.
-pub struct TempDir(pub PathBuf);
+/// A temporary folder of its own, removed when dropped (also when the test fails).
+pub struct TempDir(tempfile::TempDir);
 
 impl TempDir {
     pub fn new(name: &str) -> TempDir {
-        let dir = std::env::temp_dir().join(format!("mcts-test-{name}-{}", std::process::id()));
-        std::fs::create_dir_all(&dir).expect("temp dir");
-        TempDir(dir)
+        TempDir(tempfile::Builder::new().prefix(&format!("mcts-test-{name}-")).tempdir().expect("temp dir"))
     }
-}
 
-impl Drop for TempDir {
-    fn drop(&mut self) {
-        std::fs::remove_dir_all(&self.0).ok();
+    pub fn file(&self, name: &str) -> PathBuf {
+        self.0.path().join(name)
     }
 }
 
 /// The tiny random-weight model (byte-level vocabulary of 274 tokens), with a context long
 /// enough for short prompts and plans.
 pub fn tiny_model(dir: &TempDir) -> lm::LocalModel {
-    let path = dir.0.join("tiny.gguf");
+    let path = dir.file("tiny.gguf");
     let spec = lm::tiny::TinySpec { context_length: 4096, ..lm::tiny::TinySpec::default() };
     lm::tiny::write_tiny_gguf(&path, &spec).expect("tiny model");
     lm::LocalModel::load(&path).expect("tiny model loads")
@@ -66,7 +62,7 @@ pub fn tiny_model(dir: &TempDir) -> lm::LocalModel {
 
 /// The uniform prior over the tiny model's vocabulary.
 pub fn tiny_uniform(dir: &TempDir) -> lm::UniformModel {
-    let path = dir.0.join("tiny-tokenizer.gguf");
+    let path = dir.file("tiny-tokenizer.gguf");
     lm::tiny::write_tiny_gguf(&path, &lm::tiny::TinySpec::default()).expect("tiny model");
     lm::UniformModel::new(Arc::new(lm::Tokenizer::from_gguf_file(&path).expect("tokenizer")))
 }
