@@ -434,8 +434,13 @@ pub fn run(args: EvalArgs) -> anyhow::Result<ExitCode> {
 
 /// The report of the run's records, and the summary when `--json`.
 fn finish(args: &EvalArgs, mut summaries: serde_json::Map<String, Value>, written: &[PathBuf]) -> anyhow::Result<ExitCode> {
-    // The report of this run's records: tables, figures, a page per episode.
-    let report_dir = args.out.join("report");
+    // The report of this run's records: tables, figures, a page per episode. A shard's report
+    // has a folder of its own: shards run side by side into one records folder, and each would
+    // otherwise overwrite the others' report with one of its own part of the set.
+    let report_dir = match args.shard {
+        Some(shard) => args.out.join(format!("report-shard-{}-of-{}", shard.index, shard.count)),
+        None => args.out.join("report"),
+    };
     let paper = eval_harness::stats::BootstrapConfig::PAPER;
     let report = crate::report::write_report(written, &report_dir, paper.replicates, paper.seed)?;
     if args.json {
@@ -443,6 +448,9 @@ fn finish(args: &EvalArgs, mut summaries: serde_json::Map<String, Value>, writte
         println!("{}", Value::Object(summaries));
     } else {
         println!("report: {report}");
+        if args.shard.is_some() {
+            println!("this shard's records only: `cargo xtask merge` the shards, then `cargo xtask report` the merged file");
+        }
     }
     Ok(ExitCode::SUCCESS)
 }

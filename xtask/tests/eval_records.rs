@@ -5,10 +5,12 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 use std::time::Duration;
 
-fn run_dir(name: &str) -> PathBuf {
-    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(format!("eval-records-{name}-{}", std::process::id()));
-    std::fs::remove_dir_all(&dir).ok();
-    dir
+/// A records folder that does not exist yet (`eval` makes it), inside a temporary folder that
+/// is removed when the returned guard is dropped, also when the test fails.
+fn run_dir(name: &str) -> (tempfile::TempDir, PathBuf) {
+    let tmp = tempfile::Builder::new().prefix("eval-records-").tempdir().expect("temporary folder");
+    let dir = tmp.path().join(name);
+    (tmp, dir)
 }
 
 fn eval(out: &Path) -> Command {
@@ -30,6 +32,11 @@ fn records(out: &Path) -> Vec<serde_json::Value> {
         .map(|e| e.path())
         .find(|p| p.extension().is_some_and(|e| e == "jsonl"))
         .expect("a record file");
+    records_of(&file)
+}
+
+/// The record lines of `file`, times left out.
+fn records_of(file: &Path) -> Vec<serde_json::Value> {
     std::fs::read_to_string(file)
         .expect("readable")
         .lines()
@@ -43,12 +50,12 @@ fn records(out: &Path) -> Vec<serde_json::Value> {
 
 #[test]
 fn killed_runs_resume_to_exactly_the_records_of_an_uninterrupted_run() {
-    let whole = run_dir("whole");
+    let (_tmp_whole, whole) = run_dir("whole");
     assert!(eval(&whole).status().expect("runs").success());
     let expected = records(&whole);
     assert_eq!(expected.len(), 140);
 
-    let killed = run_dir("killed");
+    let (_tmp_killed, killed) = run_dir("killed");
     let mut interrupted = 0;
     // Kill after growing delays (a fixed sequence); each run gets further, and a run that
     // finishes before its kill ends the loop.
@@ -81,7 +88,7 @@ fn killed_runs_resume_to_exactly_the_records_of_an_uninterrupted_run() {
 /// in the report as runs of one condition; an agent without a seed refuses the option.
 #[test]
 fn seeds_make_one_run_each() {
-    let dir = run_dir("seeds");
+    let (_tmp_dir, dir) = run_dir("seeds");
     let output = Command::new(env!("CARGO_BIN_EXE_xtask"))
         .args([
             "eval",
@@ -133,5 +140,36 @@ fn seeds_make_one_run_each() {
         .expect("runs");
     assert_eq!(refused.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&refused.stderr).contains("--seeds: the planner agent has no seed"));
-    std::fs::remove_dir_all(&dir).ok();
+}
+
+/// Shards run into one records folder: each writes the report of its own records into a folder
+/// of its own (none overwrites another's, none is taken for the whole run's), and the merged
+/// shards are the records of one unsharded run.
+#[test]
+fn shards_report_apart_and_merge_to_the_records_of_one_run() {
+    let (_tmp_dir, dir) = run_dir("shards");
+    for (shard, tasks) in [("1/2", 3), ("2/2", 2)] {
+        let output = eval(&dir).args(["--limit", "5", "--json", "--shard", shard]).stdout(Stdio::piped()).output().expect("runs");
+        assert!(output.status.success(), "{}", String::from_utf8_lossy(&output.stderr));
+        let summary: serde_json::Value = serde_json::from_str(String::from_utf8_lossy(&output.stdout).trim()).expect("one JSON object");
+        assert_eq!(summary["alfworld-seen"]["tasks"].as_u64(), Some(tasks), "{summary}");
+        let folder = dir.join(format!("report-shard-{}", shard.replace('/', "-of-")));
+        assert_eq!(summary["report"].as_str().map(PathBuf::from), Some(folder.join("index.html")));
+        let markdown = std::fs::read_to_string(folder.join("report.md")).expect("the shard's report");
+        assert!(markdown.contains(&format!("(n={tasks})")), "{shard}: {markdown}");
+    }
+    assert!(!dir.join("report").exists(), "no shard writes the whole run's report");
+
+    let shards: Vec<PathBuf> =
+        std::fs::read_dir(&dir).expect("records").flatten().map(|e| e.path()).filter(|p| p.to_string_lossy().ends_with(".jsonl")).collect();
+    assert_eq!(shards.len(), 2, "{shards:?}");
+    let merged = Command::new(env!("CARGO_BIN_EXE_xtask")).arg("merge").args(&shards).output().expect("runs");
+    assert!(merged.status.success(), "{}", String::from_utf8_lossy(&merged.stderr));
+    // "N records of configuration C -> PATH"
+    let stdout = String::from_utf8_lossy(&merged.stdout);
+    let path = stdout.trim().rsplit(" -> ").next().expect("the merged file");
+
+    let (_tmp_whole, whole) = run_dir("whole");
+    assert!(eval(&whole).args(["--limit", "5"]).status().expect("runs").success());
+    assert_eq!(records_of(Path::new(path)), records(&whole), "the merged shards are the unsharded run's records");
 }

@@ -101,13 +101,16 @@ pub struct Report {
 
 /// The report of `sets` (module documentation).
 pub fn build(sets: &[RecordSet], options: &ReportOptions) -> Result<Report, ReportError> {
+    let (sets, merged) = load::without_merged_shards(sets)?;
+    let sets = sets.as_slice();
     if sets.iter().all(|s| s.records.is_empty()) {
         return Err(ReportError::NoRecords(format!(
             "the record files hold no records: {}",
             sets.iter().map(|s| s.path.display().to_string()).collect::<Vec<_>>().join(", ")
         )));
     }
-    let study = study::study(sets)?;
+    let mut study = study::study(sets)?;
+    study.left_out.splice(0..0, merged);
     let tables = tables::tables(&study, options)?;
     let figures = figures::figures(&study)?;
 

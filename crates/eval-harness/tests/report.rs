@@ -9,6 +9,7 @@ use std::path::{Path, PathBuf};
 
 use eval_harness::report::{Report, ReportError, ReportOptions, build, load, record_paths};
 use eval_harness::stats::{self, BootstrapConfig};
+use tempfile::TempDir;
 
 fn fixtures() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/report")
@@ -20,12 +21,13 @@ fn fixture_report() -> Report {
     build(&sets, &ReportOptions::default()).expect("a report")
 }
 
-/// A scratch folder of its own for each test, under cargo's target directory.
-fn scratch(name: &str) -> PathBuf {
-    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(format!("report-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).expect("scratch folder");
-    dir
+/// A scratch folder of its own for each test (`dir`, created), inside a temporary folder that is
+/// removed when the returned guard is dropped, also when the test fails.
+fn scratch(name: &str) -> (TempDir, PathBuf) {
+    let tmp = tempfile::Builder::new().prefix("report-").tempdir().expect("temporary folder");
+    let dir = tmp.path().join(name);
+    std::fs::create_dir(&dir).expect("scratch folder");
+    (tmp, dir)
 }
 
 #[test]
@@ -129,7 +131,7 @@ fn the_episode_page_shows_the_top_of_the_search_tree() {
 #[test]
 fn an_episode_page_without_a_tree_says_so() {
     // The same record as written before records kept the tree.
-    let dir = scratch("no-tree");
+    let (_tmp_dir, dir) = scratch("no-tree");
     let path = copy_fixture("virtualhome-rearrange-ours-71477d57ab53", &dir);
     let text = std::fs::read_to_string(&path).unwrap();
     let mut lines: Vec<String> = text.lines().map(str::to_string).collect();
@@ -230,7 +232,7 @@ fn message(result: Result<impl std::fmt::Debug, ReportError>) -> String {
 
 #[test]
 fn faults_in_the_input_name_the_file_and_line() {
-    let dir = scratch("faults");
+    let (_tmp_dir, dir) = scratch("faults");
     let stem = "alfworld-seen-expert-8ab1a4359acc";
     let path = copy_fixture(stem, &dir);
     let good = std::fs::read_to_string(&path).unwrap();
@@ -269,13 +271,13 @@ fn faults_in_the_input_name_the_file_and_line() {
     let text = message(load(&dir.join("broken-000000000000.jsonl")));
     assert!(text.contains("broken-000000000000.config.json") && text.contains("line 2"), "{text}");
 
-    let empty = scratch("no-files");
+    let (_tmp_empty, empty) = scratch("no-files");
     assert!(message(record_paths(&[empty])).contains("no `*.jsonl` record files"));
 }
 
 #[test]
 fn a_record_cut_short_is_left_out_with_a_warning() {
-    let dir = scratch("cut");
+    let (_tmp_dir, dir) = scratch("cut");
     let path = copy_fixture("alfworld-seen-expert-8ab1a4359acc", &dir);
     let text = std::fs::read_to_string(&path).unwrap();
     std::fs::write(&path, &text[..text.len() - 20]).unwrap();
@@ -289,7 +291,7 @@ fn a_record_cut_short_is_left_out_with_a_warning() {
 /// (n counts the judged tasks) and the report says so.
 #[test]
 fn tasks_without_an_expert_plan_are_left_out_and_said() {
-    let dir = scratch("no-plan");
+    let (_tmp_dir, dir) = scratch("no-plan");
     let path = copy_fixture("alfworld-seen-expert-8ab1a4359acc", &dir);
     let text = std::fs::read_to_string(&path).unwrap();
     let mut lines: Vec<String> = text.lines().map(str::to_string).collect();
@@ -338,7 +340,7 @@ fn variant(dir: &Path, stem: &str, edit: impl FnOnce(&mut serde_json::Value)) {
 
 #[test]
 fn the_model_column_names_each_phase_where_they_differ() {
-    let dir = scratch("model-column");
+    let (_tmp_dir, dir) = scratch("model-column");
     let ours = "alfworld-seen-ours-86924780c5c0";
     copy_fixture(ours, &dir);
     variant(&dir, ours, |c| {
@@ -378,7 +380,7 @@ fn section_of<'a>(markdown: &'a str, heading: &str) -> &'a str {
 /// own, named by the subset; the subset does not make another condition.
 #[test]
 fn a_subset_names_a_column_not_a_condition() {
-    let dir = scratch("subset");
+    let (_tmp_dir, dir) = scratch("subset");
     let stem = "alfworld-seen-ours-86924780c5c0";
     copy_fixture(stem, &dir);
     variant(&dir, stem, |c| c["subset"] = "alfworld-seen-6".into());
@@ -392,12 +394,13 @@ fn a_subset_names_a_column_not_a_condition() {
 fn shard_files_of_one_run_make_one_run_and_a_task_twice_is_an_error() {
     let report = fixture_report();
     assert!(report.markdown.contains("| Planner (A*) | — | 83.3 (n=6) | — |"));
-    let dir = scratch("twice");
+    let (_tmp_dir, dir) = scratch("twice");
     let stem = "virtualhome-rearrange-planner-1a1f05079ed4";
     std::fs::copy(fixtures().join(format!("{stem}.config.json")), dir.join(format!("{stem}.config.json"))).unwrap();
     let shard = fixtures().join(format!("{stem}.shard-1-of-2.jsonl"));
-    std::fs::copy(&shard, dir.join(format!("{stem}.jsonl"))).unwrap();
+    // The first shard's records again as the second shard's.
     std::fs::copy(&shard, dir.join(format!("{stem}.shard-1-of-2.jsonl"))).unwrap();
+    std::fs::copy(&shard, dir.join(format!("{stem}.shard-2-of-2.jsonl"))).unwrap();
     let sets: Vec<_> = record_paths(&[dir]).unwrap().iter().map(|p| load(p).unwrap()).collect();
     let text = message(build(&sets, &ReportOptions::default()));
     assert!(text.contains(":1: task clean-001 is recorded again") && text.contains("for the same configuration"), "{text}");
@@ -512,7 +515,7 @@ fn well_formed(text: &str) -> Result<String, String> {
 /// Holm: not bold).
 #[test]
 fn table_7_bolds_the_best_and_what_is_not_significantly_worse() {
-    let dir = scratch("table-7-bold");
+    let (_tmp_dir, dir) = scratch("table-7-bold");
     for (mode, solved) in [("constrained-mcts", 12), ("constrained-greedy", 11), ("unconstrained-greedy", 2)] {
         let config = serde_json::json!({"agent": "ours", "benchmark": "alfworld-seen", "mode": mode, "lm": "uniform"});
         let mut file = eval_harness::records::RecordFile::open(&dir, "alfworld-seen-ours", &config, None, false).expect("opens");
@@ -532,4 +535,44 @@ fn table_7_bolds_the_best_and_what_is_not_significantly_worse() {
     assert!(row("Unconstrained greedy").contains("| 16.7 ± 0.0 |"), "{table}");
     let p = stats::holm_adjust(&[stats::mcnemar_exact_p(1, 0), stats::mcnemar_exact_p(10, 0)]).unwrap();
     assert!(p[0] >= 0.05 && p[1] < 0.05, "{p:?}");
+}
+
+/// A folder after `merge` holds the shards and the merged file: the report reads the merged
+/// file once, says the shards were left out, and its tables are those of the shards alone; a
+/// shard resumed after the merge (a record the merged file lacks) asks for the merge again.
+#[test]
+fn shards_beside_their_merged_file_are_read_once() {
+    let (_tmp_dir, dir) = scratch("merged");
+    for entry in std::fs::read_dir(fixtures()).unwrap() {
+        let path = entry.unwrap().path();
+        std::fs::copy(&path, dir.join(path.file_name().unwrap())).expect("copy");
+    }
+    let stem = "virtualhome-rearrange-planner-1a1f05079ed4";
+    let shards: Vec<PathBuf> = (1..=2).map(|i| dir.join(format!("{stem}.shard-{i}-of-2.jsonl"))).collect();
+    let merged = eval_harness::records::merge(&shards).expect("the shards merge");
+    assert_eq!(merged.path, dir.join(format!("{stem}.jsonl")));
+
+    let report_of = |dir: &Path| {
+        let sets: Vec<_> = record_paths(&[dir.to_path_buf()]).unwrap().iter().map(|p| load(p).unwrap()).collect();
+        build(&sets, &ReportOptions::default())
+    };
+    let report = report_of(&dir).expect("a report");
+    let tables = |markdown: &str| markdown[markdown.find("\n## ").expect("a table")..].to_string();
+    assert_eq!(tables(&report.markdown), tables(&fixture_report().markdown), "the same tables as from the shards alone");
+    for shard in &shards {
+        let note = format!("- left out: {}: its records are those of the merged {}", shard.display(), merged.path.display());
+        assert!(report.markdown.contains(&note), "{}", report.markdown);
+    }
+    assert_eq!(report.episodes.len(), fixture_report().episodes.len(), "one page per episode, not one per copy");
+
+    // A shard resumed after the merge: its new record is not in the merged file.
+    let text = std::fs::read_to_string(&shards[1]).unwrap();
+    let mut last: serde_json::Value = serde_json::from_str(text.lines().last().unwrap()).unwrap();
+    last["task"] = "a-task-run-after-the-merge".into();
+    last["index"] = 99.into();
+    std::fs::write(&shards[1], format!("{text}{last}\n")).unwrap();
+    let error = message(report_of(&dir));
+    let line = text.lines().count() + 1;
+    assert!(error.starts_with(&format!("{}:{line}:", shards[1].display())), "{error}");
+    assert!(error.contains("merge the shards again"), "{error}");
 }

@@ -3,6 +3,7 @@
 //! a string `task`, a boolean `success`, a known `terminal` and `attribution` where present),
 //! any fault an error naming the file and line.
 
+use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
 use serde_json::{Map, Value};
@@ -35,6 +36,11 @@ impl RecordSet {
     /// The file name without `.jsonl` and without a shard suffix: `<stem>-<hash>`.
     pub fn stem(&self) -> String {
         record_stem(&self.path)
+    }
+
+    /// Whether the file is one shard of a run (`.shard-i-of-n.jsonl`).
+    pub fn is_shard(&self) -> bool {
+        self.path.file_name().and_then(|n| n.to_str()).is_some_and(|n| n.contains(".shard-"))
     }
 
     /// A string field of the configuration.
@@ -76,6 +82,36 @@ pub fn record_paths(arguments: &[PathBuf]) -> Result<Vec<PathBuf>, ReportError> 
         return Err(ReportError::NoRecords("no record files given".into()));
     }
     Ok(paths)
+}
+
+/// `sets` without the shard files whose merged file (`cargo xtask merge`) is among them, and a
+/// note for each one left out: a folder holds both after a merge, and the merged file holds
+/// the shards' records (the same `<stem>-<hash>`, so the same configuration). A shard record
+/// that the merged file lacks, or holds otherwise (a shard resumed after the merge), is an
+/// error that asks for the merge again.
+pub(crate) fn without_merged_shards(sets: &[RecordSet]) -> Result<(Vec<RecordSet>, Vec<String>), ReportError> {
+    let mut kept = Vec::with_capacity(sets.len());
+    let mut notes = Vec::new();
+    for set in sets {
+        let Some(whole) = sets.iter().find(|m| set.is_shard() && !m.is_shard() && m.stem() == set.stem()) else {
+            kept.push(set.clone());
+            continue;
+        };
+        let task = |r: &Record| r.fields.get("task").and_then(Value::as_str).unwrap_or_default().to_string();
+        let held: BTreeMap<String, &Record> = whole.records.iter().map(|r| (task(r), r)).collect();
+        for record in &set.records {
+            if held.get(&task(record)).is_none_or(|m| m.fields != record.fields) {
+                let message = format!(
+                    "task {} is not in the merged file {} as it is here (a shard resumed after the merge?): merge the shards again",
+                    task(record),
+                    whole.path.display()
+                );
+                return Err(RecordError::Bad { path: set.path.clone(), line: record.line, message }.into());
+            }
+        }
+        notes.push(format!("{}: its records are those of the merged {}", set.path.display(), whole.path.display()));
+    }
+    Ok((kept, notes))
 }
 
 /// Reads the record file at `path` and the configuration beside it.
