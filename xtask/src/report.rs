@@ -6,7 +6,7 @@ use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 use anyhow::Context;
-use eval_harness::report::{ReportError, ReportOptions, build, load, record_paths};
+use eval_harness::report::{ReportError, ReportOptions, build, load, record_paths, without_merged_shards};
 use eval_harness::stats::BootstrapConfig;
 
 use crate::input::InputError;
@@ -54,6 +54,11 @@ pub fn write_report(records: &[PathBuf], out: &Path, replicates: usize, seed: u6
     }
     let options = ReportOptions { bootstrap: BootstrapConfig { replicates, seed, ..BootstrapConfig::PAPER }, ..ReportOptions::default() };
     let report = build(&sets, &options).map_err(input)?;
+    // Shard files beside their merged file are read once, through it (the report says which).
+    let (sets, merged) = without_merged_shards(&sets).map_err(input)?;
+    for note in merged {
+        eprintln!("note: {note}");
+    }
     write(&out.join("report.md"), &report.markdown)?;
     write(&out.join("index.html"), &report.index)?;
     for figure in &report.figures {

@@ -47,7 +47,7 @@ use std::path::PathBuf;
 
 pub use figures::Figure;
 pub use html::{Page, escape};
-pub use load::{Record, RecordSet, load, record_paths};
+pub use load::{Record, RecordSet, load, record_paths, without_merged_shards};
 
 use crate::records::RecordError;
 use crate::stats::{BootstrapConfig, StatsError};
@@ -101,7 +101,7 @@ pub struct Report {
 
 /// The report of `sets` (module documentation).
 pub fn build(sets: &[RecordSet], options: &ReportOptions) -> Result<Report, ReportError> {
-    let (sets, merged) = load::without_merged_shards(sets)?;
+    let (sets, merged) = without_merged_shards(sets)?;
     let sets = sets.as_slice();
     if sets.iter().all(|s| s.records.is_empty()) {
         return Err(ReportError::NoRecords(format!(

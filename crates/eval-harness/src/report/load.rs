@@ -89,7 +89,7 @@ pub fn record_paths(arguments: &[PathBuf]) -> Result<Vec<PathBuf>, ReportError> 
 /// the shards' records (the same `<stem>-<hash>`, so the same configuration). A shard record
 /// that the merged file lacks, or holds otherwise (a shard resumed after the merge), is an
 /// error that asks for the merge again.
-pub(crate) fn without_merged_shards(sets: &[RecordSet]) -> Result<(Vec<RecordSet>, Vec<String>), ReportError> {
+pub fn without_merged_shards(sets: &[RecordSet]) -> Result<(Vec<RecordSet>, Vec<String>), ReportError> {
     let mut kept = Vec::with_capacity(sets.len());
     let mut notes = Vec::new();
     for set in sets {
