@@ -269,7 +269,8 @@ pub struct Merged {
 
 /// Joins shard files (`<stem>-<hash>.shard-i-of-n.jsonl`) of one configuration into
 /// `<stem>-<hash>.jsonl` beside them, records in `index` order. Refused: files of different
-/// configurations, a task in two files, a target file that already holds records.
+/// configurations, a task in two files, a shard of the run not given, a target file that
+/// already holds records.
 pub fn merge(shards: &[PathBuf]) -> Result<Merged, RecordError> {
     let first = shards.first().ok_or_else(|| RecordError::Merge("no shard files given".into()))?;
     let name = first.file_name().and_then(|n| n.to_str()).unwrap_or_default();
@@ -297,6 +298,28 @@ pub fn merge(shards: &[PathBuf]) -> Result<Merged, RecordError> {
         }
     }
     let config = config.ok_or_else(|| RecordError::Merge("the shard files hold no records".into()))?;
+    // Every shard of the run, once: a merged file short of a shard would pass for the whole run.
+    let mut numbers = Vec::with_capacity(shards.len());
+    for path in shards {
+        let name = path.file_name().and_then(|n| n.to_str()).unwrap_or_default();
+        let shard = name
+            .strip_suffix(".jsonl")
+            .and_then(|n| n.rsplit_once(".shard-"))
+            .and_then(|(_, i_of_n)| i_of_n.replace("-of-", "/").parse::<Shard>().ok())
+            .ok_or_else(|| RecordError::Merge(format!("{}: not a shard file (`<stem>-<hash>.shard-i-of-n.jsonl`)", path.display())))?;
+        numbers.push(shard);
+    }
+    let count = numbers[0].count;
+    if let Some(other) = numbers.iter().find(|s| s.count != count) {
+        return Err(RecordError::Merge(format!("shards of {count} and of {} given: one run's shards all have the same n", other.count)));
+    }
+    let missing: Vec<String> = (1..=count).filter(|i| !numbers.iter().any(|s| s.index == *i)).map(|i| i.to_string()).collect();
+    if !missing.is_empty() {
+        return Err(RecordError::Merge(format!(
+            "shard(s) {} of {count} not given: the merged file is the whole run's, so every shard is needed",
+            missing.join(", ")
+        )));
+    }
     let mut seen = BTreeSet::new();
     for record in &all {
         let task = record.get("task").and_then(Value::as_str).unwrap_or_default();

@@ -127,6 +127,9 @@ fn shards_merge_into_what_one_run_writes() {
         }
         shard_paths.push(file.path().to_path_buf());
     }
+    // Every shard of the run is needed: the merged file stands for the whole run.
+    let error = merge(&shard_paths[..2]).expect_err("a shard short");
+    assert!(error.to_string().contains("shard(s) 3 of 3 not given"), "{error}");
     let merged = merge(&shard_paths).expect("merges");
     assert_eq!(merged.records, names.len());
     assert_eq!(std::fs::read_to_string(&merged.path).expect("reads"), std::fs::read_to_string(whole.path()).expect("reads"));
