@@ -100,8 +100,8 @@ pub struct EvalArgs {
     /// longer run of the same configuration).
     #[arg(long)]
     limit: Option<usize>,
-    /// Run every n-th task only, `i/n` (1 <= i <= n), into its own shard file; `cargo xtask
-    /// merge` joins the shards.
+    /// Run every n-th task only, `i/n` (1 <= i <= n), into its own shard file, its report into
+    /// `<out>/report-shard-i-of-n`; `cargo xtask merge` joins the shards.
     #[arg(long)]
     shard: Option<Shard>,
     /// Folder of EAI task files for `virtualhome-eai` with `ours`/`planner`/`direct` [default: the 33
