@@ -489,7 +489,8 @@ const KEY_BLOCK: usize = 64;
 ///
 /// Until the blocking, each (query row, head) was its own item that read all its keys for
 /// itself; now a block of keys is read once for the item's queries (the three query heads of
-/// a SmolLM2 group and 16 rows). Every query's floats are computed in the same order as then (one score per key in the same
+/// a SmolLM2 group and 16 rows), which made a 1,024-token prefill 15-20% faster (ARCHITECTURE).
+/// Every query's floats are computed in the same order as then (one score per key in the same
 /// chains, the softmax in key order, the values summed in key order), so the result is the
 /// same bit for bit (test `blocked_attention_equals_one_query_at_a_time_bit_for_bit`).
 fn attention(cfg: &ModelConfig, q: &[f32], keys: &[f32], values: &[f32], start: usize, n: usize) -> Vec<f32> {
