@@ -8,15 +8,10 @@ use std::io::{Read, Write};
 use std::net::TcpListener;
 use std::process::Output;
 
-use common::xtask;
+use common::{scratch_dir, xtask};
 
 use serde_json::{Value, json};
 use tempfile::TempDir;
-
-/// A test's scratch folder, removed when dropped.
-fn scratch_dir() -> TempDir {
-    tempfile::Builder::new().prefix("xtask-chat-").tempdir().expect("temp dir")
-}
 
 fn scratch(dir: &TempDir, name: &str, bytes: &[u8]) -> String {
     let path = dir.path().join(name);
@@ -40,7 +35,7 @@ fn stdout_json(output: &Output) -> Value {
 
 #[test]
 fn a_local_model_replies_with_schema_valid_json() {
-    let tmp = scratch_dir();
+    let tmp = scratch_dir("xtask-chat-");
     // The tiny model's weights are random: only the schema makes its reply JSON.
     let model = tmp.path().join("tiny.gguf");
     lm::tiny::write_tiny_gguf(&model, &lm::tiny::TinySpec::default()).expect("tiny model");
@@ -71,7 +66,7 @@ fn a_local_model_replies_with_schema_valid_json() {
 
 #[test]
 fn a_served_model_gets_the_image_and_its_reply_is_printed() {
-    let tmp = scratch_dir();
+    let tmp = scratch_dir("xtask-chat-");
     let listener = TcpListener::bind("127.0.0.1:0").expect("bind");
     let address = listener.local_addr().expect("address");
     let server = std::thread::spawn(move || {
@@ -136,7 +131,7 @@ fn a_served_model_gets_the_image_and_its_reply_is_printed() {
 
 #[test]
 fn bad_input_exits_2_and_a_failing_server_exits_1() {
-    let tmp = scratch_dir();
+    let tmp = scratch_dir("xtask-chat-");
     // A port nothing listens on any more.
     let port = TcpListener::bind("127.0.0.1:0").expect("bind").local_addr().expect("address").port();
     let url = &format!("openai:http://127.0.0.1:{port}/v1");

@@ -4,17 +4,12 @@ mod common;
 
 use std::path::{Path, PathBuf};
 
-use common::xtask;
+use common::{scratch_dir, xtask};
 use std::process::Output;
 use tempfile::TempDir;
 
 fn fixtures() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../fixtures")
-}
-
-/// A test's scratch folder, removed when dropped (also when the test fails).
-fn scratch_dir() -> TempDir {
-    tempfile::Builder::new().prefix("xtask-cli-").tempdir().expect("temp dir")
 }
 
 /// Writes `text` to `name` in `dir`.
@@ -47,7 +42,7 @@ fn ground_prints_one_json_object() {
 
 #[test]
 fn validate_reports_valid_invalid_and_bad_input_with_exit_codes() {
-    let tmp = scratch_dir();
+    let tmp = scratch_dir("xtask-cli-");
     let (domain, problem) = household();
     let good = scratch(
         &tmp,
@@ -94,7 +89,7 @@ fn validate_reports_valid_invalid_and_bad_input_with_exit_codes() {
 
 #[test]
 fn validate_reads_alfworld_commands_from_a_game() {
-    let tmp = scratch_dir();
+    let tmp = scratch_dir("xtask-cli-");
     let game = fixtures().join("alfworld/valid_seen/look_at_obj_in_light-AlarmClock-None-DeskLamp-323");
     let trial = std::fs::read_dir(&game).expect("game folder").next().expect("a trial").expect("entry").path();
     let plan = scratch(&tmp, "walkthrough.txt", "go to desk 1\nuse desklamp 1\ntake alarmclock 2 from desk 1\n");
@@ -108,7 +103,7 @@ fn validate_reads_alfworld_commands_from_a_game() {
 
 #[test]
 fn plan_writes_a_fast_downward_plan_and_heuristic_prints_every_value() {
-    let tmp = scratch_dir();
+    let tmp = scratch_dir("xtask-cli-");
     let domain = fixtures().join("ipc/blocks/domain.pddl").display().to_string();
     let problem = fixtures().join("ipc/blocks/instance-1.pddl").display().to_string();
     let out = scratch(&tmp, "blocks-1.plan", "");
@@ -154,7 +149,7 @@ fn plan_writes_a_fast_downward_plan_and_heuristic_prints_every_value() {
 
 #[test]
 fn plan_reports_unsolvable_tasks() {
-    let tmp = scratch_dir();
+    let tmp = scratch_dir("xtask-cli-");
     let domain = fixtures().join("pddl-valid/household/domain.pddl").display().to_string();
     let problem = scratch(
         &tmp,
@@ -199,7 +194,7 @@ fn bench_mask_reports_the_issue_figures_and_agrees_with_llguidance() {
 
 #[test]
 fn phase2_writes_records_resumes_and_plan_mcts_prints_json() {
-    let tmp = scratch_dir();
+    let tmp = scratch_dir("xtask-cli-");
     let out = tmp.path().join("records");
     let out_text = out.display().to_string();
     let args = [
@@ -339,7 +334,7 @@ fn env_prints_the_engines_lines_byte_for_byte() {
 
 #[test]
 fn env_virtualhome_prints_json_lines_and_the_verdict() {
-    let tmp = scratch_dir();
+    let tmp = scratch_dir("xtask-cli-");
     // EAI's gold program of task 201_1 (wash a plate with the dishwasher).
     let program = "[WALK] <dining_room> (201)\n[WALK] <dishwasher> (1000)\n[FIND] <dishwasher> (1000)\n[OPEN] <dishwasher> (1000)\n\
                    [FIND] <plate> (1001)\n[GRAB] <plate> (1001)\n[PUTBACK] <plate> (1001) <dishwasher> (1000)\n[FIND] <dish_soap> (1002)\n\
@@ -367,7 +362,7 @@ fn env_virtualhome_prints_json_lines_and_the_verdict() {
 
 #[test]
 fn agent_wins_a_game_and_writes_commands_the_engine_can_replay() {
-    let tmp = scratch_dir();
+    let tmp = scratch_dir("xtask-cli-");
     let game = "fixtures/alfworld/valid_seen/pick_clean_then_place_in_recep-Mug-None-CoffeeMachine-26/trial_T20190907_233056_022802";
     let commands = scratch(&tmp, "agent-commands.txt", "");
     // The defaults: systematic explorer, constrained MCTS with the uniform prior.
@@ -443,7 +438,7 @@ fn agent_proves_by_a_star_that_no_plan_fits_where_lm_cut_cannot() {
 
 #[test]
 fn agent_solves_a_virtualhome_rearrangement_task_with_a_trace() {
-    let tmp = scratch_dir();
+    let tmp = scratch_dir("xtask-cli-");
     let trace = scratch(&tmp, "agent-trace.json", "");
     let output = xtask(&["agent", "--benchmark", "virtualhome-rearrange", "--task", "fridge-003", "--trace", trace.to_str().unwrap()]);
     assert_eq!(output.status.code(), Some(0), "{}{}", stdout(&output), String::from_utf8_lossy(&output.stderr));
@@ -457,7 +452,7 @@ fn agent_solves_a_virtualhome_rearrangement_task_with_a_trace() {
 
 #[test]
 fn soundness_plans_fixture_tasks_and_they_reach_their_goals() {
-    let tmp = scratch_dir();
+    let tmp = scratch_dir("xtask-cli-");
     let out = scratch(&tmp, "soundness.jsonl", "");
     let output = xtask(&["soundness", "--limit", "3", "--out", out.to_str().unwrap()]);
     assert_eq!(output.status.code(), Some(0), "{}", String::from_utf8_lossy(&output.stderr));

@@ -1,5 +1,5 @@
 //! Helpers shared by xtask's integration tests: running the built `xtask` from the workspace
-//! root, and where the default model file is cached.
+//! root, scratch folders, and where the default model file is cached.
 
 #![allow(dead_code)]
 
@@ -13,6 +13,11 @@ pub fn xtask(args: &[&str]) -> Output {
         .current_dir(Path::new(env!("CARGO_MANIFEST_DIR")).join(".."))
         .output()
         .expect("xtask runs")
+}
+
+/// A test's scratch folder (named `<prefix>…`), removed when dropped, also when the test fails.
+pub fn scratch_dir(prefix: &str) -> tempfile::TempDir {
+    tempfile::Builder::new().prefix(prefix).tempdir().expect("temp dir")
 }
 
 /// The default model file in the model cache.
