@@ -6,7 +6,7 @@ use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 use anyhow::Context;
-use eval_harness::report::{ReportError, ReportOptions, build, load, record_paths, without_merged_shards};
+use eval_harness::report::{ReportError, ReportOptions, build, load, record_paths};
 use eval_harness::stats::BootstrapConfig;
 
 use crate::input::InputError;
@@ -55,8 +55,7 @@ pub fn write_report(records: &[PathBuf], out: &Path, replicates: usize, seed: u6
     let options = ReportOptions { bootstrap: BootstrapConfig { replicates, seed, ..BootstrapConfig::PAPER }, ..ReportOptions::default() };
     let report = build(&sets, &options).map_err(input)?;
     // Shard files beside their merged file are read once, through it (the report says which).
-    let (sets, merged) = without_merged_shards(&sets).map_err(input)?;
-    for note in merged {
+    for note in &report.merged_shards {
         eprintln!("note: {note}");
     }
     write(&out.join("report.md"), &report.markdown)?;
@@ -67,10 +66,10 @@ pub fn write_report(records: &[PathBuf], out: &Path, replicates: usize, seed: u6
     for page in &report.episodes {
         write(&out.join(&page.path), &page.html)?;
     }
-    let records: usize = sets.iter().map(|s| s.records.len()).sum();
     Ok(format!(
-        "{} record file(s), {records} record(s) -> {} ({} episode pages), {}, {} figure(s)",
-        sets.len(),
+        "{} record file(s), {} record(s) -> {} ({} episode pages), {}, {} figure(s)",
+        report.files,
+        report.records,
         out.join("index.html").display(),
         report.episodes.len(),
         out.join("report.md").display(),

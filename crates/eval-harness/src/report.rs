@@ -97,6 +97,12 @@ pub struct Report {
     pub index: String,
     /// `episodes/<file stem>/<index>.html`, one per record.
     pub episodes: Vec<Page>,
+    /// The record files read and their records, shard files beside their merged file not
+    /// counted (they are read through it).
+    pub files: usize,
+    pub records: usize,
+    /// Each shard file read through its merged file ([`without_merged_shards`]).
+    pub merged_shards: Vec<String>,
 }
 
 /// The report of `sets` (module documentation).
@@ -110,7 +116,7 @@ pub fn build(sets: &[RecordSet], options: &ReportOptions) -> Result<Report, Repo
         )));
     }
     let mut study = study::study(sets)?;
-    study.left_out.splice(0..0, merged);
+    study.left_out.splice(0..0, merged.iter().cloned());
     let tables = tables::tables(&study, options)?;
     let figures = figures::figures(&study)?;
 
@@ -149,5 +155,5 @@ pub fn build(sets: &[RecordSet], options: &ReportOptions) -> Result<Report, Repo
             episodes.push(Page { path: path.clone(), html: html::episode_page(&study, set, record) });
         }
     }
-    Ok(Report { markdown, figures, index, episodes })
+    Ok(Report { markdown, figures, index, episodes, files: sets.len(), records, merged_shards: merged })
 }
