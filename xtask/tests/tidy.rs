@@ -118,7 +118,9 @@ fn crates_share_settings_and_respect_their_boundaries() {
     for (dir, name) in crates().iter().zip(&names) {
         let manifest = std::fs::read_to_string(dir.join("Cargo.toml")).expect("Cargo.toml");
         assert!(manifest.contains(&format!("name = \"{name}\"")), "{name}: directory name == crate name");
-        assert!(manifest.contains("version = \"0.0.0\""), "{name}: internal crates are version 0.0.0");
+        // The hack is 0.1.0: it stands, through [patch.crates-io], in the place of crates.io's stub.
+        let version = if name == "workspace-hack" { "0.1.0" } else { "0.0.0" };
+        assert!(manifest.contains(&format!("version = \"{version}\"")), "{name}: internal crates are version 0.0.0, the hack 0.1.0");
         assert!(manifest.contains("publish.workspace = true"), "{name}: publish = false via the workspace");
         assert!(manifest.contains("[lints]\nworkspace = true"), "{name}: uses the workspace lint table");
         assert!(architecture.contains(&format!("`{name}`")), "{name} is missing from docs/ARCHITECTURE.md");
@@ -142,6 +144,11 @@ fn crates_share_settings_and_respect_their_boundaries() {
             "{name}: every member depends on workspace-hack (`cargo hakari manage-deps`)"
         );
     }
+    // Members name crates.io's empty stub; only this workspace's [patch] makes it ours, so a
+    // project that takes one of our crates by git or path does not build the hack's union.
+    let root_manifest = std::fs::read_to_string(root().join("Cargo.toml")).expect("Cargo.toml");
+    assert!(section(&root_manifest, "[workspace.dependencies]").contains(&"workspace-hack = \"0.1\""), "the stub by version, no path");
+    assert!(section(&root_manifest, "[patch.crates-io]").contains(&"workspace-hack = { path = \"crates/workspace-hack\" }"));
 }
 
 /// The `[section]` of a manifest, as its lines (trimmed, comments and blanks dropped).
