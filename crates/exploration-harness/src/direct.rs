@@ -43,7 +43,7 @@
 
 use std::time::Instant;
 
-use household_sim::{Environment, Event, Judge, Observation};
+use household_sim::{EngineLine, Environment, Event, Judge, Observation};
 use serde::Serialize;
 use serde_json::{Value, json};
 use vlm_client::{ChatErrorKind, ChatModel, ChatRequest, Image, Message, Sampling, chat_json};
@@ -143,6 +143,9 @@ pub struct DirectEpisode {
     pub attribution: Option<Attribution>,
     /// The goal's parts that do not hold at the end, from the judge (evaluation only).
     pub unmet_goals: Vec<String>,
+    /// The episode as the benchmark's own engine takes it, to replay there (the judge's
+    /// [`Judge::engine_script`]; evaluation only).
+    pub engine_script: Vec<EngineLine>,
     pub usage: DirectUsage,
     /// The DONE reply, when the model ended the episode.
     pub done_reply: Option<String>,
@@ -515,6 +518,7 @@ pub fn run_direct<E: Environment + Judge>(
         steps,
         attribution,
         unmet_goals: env.unmet_goals(),
+        engine_script: env.engine_script(),
         usage,
         done_reply,
         millis: start.elapsed().as_secs_f64() * 1e3,

@@ -172,6 +172,9 @@ pub struct Episode {
     pub phase1_ms: f64,
     pub phase2_ms: f64,
     pub execute_ms: f64,
+    /// The episode as the benchmark's own engine takes it, to replay there (the judge's
+    /// [`household_sim::Judge::engine_script`]; evaluation only: no part of the agent sees it).
+    pub engine_script: Vec<household_sim::EngineLine>,
 }
 
 /// Settings of one episode.
@@ -236,6 +239,7 @@ pub fn run_episode<E: Environment + Judge>(
         phase1_ms,
         phase2_ms: 0.0,
         execute_ms: 0.0,
+        engine_script: Vec::new(),
     };
     let mut exploration = exploration;
     // The hand-over itself failed (no ŝ0): like a missing plan for the attribution.
@@ -365,6 +369,7 @@ pub fn run_episode<E: Environment + Judge>(
         }
     }
     episode.success = env.goal_reached();
+    episode.engine_script = env.engine_script();
     if episode.success {
         episode.failure = None;
     } else {

@@ -81,6 +81,11 @@ fn play_split(split: &str) -> (usize, usize, Vec<String>) {
     let (mut won, mut failures) = (0, Vec::new());
     for path in &games {
         let episode = play(path, &ontology, &domain, &grammar);
+        // What the real engine is given to replay the record: the very commands sent, Phase I's and
+        // the plan's, each with the outcome it had here.
+        let script: Vec<(&str, bool)> = episode.engine_script.iter().map(|l| (l.line.as_str(), l.executed)).collect();
+        let sent: Vec<(&str, bool)> = episode.steps.iter().map(|s| (s.command.as_str(), s.executed)).collect();
+        assert_eq!(script, sent, "{}", path.display());
         if let Some(handover) = &episode.handover {
             assert_checks(&domain, &handover.problem);
         }

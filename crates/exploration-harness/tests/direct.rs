@@ -13,7 +13,7 @@ use std::path::{Path, PathBuf};
 use exploration_harness::direct::{self, DirectConfig, DirectEnd, DirectEpisode, FAILURE_LIMIT};
 use exploration_harness::{Attribution, parse_goal, run_direct};
 use household_sim::{
-    AlfworldEnv, Environment, GoalAnnotation, Image, Judge, JudgeAtom, Observation, StepResult, VirtualhomeEnv, VirtualhomeTask,
+    AlfworldEnv, EngineLine, Environment, GoalAnnotation, Image, Judge, JudgeAtom, Observation, StepResult, VirtualhomeEnv, VirtualhomeTask,
 };
 use vlm_client::{ChatError, ChatModel, ChatReply, ChatRequest, Usage};
 
@@ -129,6 +129,9 @@ fn the_walkthrough_replied_one_command_a_turn_wins() {
         assert_eq!(model.prompts.len() as u64, turns, "{name}");
         assert_eq!(env.steps_taken() as u64, turns, "{name}");
         assert!(episode.requests().iter().all(|(_, executed)| *executed));
+        // The record replays in the real engine: every command as sent, with its outcome.
+        let script: Vec<(&str, bool)> = episode.engine_script.iter().map(|l| (l.line.as_str(), l.executed)).collect();
+        assert_eq!(script, episode.requests(), "{name}");
     }
 }
 
@@ -266,6 +269,9 @@ fn virtualhome_takes_class_level_commands_only() {
     assert!(episode.steps[1].sent && episode.steps[1].executed, "{:?}", episode.steps[1]);
     assert_eq!(env.steps_taken(), 1);
     assert!(model.prompts[1].contains("without instance numbers"), "{}", model.prompts[1]);
+    // What the executor is given to replay the episode: the line the class-level walk was
+    // grounded to; the refused instance-level line never reached it.
+    assert_eq!(episode.engine_script, vec![EngineLine { line: "[WALK] <dining_room> (201)".into(), executed: true }]);
 
     // A class the agent cannot see from here: the environment's own reason comes back.
     let mut env = rearrangement("dishwasher-000");
@@ -311,6 +317,9 @@ impl Judge for Pictured {
     }
     fn unmet_goals(&self) -> Vec<String> {
         self.0.unmet_goals()
+    }
+    fn engine_script(&self) -> Vec<EngineLine> {
+        self.0.engine_script()
     }
 }
 

@@ -73,6 +73,11 @@ fn play_set(dir: &Path, benchmark: &str) -> (usize, usize, BTreeMap<String, usiz
     for path in &paths {
         let episode = play(path, benchmark, &ontology);
         assert!(episode.steps.len() <= 20, "{}: {} steps", path.display(), episode.steps.len());
+        // What the real engine is given to replay the record: the very commands sent, Phase I's and
+        // the plan's, each with the outcome it had here.
+        let script: Vec<(&str, bool)> = episode.engine_script.iter().map(|l| (l.line.as_str(), l.executed)).collect();
+        let sent: Vec<(&str, bool)> = episode.steps.iter().map(|s| (s.command.as_str(), s.executed)).collect();
+        assert_eq!(script, sent, "{}", path.display());
         // Plans are executable by construction: a step the environment refuses from a state
         // Phase I got right would be a soundness bug of the hand-over.
         assert_ne!(episode.attribution, Some(Attribution::Grounding), "{}: {:?}", path.display(), episode.failure);

@@ -110,6 +110,16 @@ impl fmt::Display for JudgeAtom {
     }
 }
 
+/// One command of an episode as the benchmark's own engine takes it ([`Judge::engine_script`]).
+#[derive(Debug, Clone, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+pub struct EngineLine {
+    /// The command in the engine's language: ALFWorld's text command, VirtualHome's
+    /// instance-level script line (`[GRAB] <plate> (1001)`).
+    pub line: String,
+    /// Whether this environment executed it (the engine must agree).
+    pub executed: bool,
+}
+
 /// The hidden state, for evaluation only (failure attribution, precision and recall of
 /// what an agent believed). Agents are handed `&mut dyn Environment`, never this.
 pub trait Judge {
@@ -117,4 +127,13 @@ pub trait Judge {
     fn hidden_atoms(&self) -> Vec<JudgeAtom>;
     /// The goal's parts that do not hold now, in words; empty when the goal holds.
     fn unmet_goals(&self) -> Vec<String>;
+    /// The episode since the last reset as the benchmark's own engine would be given it, so
+    /// that a record replays there (`tools/replay_records.py`): ALFWorld every command sent
+    /// (TextWorld answers one it cannot execute itself, "Nothing happens."); VirtualHome the
+    /// script line of every command that named an action and objects it could ground (EAI's
+    /// adapter turns a class-level command into an instance-level line; a command with no
+    /// line never reaches the executor), executed or refused by its preconditions. Evaluation
+    /// only: a grounded line names the instance the environment picked, which the agent may
+    /// not have perceived.
+    fn engine_script(&self) -> Vec<EngineLine>;
 }

@@ -13,7 +13,7 @@ mod python_random;
 mod virtualhome;
 
 pub use alfworld::{AlfworldEnv, NOTHING_HAPPENS, TASK_TYPES};
-pub use env::{Environment, Event, GoalAnnotation, Image, Judge, JudgeAtom, Observation, StepResult};
+pub use env::{EngineLine, Environment, Event, GoalAnnotation, Image, Judge, JudgeAtom, Observation, StepResult};
 pub use error::EnvError;
 pub use python_random::PythonRandom;
 pub use virtualhome::pddl as vh_pddl;

@@ -2,13 +2,17 @@
 
 use std::path::Path;
 
-use household_sim::{AlfworldEnv, Environment, Judge};
+use household_sim::{AlfworldEnv, EngineLine, Environment, Judge};
+
+fn mug_game() -> AlfworldEnv {
+    let game = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../fixtures/alfworld/valid_seen/pick_clean_then_place_in_recep-Mug-None-CoffeeMachine-26/trial_T20190907_233056_022802");
+    AlfworldEnv::from_game_file(&game).expect("fixture loads")
+}
 
 #[test]
 fn the_judge_reports_unmet_goal_literals_until_the_walkthrough_wins() {
-    let game = Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../../fixtures/alfworld/valid_seen/pick_clean_then_place_in_recep-Mug-None-CoffeeMachine-26/trial_T20190907_233056_022802");
-    let mut env = AlfworldEnv::from_game_file(&game).expect("fixture loads");
+    let mut env = mug_game();
     assert_eq!(env.goal().family, "pick_clean_then_place_in_recep");
     assert_eq!(env.goal().sentence, "clean some mug and put it in coffeemachine.");
     assert!(env.goal().formula.contains("(isClean ?o)"), "{}", env.goal().formula);
@@ -24,4 +28,26 @@ fn the_judge_reports_unmet_goal_literals_until_the_walkthrough_wins() {
     }
     assert!(env.goal_reached());
     assert!(env.unmet_goals().is_empty());
+}
+
+#[test]
+fn the_engine_script_holds_every_command_as_sent_with_its_outcome() {
+    let mut env = mug_game();
+    env.reset();
+    let first = env.walkthrough()[0].clone();
+    for command in ["fly to the moon", &format!("  {first} "), "look", "take mug 99 from desk 1"] {
+        env.step(command);
+    }
+    let line = |line: &str, executed: bool| EngineLine { line: line.to_string(), executed };
+    assert_eq!(
+        env.engine_script(),
+        vec![
+            line("fly to the moon", false),
+            line(&format!("  {first} "), true),
+            line("look", true),
+            line("take mug 99 from desk 1", false)
+        ]
+    );
+    env.reset();
+    assert_eq!(env.engine_script(), vec![]);
 }

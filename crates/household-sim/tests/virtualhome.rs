@@ -8,7 +8,7 @@
 //!     └─ dishwasher (30) [CLOSED, OFF]
 //! ```
 
-use household_sim::{Environment, Event, Judge, VirtualhomeEnv, VirtualhomeError, VirtualhomeTask};
+use household_sim::{EngineLine, Environment, Event, Judge, VirtualhomeEnv, VirtualhomeError, VirtualhomeTask};
 
 fn scene(goal: &str) -> String {
     let node = |id: u32, class: &str, category: &str, props: &str, states: &str| {
@@ -133,6 +133,32 @@ fn class_level_commands_bind_to_visible_instances_or_say_why_not() {
     assert_eq!(&e.executed_lines()[1..], ["[GRAB] <plate> (21)", "[GRAB] <plate> (22)"]);
     check(&mut e, &[("walk dishwasher", true), ("open dishwasher", false)]);
     check(&mut e, &[("putback plate table", false)]);
+}
+
+#[test]
+fn the_engine_script_holds_every_grounded_line_with_its_outcome() {
+    let mut e = env(PLATE_IN_DISHWASHER);
+    // No line: an action the executor does not know, a class with no instance in view.
+    check(&mut e, &[("fly plate", false), ("grab apple", false)]);
+    // Class-level commands become the instance-level lines the executor takes; a line the
+    // preconditions refuse is kept with its outcome (the executor must refuse it too).
+    check(
+        &mut e,
+        &[("[GRAB] <plate> (21)", false), ("walk plate", true), ("grab plate", true), ("walk fridge", true), ("grab apple", false)],
+    );
+    let line = |line: &str, executed: bool| EngineLine { line: line.to_string(), executed };
+    assert_eq!(
+        e.engine_script(),
+        vec![
+            line("[GRAB] <plate> (21)", false),
+            line("[WALK] <plate> (21)", true),
+            line("[GRAB] <plate> (21)", true),
+            line("[WALK] <fridge> (10)", true),
+        ],
+        "the apple in the closed fridge is not in view: `grab apple` has no line"
+    );
+    e.reset();
+    assert_eq!(e.engine_script(), vec![]);
 }
 
 #[test]

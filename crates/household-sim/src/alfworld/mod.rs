@@ -26,7 +26,7 @@ use rustc_hash::FxHashSet;
 use smallvec::SmallVec;
 use transition_model::{State, TransitionModel};
 
-use crate::env::{Environment, Event, GoalAnnotation, Judge, JudgeAtom, Observation, StepResult};
+use crate::env::{EngineLine, Environment, Event, GoalAnnotation, Judge, JudgeAtom, Observation, StepResult};
 use crate::error::EnvError;
 use facts::{Args, Entity, FactStore, Placeholder, Predicates};
 use names::EntityInfo;
@@ -91,6 +91,8 @@ pub struct AlfworldEnv {
     valid: Vec<(Box<str>, ActionId)>,
     admissible: Vec<String>,
     steps: usize,
+    /// Every command since the reset with whether it executed ([`Judge::engine_script`]).
+    script: Vec<EngineLine>,
     scratch: Vec<ActionId>,
 }
 
@@ -371,6 +373,7 @@ impl AlfworldEnv {
             valid: Vec::new(),
             admissible: Vec::new(),
             steps: 0,
+            script: Vec::new(),
             scratch: Vec::new(),
         };
         env.gather();
@@ -533,6 +536,7 @@ impl Environment for AlfworldEnv {
         self.state = self.model.initial_state();
         self.facts = self.initial_facts.clone();
         self.steps = 0;
+        self.script.clear();
         self.gather();
         let text = self.world().derive(&self.intro, &Context::default()).unwrap_or_else(|e| format!("[grammar error: {e}]"));
         Observation::text(text)
@@ -540,8 +544,11 @@ impl Environment for AlfworldEnv {
 
     fn step(&mut self, command: &str) -> StepResult {
         self.steps += 1;
+        let sent = command;
         let command = python_strip(command);
         let found = self.valid.iter().find(|(text, _)| &**text == command).map(|&(_, id)| id);
+        // As sent: the engine strips it as `python_strip` does.
+        self.script.push(EngineLine { line: sent.to_string(), executed: found.is_some() });
         let Some(id) = found else {
             self.gather();
             return StepResult {
@@ -593,5 +600,8 @@ impl Judge for AlfworldEnv {
             None => vec!["the goal can never hold".into()],
             Some(unmet) => unmet.iter().map(|u| u.describe(self.model.task())).collect(),
         }
+    }
+    fn engine_script(&self) -> Vec<EngineLine> {
+        self.script.clone()
     }
 }

@@ -16,7 +16,7 @@ use std::path::Path;
 
 use serde::Deserialize;
 
-use crate::env::{Environment, Event, GoalAnnotation, Judge, JudgeAtom, Observation, StepResult};
+use crate::env::{EngineLine, Environment, Event, GoalAnnotation, Judge, JudgeAtom, Observation, StepResult};
 
 pub use exec::{Action, ScriptLine, World};
 pub use graph::{NodeIx, NodeState, Property, Relation, SceneGraph, SceneNode};
@@ -270,6 +270,8 @@ pub struct VirtualhomeEnv {
     world: World,
     /// Lines executed since the reset, as sent (instance level), for the action goals.
     executed: Vec<String>,
+    /// Every grounded line since the reset with whether it executed ([`Judge::engine_script`]).
+    script: Vec<EngineLine>,
     steps: usize,
     annotation: GoalAnnotation,
 }
@@ -283,7 +285,7 @@ impl VirtualhomeEnv {
             family: task.task_name.clone(),
         };
         let world = task.init.clone();
-        VirtualhomeEnv { task, world, executed: Vec::new(), steps: 0, annotation }
+        VirtualhomeEnv { task, world, executed: Vec::new(), script: Vec::new(), steps: 0, annotation }
     }
 
     /// What the agent sees now as `(id, class_name)`, by id (the nodes the observation
@@ -440,13 +442,18 @@ impl Environment for VirtualhomeEnv {
     fn reset(&mut self) -> Observation {
         self.world = self.task.init.clone();
         self.executed.clear();
+        self.script.clear();
         self.steps = 0;
         Observation::text(self.observe())
     }
 
     fn step(&mut self, command: &str) -> StepResult {
         self.steps += 1;
-        let outcome = self.resolve(command).and_then(|(line, text)| self.world.execute(&line).map(|()| text));
+        let outcome = self.resolve(command).and_then(|(line, text)| {
+            let executed = self.world.execute(&line);
+            self.script.push(EngineLine { line: text.clone(), executed: executed.is_ok() });
+            executed.map(|()| text)
+        });
         match outcome {
             Ok(text) => {
                 let observation = Observation::text(format!("Executed {text}.\n{}", self.observe()));
@@ -529,5 +536,8 @@ impl Judge for VirtualhomeEnv {
         }
         unmet.extend(self.unmet_action_goals().into_iter().map(|a| format!("action {a} not done")));
         unmet
+    }
+    fn engine_script(&self) -> Vec<EngineLine> {
+        self.script.clone()
     }
 }
