@@ -129,6 +129,24 @@ fn the_episode_page_shows_the_top_of_the_search_tree() {
 }
 
 #[test]
+fn the_episode_page_shows_what_the_engine_is_given_on_replay() {
+    let report = fixture_report();
+    let page = report
+        .episodes
+        .iter()
+        .find(|p| p.html.contains("<code>walk kitchen</code>"))
+        .expect("the direct episode that sent class-level commands");
+    let script = section(&page.html, "Engine script");
+    assert!(
+        script.contains("<ol><li><span class=\"ok\">✓</span> <code>[WALK] &lt;kitchen&gt; (1)</code></li><li><span class=\"ok\">✓</span> <code>[GRAB] &lt;plate&gt; (10)</code></li></ol>"),
+        "{script}"
+    );
+    assert!(!section(&page.html, "Other episode fields").contains("engine_script"));
+    // Records written before the engine script have no such section.
+    assert!(!tree_page(&report).contains("<h2>Engine script</h2>"));
+}
+
+#[test]
 fn an_episode_page_without_a_tree_says_so() {
     // The same record as written before records kept the tree.
     let (_tmp_dir, dir) = scratch("no-tree");

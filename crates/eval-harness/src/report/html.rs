@@ -376,6 +376,28 @@ fn steps_html(steps: &[Value]) -> String {
     out
 }
 
+/// The episode as the benchmark's own engine is given it on replay (`engine_script`: each line
+/// with whether it executed here).
+fn engine_script_html(script: &[Value]) -> String {
+    if script.is_empty() {
+        return "<p class=\"empty\">No command reached the engine (nothing to replay: the engine is judged on the initial state).</p>\n"
+            .into();
+    }
+    let items: String = script
+        .iter()
+        .map(|line| {
+            let text = line.get("line").and_then(Value::as_str).map_or_else(|| escape(&line.to_string()), escape);
+            let outcome = match line.get("executed").and_then(Value::as_bool) {
+                Some(true) => "<span class=\"ok\">✓</span>",
+                Some(false) => "<span class=\"bad\">✗</span>",
+                None => "—",
+            };
+            format!("<li>{outcome} <code>{text}</code></li>")
+        })
+        .collect();
+    format!("<ol>{items}</ol>\n")
+}
+
 fn handover_html(episode: &Map<String, Value>) -> String {
     let Some(handover) = episode.get("handover").and_then(Value::as_object) else {
         return "<p class=\"empty\">No hand-over: Phase I produced no grounded problem.</p>\n".into();
@@ -560,6 +582,10 @@ pub(crate) fn episode_page(study: &Study<'_>, set: &RecordSet, record: &Record) 
             if let Some(failure) = episode.get("failure").and_then(Value::as_str) {
                 let _ = writeln!(body, "<p><strong>Failure:</strong> {}</p>", escape(failure));
             }
+            if let Some(script) = episode.get("engine_script").and_then(Value::as_array) {
+                body.push_str("<h2>Engine script</h2>\n<p class=\"caption\">The commands as the benchmark's own engine takes them (ALFWorld's as sent, VirtualHome's grounded script lines), each with its outcome here: what <code>tools/replay_records.py</code> replays.</p>\n");
+                body.push_str(&engine_script_html(script));
+            }
             if let Some(detail) = episode.get("phase2_detail") {
                 body.push_str("<h2>Phase II</h2>\n");
                 match detail {
@@ -578,8 +604,18 @@ pub(crate) fn episode_page(study: &Study<'_>, set: &RecordSet, record: &Record) 
             }
             body.push_str("<h2>Record</h2>\n");
             body.push_str(&key_value_table(&record.fields, &["episode"]));
-            let shown =
-                ["decisions", "handover", "plan", "steps", "phase2_detail", "search_tree", "phase1_stop", "phase1_steps", "failure"];
+            let shown = [
+                "decisions",
+                "handover",
+                "plan",
+                "steps",
+                "phase2_detail",
+                "search_tree",
+                "phase1_stop",
+                "phase1_steps",
+                "failure",
+                "engine_script",
+            ];
             let rest: Map<String, Value> =
                 episode.iter().filter(|(k, _)| !shown.contains(&k.as_str())).map(|(k, v)| (k.clone(), v.clone())).collect();
             if !rest.is_empty() {
