@@ -1,7 +1,9 @@
 //! One episode of the paper's agent (Fig. 1): Phase I ([`crate::phase1::explore`]), the
 //! hand-over (Eq. 4: ŝ0 as a PDDL problem and β), Phase II (the caller's planner on ŝ0's
 //! transition model: constrained MCTS, any other mode, or A*), the plan bound back through β and
-//! run open-loop in the environment, whose own goal check is the verdict.
+//! run open-loop in the environment, whose own goal check is the verdict. The episode ends the
+//! moment that check holds, in Phase I or mid-plan: the rest of the plan is not sent (ALFWorld's
+//! engine ends the game once won; the direct policy ends the same way).
 //!
 //! The driver is the evaluation side: it takes an environment that is also a [`Judge`], hands
 //! the agent's parts only `&mut dyn Environment`, and after Phase I asks the judge for the
@@ -137,7 +139,7 @@ pub enum Attribution {
 #[derive(Debug, Clone, Serialize)]
 pub struct Episode {
     pub success: bool,
-    /// Why Phase I stopped (`ready`, `done`, `budget`, `refusals`, `policy error: ...`).
+    /// Why Phase I stopped (`goal`, `ready`, `done`, `budget`, `refusals`, `policy error: ...`).
     pub phase1_stop: String,
     pub phase1_steps: usize,
     pub decisions: Vec<Decision>,
@@ -248,6 +250,11 @@ pub fn run_episode<E: Environment + Judge>(
     let mut explored_out = false;
     let mut not_executed = false;
     loop {
+        // The environment's goal check holds (Phase I's steps or an earlier plan's reached it):
+        // the episode is over, as the benchmark's engine ends it.
+        if env.goal_reached() {
+            break;
+        }
         episode.handovers += 1;
         // No plan has taken a step yet: a plan that does not fit is exploration's doing.
         let first_plan = episode.steps.len() == exploration.record.steps.len();
@@ -352,6 +359,10 @@ pub fn run_episode<E: Environment + Judge>(
             if !executed {
                 episode.failure = Some(format!("step {} not executed: {command}", episode.steps.len()));
                 not_executed = true;
+                break;
+            }
+            // The rest of the plan is not sent: the engine ends the episode at the goal.
+            if env.goal_reached() {
                 break;
             }
         }

@@ -315,8 +315,8 @@ pub trait Adapter {
 pub struct Exploration {
     pub belief: Belief,
     pub record: Record,
-    /// Why exploration stopped: `ready`, `done` (the policy), `budget`, `refusals`, or
-    /// `policy error: ...`.
+    /// Why exploration stopped: `goal` (the environment's goal check holds: the episode is
+    /// over), `ready`, `done` (the policy), `budget`, `refusals`, or `policy error: ...`.
     pub stop: String,
     /// The last observation (the policy's input if Phase I [`resume`]s).
     pub observation: Observation,
@@ -363,6 +363,10 @@ pub fn resume(
     // The frontier's width now (it narrows as `Frontier` says).
     let mut width = frontier.map(|f| f.width);
     let stop = loop {
+        // The environment's own goal check ends the episode (ALFWorld's game is done once won).
+        if env.goal_reached() {
+            break "goal".to_string();
+        }
         if adapter.ready(goal, &belief, &record) {
             break "ready".to_string();
         }
@@ -483,6 +487,9 @@ pub fn resume(
             steps.push(record.steps.len());
             record.steps.push(StepRecord { phase: "explore", command, executed, observation: result.observation.text.clone() });
             observation = result.observation;
+            if env.goal_reached() {
+                break;
+            }
         }
         let after = belief.facts();
         let admitted: Vec<String> = after.iter().filter(|f| !before.contains(f)).map(Fact::to_string).collect();

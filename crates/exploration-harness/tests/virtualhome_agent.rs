@@ -8,7 +8,7 @@ use std::path::{Path, PathBuf};
 use exploration_harness::virtualhome::VirtualhomeAdapter;
 mod common;
 
-use common::{Restless, assert_no_target_repeats};
+use common::{Restless, assert_ends_at_the_win, assert_no_target_repeats};
 use exploration_harness::{Attribution, Episode, EpisodeConfig, Grounded, Ontology, PhaseTwo, Systematic, parse_goal, run_episode};
 use household_sim::{Environment, VirtualhomeEnv, VirtualhomeTask};
 
@@ -78,6 +78,8 @@ fn play_set(dir: &Path, benchmark: &str) -> (usize, usize, BTreeMap<String, usiz
         let script: Vec<(&str, bool)> = episode.engine_script.iter().map(|l| (l.line.as_str(), l.executed)).collect();
         let sent: Vec<(&str, bool)> = episode.steps.iter().map(|s| (s.command.as_str(), s.executed)).collect();
         assert_eq!(script, sent, "{}", path.display());
+        let mut replay = VirtualhomeEnv::new(VirtualhomeTask::load(path).unwrap(), benchmark);
+        assert_ends_at_the_win(&mut replay, &episode, &path.display().to_string());
         // Plans are executable by construction: a step the environment refuses from a state
         // Phase I got right would be a soundness bug of the hand-over.
         assert_ne!(episode.attribution, Some(Attribution::Grounding), "{}: {:?}", path.display(), episode.failure);

@@ -49,3 +49,20 @@ pub fn assert_no_target_repeats(episode: &Episode, what: &str) {
     assert_eq!(distinct.len(), chosen.len(), "{what}: a skill repeated: {chosen:?}");
     assert!(!chosen.is_empty(), "{what}");
 }
+
+/// The episode ends the moment the environment's goal check holds: its engine script, replayed
+/// in `env` from a reset, reaches the goal at the last line of a won episode and at no line
+/// before it (a lost episode: at no line), each line with the outcome the episode recorded.
+pub fn assert_ends_at_the_win(env: &mut dyn household_sim::Environment, episode: &Episode, what: &str) {
+    env.reset();
+    let script = &episode.engine_script;
+    let start = if env.goal_reached() { "the goal holds at the start" } else { "" };
+    assert!(!(env.goal_reached() && !script.is_empty()), "{what}: {start}, yet {} line(s) were sent", script.len());
+    for (n, line) in script.iter().enumerate() {
+        let executed = env.step(&line.line).event.executed();
+        assert_eq!(executed, line.executed, "{what}: line {} {}", n + 1, line.line);
+        let last = n + 1 == script.len();
+        assert!(!env.goal_reached() || last, "{what}: the goal holds after line {} of {}: {}", n + 1, script.len(), line.line);
+    }
+    assert_eq!(env.goal_reached(), episode.success, "{what}: the replay's verdict");
+}
