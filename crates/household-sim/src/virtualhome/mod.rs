@@ -268,9 +268,8 @@ pub fn bind(world: &World, action: Action, position: usize, class_name: &str) ->
 pub struct VirtualhomeEnv {
     task: VirtualhomeTask,
     world: World,
-    /// Lines executed since the reset, as sent (instance level), for the action goals.
-    executed: Vec<String>,
-    /// Every grounded line since the reset with whether it executed ([`Judge::engine_script`]).
+    /// Every grounded line since the reset (instance level) with whether it executed: the
+    /// executed ones for the action goals, all for [`Judge::engine_script`].
     script: Vec<EngineLine>,
     steps: usize,
     annotation: GoalAnnotation,
@@ -285,7 +284,7 @@ impl VirtualhomeEnv {
             family: task.task_name.clone(),
         };
         let world = task.init.clone();
-        VirtualhomeEnv { task, world, executed: Vec::new(), script: Vec::new(), steps: 0, annotation }
+        VirtualhomeEnv { task, world, script: Vec::new(), steps: 0, annotation }
     }
 
     /// What the agent sees now as `(id, class_name)`, by id (the nodes the observation
@@ -302,8 +301,8 @@ impl VirtualhomeEnv {
     }
 
     /// The instance-level lines executed since the reset.
-    pub fn executed_lines(&self) -> &[String] {
-        &self.executed
+    pub fn executed_lines(&self) -> Vec<&str> {
+        self.script.iter().filter(|l| l.executed).map(|l| l.line.as_str()).collect()
     }
 
     /// The observation text: the room, whether the character sits or lies (a line only when it
@@ -416,7 +415,7 @@ impl VirtualhomeEnv {
     /// group's options (upper-cased, spaces removed) searched in order in the executed lines
     /// joined by spaces; the first group not found and every later one are unmet.
     fn unmet_action_goals(&self) -> Vec<String> {
-        let joined = self.executed.join(" ");
+        let joined = self.executed_lines().join(" ");
         let mut start = 0;
         let mut unmet = Vec::new();
         for goal in &self.task.goals {
@@ -441,7 +440,6 @@ impl VirtualhomeEnv {
 impl Environment for VirtualhomeEnv {
     fn reset(&mut self) -> Observation {
         self.world = self.task.init.clone();
-        self.executed.clear();
         self.script.clear();
         self.steps = 0;
         Observation::text(self.observe())
@@ -457,7 +455,6 @@ impl Environment for VirtualhomeEnv {
         match outcome {
             Ok(text) => {
                 let observation = Observation::text(format!("Executed {text}.\n{}", self.observe()));
-                self.executed.push(text);
                 StepResult { observation, event: Event::Executed }
             }
             Err(reason) => {
@@ -468,7 +465,8 @@ impl Environment for VirtualhomeEnv {
     }
 
     fn goal_reached(&self) -> bool {
-        self.unmet_goals().is_empty()
+        // `unmet_goals` is empty, without spelling out what is unmet (an episode asks every step).
+        self.task.goals.iter().all(|g| self.goal_holds(g)) && self.unmet_action_goals().is_empty()
     }
 
     fn steps_taken(&self) -> usize {
