@@ -62,6 +62,20 @@ def memoize_parsers():
     fast_downward.pddl2sas = cached(fast_downward.pddl2sas)
 
 
+def make_env(path):
+    """The game at `path` as ALFWorld's evaluation loads it (AlfredTWEnv.init_env): won and the
+    admissible commands requested, the wrappers AlfredDemangler(shuffle=False) and AlfredInfos,
+    batch size 1, no step limit."""
+    import textworld
+    import textworld.gym
+    from alfworld.agents.environment.alfred_tw_env import AlfredDemangler, AlfredInfos
+    infos_wanted = textworld.EnvInfos(won=True, admissible_commands=True, extras=["gamefile"])
+    env_id = textworld.gym.register_games([os.path.abspath(path)], infos_wanted, batch_size=1,
+                                          asynchronous=False, max_episode_steps=None,
+                                          wrappers=[AlfredDemangler(shuffle=False), AlfredInfos])
+    return textworld.gym.make(env_id)
+
+
 def trace(env, plan, n_random, seed):
     """alfworld_trace.py's main loop, yielding its dicts."""
     obs, infos = env.reset()
@@ -103,11 +117,7 @@ def main():
             path = os.path.join(game_dir, "game.tw-pddl") if os.path.isdir(game_dir) else game_dir
             game = json.load(open(path, encoding="utf-8"))
             rel = os.path.relpath(os.path.dirname(os.path.abspath(path)), os.path.abspath(args.root))
-            infos_wanted = textworld.EnvInfos(won=True, admissible_commands=True, extras=["gamefile"])
-            env_id = textworld.gym.register_games([os.path.abspath(path)], infos_wanted, batch_size=1,
-                                                  asynchronous=False, max_episode_steps=None,
-                                                  wrappers=[AlfredDemangler(shuffle=False), AlfredInfos])
-            env = textworld.gym.make(env_id)
+            env = make_env(path)
             runs = [] if args.no_walkthrough else [("walkthrough", list(game.get("walkthrough") or []), None, 0)]
             runs += [(f"random-{args.random}-seed-{s}", None, args.random, s) for s in seeds]
             lines = []

@@ -90,12 +90,13 @@ def compare(record, outcomes, engine_success, engine_won_early=None):
     """The first disagreement between the record and the engine, or None."""
     script = record["episode"]["engine_script"]
     for n, (line, engine_executed) in enumerate(zip(script, outcomes), 1):
+        # In line order: a game won before this line is the first thing that went differently.
+        if engine_won_early is not None and n > engine_won_early:
+            return f"the engine's game was won at line {engine_won_early} of {len(script)}; line {n} {line['line']!r} came after"
         if line["executed"] != engine_executed:
             ours = "executed" if line["executed"] else "refused"
             theirs = "executed" if engine_executed else "refused"
             return f"line {n} {line['line']!r}: {ours} here, {theirs} by the engine"
-    if engine_won_early is not None:
-        return f"the engine's game was won at line {engine_won_early} of {len(script)}"
     if bool(record["success"]) != engine_success:
         return f"success {record['success']} here, {engine_success} by the engine"
     return None
@@ -112,14 +113,12 @@ class Alfworld:
         except ImportError:
             alfworld_record.reexec_in_anchor_venv()
         alfworld_record.memoize_parsers()
+        self.record = alfworld_record
         self.fixtures = fixtures
         self.game = None
         self.env = None
 
     def load(self, split, task):
-        import textworld
-        import textworld.gym
-        from alfworld.agents.environment.alfred_tw_env import AlfredDemangler, AlfredInfos
         path = os.path.abspath(os.path.join(self.fixtures, "alfworld", split, task, "game.tw-pddl"))
         if self.game == path:
             return
@@ -127,10 +126,7 @@ class Alfworld:
             self.env.close()
         if not os.path.exists(path):
             bad_input(f"no game {path} (--fixtures)")
-        infos = textworld.EnvInfos(won=True, admissible_commands=True, extras=["gamefile"])
-        env_id = textworld.gym.register_games([path], infos, batch_size=1, asynchronous=False, max_episode_steps=None,
-                                              wrappers=[AlfredDemangler(shuffle=False), AlfredInfos])
-        self.env = textworld.gym.make(env_id)
+        self.env = self.record.make_env(path)
         self.game = path
 
     def replay(self, config, record):
