@@ -160,11 +160,25 @@ pub struct ChatPlannerArgs {
     /// names it).
     #[arg(long, value_parser = crate::model_spec::chat_model)]
     pub chat_planner: Option<ModelSpec>,
-    /// With `--chat-planner`: thinking on, Qwen3's recommended sampling (temperature 0.6, top-p
-    /// 0.95, top-k 20, seed `--seed`), 32K tokens: the paper's unconstrained thinking. Without
-    /// it: greedy, 512 tokens, thinking off.
-    #[arg(long, requires = "chat_planner")]
-    pub thinking: bool,
+    /// With `--chat-planner`: thinking on, at most 32,768 tokens, the paper's two thinking
+    /// conditions: `--thinking` at temperature zero (its main tables), `--thinking recommended`
+    /// with the recommended sampling of its appendix (temperature 1.0, top-p 0.95, top-k 20,
+    /// seed `--seed`; run `--seeds 0,42,1738`). Thinking is asked for through the request's
+    /// `chat_template_kwargs` (`enable_thinking`), which vLLM and llama-server (its Jinja
+    /// templates, on by default) apply. Without `--thinking`: greedy, 512 tokens, thinking off
+    /// (the unconstrained greedy condition through a chat endpoint).
+    #[arg(long, requires = "chat_planner", num_args = 0..=1, default_missing_value = "temperature-zero", value_name = "SAMPLING")]
+    pub thinking: Option<Thinking>,
+}
+
+/// How a thinking Phase II decodes (the paper's table of decoding settings).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum, serde::Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Thinking {
+    /// Temperature zero: "Qwen thinking, main paper".
+    TemperatureZero,
+    /// Temperature 1.0, top-p 0.95, top-k 20, seeded: "Qwen thinking, supplementary".
+    Recommended,
 }
 
 /// Phase II as `--planner`, `--lm`, `--chat-planner` and the decoding options say.
@@ -180,7 +194,11 @@ pub struct PhaseTwoRunner {
 impl PhaseTwoRunner {
     pub fn new(planner: &str, lm: &LmArgs, decode: &DecodeArgs, chat: &ChatPlannerArgs, time_limit: f64) -> anyhow::Result<PhaseTwoRunner> {
         if let Some(name) = &chat.chat_planner {
-            let mut config = if chat.thinking { ChatPlannerConfig::thinking(decode.seed) } else { ChatPlannerConfig::greedy() };
+            let mut config = match chat.thinking {
+                None => ChatPlannerConfig::greedy(),
+                Some(Thinking::TemperatureZero) => ChatPlannerConfig::thinking(),
+                Some(Thinking::Recommended) => ChatPlannerConfig::thinking_recommended(decode.seed),
+            };
             config.prompt = decode.prompt_options();
             let chat = Some((chat_model(name, &lm.served_model)?, config));
             return Ok(PhaseTwoRunner { planner: "chat".into(), chat, lm: None, vocab: None, decode: decode.clone(), time_limit });

@@ -365,8 +365,13 @@ fn config(args: &EvalArgs, suite: Suite) -> anyhow::Result<Value> {
         return Ok(config);
     }
     if args.agent != AgentName::Expert {
+        let planner = match args.agent {
+            AgentName::Ours if args.episode.chat.chat_planner.is_some() => "chat",
+            AgentName::Ours => "mcts",
+            _ => "astar",
+        };
         let more = json!({
-            "explorer": args.episode.explorer, "planner": if args.agent == AgentName::Ours { "mcts" } else { "astar" },
+            "explorer": args.episode.explorer, "planner": planner,
             "budget": args.episode.budget, "time_limit": args.episode.time_limit, "closed_loop": args.episode.closed_loop,
             "reexplore": args.episode.reexplore,
             "task_dir": task_dir,

@@ -486,4 +486,12 @@ fn chat_planner_options_are_checked() {
     let unknown = xtask(&["agent", "--benchmark", "virtualhome-rearrange", "--task", "fridge-003", "--chat-planner", "no-such-model"]);
     assert_eq!(unknown.status.code(), Some(2), "{}", String::from_utf8_lossy(&unknown.stderr));
     assert!(String::from_utf8_lossy(&unknown.stderr).contains("no-such-model"));
+    // The two thinking conditions by name; another is bad input that lists them.
+    #[rustfmt::skip]
+    let sampling = xtask(&[
+        "eval", "--benchmark", "alfworld-seen", "--limit", "1", "--chat-planner", "uniform-thinker.gguf", "--thinking", "hot",
+    ]);
+    assert_eq!(sampling.status.code(), Some(2), "{}", String::from_utf8_lossy(&sampling.stderr));
+    let stderr = String::from_utf8_lossy(&sampling.stderr);
+    assert!(stderr.contains("hot") && stderr.contains("temperature-zero") && stderr.contains("recommended"), "{stderr}");
 }

@@ -9,7 +9,7 @@ mod common;
 
 use std::path::PathBuf;
 
-use common::{model_path, xtask};
+use common::{model_path, scratch_dir, xtask};
 
 fn server() -> String {
     let url = std::env::var("NSEA_LLAMA_SERVER_URL")
@@ -57,4 +57,45 @@ fn chat_gets_a_schema_valid_reply_from_the_server() {
     assert_eq!(output.status.code(), Some(0), "{}", String::from_utf8_lossy(&output.stderr));
     let summary: serde_json::Value = serde_json::from_str(String::from_utf8_lossy(&output.stdout).trim()).expect("one JSON object");
     assert!(["Goto(fridge 1)", "Open(fridge 1)", "Done"].contains(&summary["json"]["skill"].as_str().expect("a skill")), "{summary}");
+}
+
+/// The paper's thinking condition through a real server (`eval --chat-planner openai:URL
+/// --thinking recommended`, Phase I by the sweep) on one ALFWorld game: the request's sampling
+/// is recorded with the episode, the configuration names the chat planner, and the report names
+/// the condition as the paper does. SmolLM2 has no thinking mode, so this checks the path, not
+/// the condition's success.
+#[test]
+fn thinking_through_the_server_is_recorded_and_reported_as_thinking() {
+    let scratch = scratch_dir("real-server-thinking");
+    let out = scratch.path();
+    let dir = out.display().to_string();
+    #[rustfmt::skip]
+    let output = xtask(&[
+        "eval", "--benchmark", "alfworld-seen", "--limit", "1", "--explorer", "systematic",
+        "--chat-planner", &server(), "--thinking", "recommended", "--seed", "42", "--fresh", "--out", &dir,
+    ]);
+    assert_eq!(output.status.code(), Some(0), "{}", String::from_utf8_lossy(&output.stderr));
+    let file = |suffix: &str| {
+        let found = std::fs::read_dir(out)
+            .expect("the records' folder")
+            .map(|e| e.expect("entry").path())
+            .find(|p| p.file_name().and_then(|n| n.to_str()).is_some_and(|n| n.starts_with("alfworld-seen-ours-") && n.ends_with(suffix)));
+        std::fs::read_to_string(found.unwrap_or_else(|| panic!("no alfworld-seen-ours-*{suffix} in {dir}"))).expect("readable")
+    };
+    let config: serde_json::Value = serde_json::from_str(&file(".config.json")).expect("JSON");
+    assert_eq!((config["planner"].as_str(), config["chat_planner"]["thinking"].as_str()), (Some("chat"), Some("recommended")), "{config}");
+    assert_eq!(config["decode"]["seed"], 42, "{config}");
+    let record: serde_json::Value = serde_json::from_str(file(".jsonl").lines().next().expect("a record")).expect("JSON");
+    let episode = &record["episode"];
+    let detail = &episode["phase2_detail"];
+    assert_eq!((detail["planner"].as_str(), detail["thinking"].as_bool()), (Some("chat"), Some(true)), "{detail}");
+    assert_eq!((detail["temperature"].as_f64(), detail["top_k"].as_u64(), detail["seed"].as_u64()), (Some(1.0), Some(20), Some(42)));
+    assert_eq!(episode["phase2_calls"], 1, "{episode}");
+    assert!(episode["phase2_tokens"].as_u64().is_some_and(|t| t > 0), "the server's count of generated tokens: {episode}");
+    let report = out.join("tables");
+    let status = xtask(&["report", &dir, "--out", &report.display().to_string()]);
+    assert_eq!(status.status.code(), Some(0), "{}", String::from_utf8_lossy(&status.stderr));
+    let markdown = std::fs::read_to_string(report.join("report.md")).expect("report.md");
+    assert!(markdown.lines().any(|l| l.starts_with("| Thinking, recommended sampling | sweep / ")), "{markdown}");
+    assert!(!markdown.lines().any(|l| l.starts_with("| Ours |")), "{markdown}");
 }

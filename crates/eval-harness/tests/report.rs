@@ -387,6 +387,74 @@ fn the_model_column_names_each_phase_where_they_differ() {
     }
 }
 
+/// Phase II by a chat model (`eval --chat-planner M [--thinking [recommended]]`) is the
+/// paper's unconstrained greedy or thinking condition: named so in every table (not `Ours`,
+/// whose decoder settings its configuration also carries), its model the chat planner's, its
+/// seeds its runs, tested against ours among the main comparisons (thinking, as the paper) or
+/// the component ablations (greedy).
+#[test]
+fn a_chat_planner_is_the_unconstrained_greedy_or_thinking_condition() {
+    let (_tmp_dir, dir) = scratch("chat-planner");
+    let ours = "alfworld-seen-ours-86924780c5c0";
+    let phase2 = |c: &mut serde_json::Value, mode: &str, seed: u64| {
+        c["decode"]["mode"] = mode.into();
+        c["decode"]["seed"] = seed.into();
+    };
+    variant(&dir, ours, |c| {
+        phase2(c, "constrained-mcts", 0);
+        c["lm"]["lm"] = "smollm2".into();
+    });
+    variant(&dir, ours, |c| {
+        phase2(c, "constrained-greedy", 0);
+        c["lm"]["lm"] = "smollm2".into();
+    });
+    // The chat planner's runs keep the decoder's defaults (`lm.lm` uniform) beside it.
+    let chat = |c: &mut serde_json::Value, thinking: serde_json::Value, seed: u64| {
+        phase2(c, "constrained-mcts", seed);
+        c["planner"] = "chat".into();
+        c["chat_planner"] = serde_json::json!({"chat_planner": "smollm2", "thinking": thinking});
+    };
+    variant(&dir, ours, |c| chat(c, serde_json::Value::Null, 0));
+    variant(&dir, ours, |c| chat(c, "temperature-zero".into(), 0));
+    for seed in [0, 42, 1738] {
+        variant(&dir, ours, |c| chat(c, "recommended".into(), seed));
+    }
+    let sets: Vec<_> = record_paths(&[dir]).unwrap().iter().map(|p| load(p).unwrap()).collect();
+    let markdown = build(&sets, &ReportOptions::default()).unwrap().markdown;
+    let table_1 = section_of(&markdown, "## Task success");
+    for row in [
+        "| Ours | sweep / SmolLM2-135M |",
+        "| Constrained greedy | sweep / SmolLM2-135M |",
+        "| Unconstrained greedy | sweep / SmolLM2-135M |",
+        "| Thinking | sweep / SmolLM2-135M |",
+        "| Thinking, recommended sampling | sweep / SmolLM2-135M |",
+    ] {
+        assert_eq!(table_1.lines().filter(|l| l.starts_with(row)).count(), 1, "{row} in\n{table_1}");
+    }
+    assert_eq!(table_1.lines().filter(|l| l.starts_with("| ")).count(), 6, "five conditions and the header: {table_1}");
+    let table_8 = section_of(&markdown, "## Component ablation");
+    for row in ["| Greedy | – | – | sweep / SmolLM2-135M |", "| Greedy | – | ✓ |", "| Ours | ✓ | ✓ |"] {
+        assert_eq!(table_8.lines().filter(|l| l.starts_with(row)).count(), 1, "{row} in\n{table_8}");
+    }
+    assert_eq!(table_8.lines().filter(|l| l.starts_with("| Thinking | – | – | sweep / SmolLM2-135M |")).count(), 2, "{table_8}");
+    let table_7 = section_of(&markdown, "## Accuracy and robustness");
+    let runs = |approach: &str| {
+        let row = table_7.lines().find(|l| l.starts_with(&format!("| {approach} |"))).unwrap_or_else(|| panic!("{approach}: {table_7}"));
+        row.split('|').map(str::trim).nth(3).unwrap().to_string()
+    };
+    assert_eq!((runs("Thinking"), runs("Thinking, recommended sampling")), ("1".to_string(), "3".to_string()));
+    let main = section_of(&markdown, "## Paired significance: main comparisons");
+    let ablation = section_of(&markdown, "## Paired significance: component ablations");
+    let ours = "Ours (sweep / SmolLM2-135M)";
+    for other in ["Thinking (sweep / SmolLM2-135M)", "Thinking, recommended sampling (sweep / SmolLM2-135M)"] {
+        assert!(main.contains(&format!("| {ours} vs. {other} |")), "{other} in\n{main}");
+    }
+    for other in ["Constrained greedy (sweep / SmolLM2-135M)", "Unconstrained greedy (sweep / SmolLM2-135M)"] {
+        assert!(ablation.contains(&format!("| {ours} vs. {other} |")), "{other} in\n{ablation}");
+    }
+    assert!(!ablation.contains("Thinking"), "{ablation}");
+}
+
 /// The Markdown from `heading` to the next `## `.
 fn section_of<'a>(markdown: &'a str, heading: &str) -> &'a str {
     let start = markdown.find(heading).expect(heading);

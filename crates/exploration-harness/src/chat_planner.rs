@@ -1,6 +1,8 @@
 //! Phase II by a chat model without the constraint: the paper's *unconstrained thinking*
-//! condition (a served model with its thinking mode on, the model's recommended sampling, a
-//! 32K-token budget; §4) and unconstrained greedy decoding through a chat endpoint. The model
+//! conditions (a served model with its thinking mode on and a 32K-token budget, decoded at
+//! temperature zero as in the main paper's tables or with the model's recommended sampling over
+//! three seeds as in its appendix; Table 6 of the paper) and unconstrained greedy decoding
+//! through a chat endpoint. The model
 //! reads the same planning prompt as the constrained conditions (`mcts::prompt`, from the same
 //! grounded state ŝ0) and writes the plan as text; nothing checks its tokens.
 //!
@@ -35,11 +37,17 @@ impl ChatPlannerConfig {
         ChatPlannerConfig { thinking: false, sampling: Sampling::greedy(512), prompt: mcts::prompt::PromptOptions::default() }
     }
 
-    /// Thinking on with Qwen3's recommended sampling for it (temperature 0.6, top-p 0.95,
-    /// top-k 20) and a 32K-token budget (§4: "thinking conditions use the model-recommended
-    /// sampling parameters and a 32K-token context"); `seed` for the paper's three runs.
-    pub fn thinking(seed: u64) -> ChatPlannerConfig {
-        let sampling = Sampling { temperature: Some(0.6), top_p: Some(0.95), top_k: Some(20), max_tokens: Some(32_768), seed: Some(seed) };
+    /// Thinking on, temperature zero, at most 32,768 tokens: the main paper's thinking rows
+    /// ("Qwen thinking, main paper" in its table of decoding settings).
+    pub fn thinking() -> ChatPlannerConfig {
+        ChatPlannerConfig { thinking: true, sampling: Sampling::greedy(32_768), prompt: mcts::prompt::PromptOptions::default() }
+    }
+
+    /// Thinking on with the recommended sampling the paper's appendix uses for it (temperature
+    /// 1.0, top-p 0.95, top-k 20, at most 32,768 tokens: "Qwen thinking, supplementary"), `seed`
+    /// one of its three runs (0, 42, 1738).
+    pub fn thinking_recommended(seed: u64) -> ChatPlannerConfig {
+        let sampling = Sampling { temperature: Some(1.0), top_p: Some(0.95), top_k: Some(20), max_tokens: Some(32_768), seed: Some(seed) };
         ChatPlannerConfig { thinking: true, sampling, prompt: mcts::prompt::PromptOptions::default() }
     }
 }
@@ -107,7 +115,9 @@ pub fn plan_by_chat(chat: &mut dyn ChatModel, grounded: &Grounded, config: &Chat
         model_calls: 1,
         generated_tokens: reply.usage.completion_tokens,
         detail: json!({
-            "planner": "chat", "thinking": config.thinking, "valid": read.invalid.is_none(),
+            "planner": "chat", "thinking": config.thinking, "temperature": config.sampling.temperature,
+            "top_p": config.sampling.top_p, "top_k": config.sampling.top_k, "seed": config.sampling.seed,
+            "valid": read.invalid.is_none(),
             "invalid": read.invalid.as_ref().map(|(line, text)| format!("line {line}: {text:?}")),
             "plan_text": plan_text.trim(), "reasoning_chars": reasoning_chars, "finish_reason": reply.finish_reason,
         }),

@@ -67,18 +67,31 @@ fn a_thinking_reply_with_a_numbered_plan_wins_the_episode() {
         let numbered: Vec<String> = plan.iter().enumerate().map(|(i, line)| format!("{}. {line}", i + 1)).collect();
         format!("<think>\nThe book is on the bed; go to desk 1? No.\n</think>\n\n{}\nDONE\n", numbered.join("\n"))
     };
-    let (ep, requests) = episode(&answer, &ChatPlannerConfig::thinking(42));
+    let (ep, requests) = episode(&answer, &ChatPlannerConfig::thinking());
     assert!(ep.success, "{:?}", ep.failure);
     assert_eq!((ep.phase2_calls, ep.phase2_tokens), (1, 42));
     assert_eq!(ep.phase2_detail["valid"], true);
     assert!(!ep.phase2_detail["plan_text"].as_str().unwrap().contains("think"), "the thinking is not the plan");
-    // The request: the planning prompt as system + user, thinking on, Qwen3's thinking sampling.
+    // The request: the planning prompt as system + user, thinking on, temperature zero (the
+    // main paper's thinking rows), 32K tokens.
     let request = &requests[0];
     assert_eq!(request.messages.len(), 2);
     assert!(request.messages[1].joined_text().contains("Plan:"));
     assert_eq!(request.chat_template_kwargs.as_ref().unwrap()["enable_thinking"], true);
-    assert_eq!((request.sampling.temperature, request.sampling.top_k, request.sampling.max_tokens), (Some(0.6), Some(20), Some(32_768)));
-    assert_eq!(request.sampling.seed, Some(42));
+    assert_eq!((request.sampling.temperature, request.sampling.top_k, request.sampling.max_tokens), (Some(0.0), None, Some(32_768)));
+    assert_eq!(ep.phase2_detail["temperature"], 0.0);
+}
+
+#[test]
+fn recommended_thinking_samples_as_the_papers_appendix_with_the_runs_seed() {
+    let answer = |plan: &[String]| format!("<think>ok</think>\n{}\n", plan.join("\n"));
+    let (ep, requests) = episode(&answer, &ChatPlannerConfig::thinking_recommended(1738));
+    assert!(ep.success, "{:?}", ep.failure);
+    let request = &requests[0];
+    assert_eq!(request.chat_template_kwargs.as_ref().unwrap()["enable_thinking"], true);
+    let s = &request.sampling;
+    assert_eq!((s.temperature, s.top_p, s.top_k, s.max_tokens, s.seed), (Some(1.0), Some(0.95), Some(20), Some(32_768), Some(1738)));
+    assert_eq!((ep.phase2_detail["top_k"].as_u64(), ep.phase2_detail["seed"].as_u64()), (Some(20), Some(1738)));
 }
 
 #[test]

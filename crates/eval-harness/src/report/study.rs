@@ -27,6 +27,30 @@ pub(crate) fn column(set: &RecordSet) -> String {
         Some(subset) => format!("{benchmark} ({subset})"),
     }
 }
+/// Configuration keys that choose how Phase II plans (its model aside).
+const PHASE2_CHOICE: [&str; 5] = ["decode.mode", "planner", "chat_planner.chat_planner", "chat_planner.thinking", "lm.lm"];
+
+/// Phase II's model: the chat planner's where one plans (`eval --chat-planner`), else the
+/// decoder's.
+fn phase2_model(flat: &BTreeMap<String, Value>) -> Option<&Value> {
+    flat.get("chat_planner.chat_planner").filter(|v| v.is_string()).or(flat.get("lm.lm"))
+}
+
+/// Phase II's condition: a chat planner's (`thinking`, `thinking-recommended`, or
+/// `chat-greedy`: unconstrained greedy through a chat endpoint), else the decoder's mode
+/// (`decode.mode`, or a `phase2` record's `mode`).
+fn phase2_mode(flat: &BTreeMap<String, Value>) -> Option<String> {
+    if flat.get("chat_planner.chat_planner").is_some_and(Value::is_string) {
+        let mode = match flat.get("chat_planner.thinking") {
+            Some(Value::String(s)) if s == "recommended" => "thinking-recommended",
+            Some(Value::String(_) | Value::Bool(true)) => "thinking",
+            _ => "chat-greedy",
+        };
+        return Some(mode.into());
+    }
+    flat.get("decode.mode").or(flat.get("mode")).and_then(Value::as_str).map(str::to_string)
+}
+
 /// Configuration keys that tell runs of one condition apart.
 const SEED_KEYS: [&str; 2] = ["seed", "decode.seed"];
 
@@ -53,10 +77,23 @@ impl Condition {
         if inner.is_empty() { self.approach.clone() } else { format!("{} ({})", self.approach, inner.join("; ")) }
     }
 
-    /// The configuration with `decode.mode` left out: conditions equal in it differ only in
-    /// Phase II's mode (the component ablation's family).
+    /// The configuration without what chooses Phase II's condition (the decoder's mode, or a
+    /// chat planner and its thinking) and with Phase II's model in one place whichever plans:
+    /// conditions equal in it differ only in how the same model plans from the same Phase I
+    /// (the component ablation's family).
     pub fn without_mode(&self) -> BTreeMap<&str, &Value> {
-        self.flat.iter().filter(|(k, _)| k.as_str() != "decode.mode").map(|(k, v)| (k.as_str(), v)).collect()
+        let mut rest: BTreeMap<&str, &Value> =
+            self.flat.iter().filter(|(k, _)| !PHASE2_CHOICE.contains(&k.as_str())).map(|(k, v)| (k.as_str(), v)).collect();
+        if let Some(model) = phase2_model(&self.flat) {
+            rest.insert("phase2 model", model);
+        }
+        rest
+    }
+
+    /// Whether Phase II is a thinking condition (the paper tests it in the main family, as a
+    /// baseline, not among the component ablations).
+    pub fn is_thinking(&self) -> bool {
+        self.mode.as_deref().is_some_and(|m| m.starts_with("thinking"))
     }
 }
 
@@ -149,7 +186,17 @@ fn agent_rank(agent: &str) -> usize {
 }
 
 fn mode_rank(mode: Option<&str>) -> usize {
-    let known = ["constrained-mcts", "unconstrained-mcts", "constrained-greedy", "unconstrained-greedy", "constrained-sample", "sample"];
+    let known = [
+        "constrained-mcts",
+        "unconstrained-mcts",
+        "constrained-greedy",
+        "unconstrained-greedy",
+        "chat-greedy",
+        "thinking",
+        "thinking-recommended",
+        "constrained-sample",
+        "sample",
+    ];
     mode.and_then(|m| known.iter().position(|k| *k == m)).unwrap_or(known.len())
 }
 
@@ -159,7 +206,9 @@ fn approach(agent: &str, mode: Option<&str>) -> String {
         ("ours", Some("constrained-mcts") | None) => "Ours".into(),
         ("ours", Some("constrained-greedy")) => "Constrained greedy".into(),
         ("ours", Some("unconstrained-mcts")) => "Unconstrained MCTS".into(),
-        ("ours", Some("unconstrained-greedy")) => "Unconstrained greedy".into(),
+        ("ours", Some("unconstrained-greedy" | "chat-greedy")) => "Unconstrained greedy".into(),
+        ("ours", Some("thinking")) => "Thinking".into(),
+        ("ours", Some("thinking-recommended")) => "Thinking, recommended sampling".into(),
         ("ours", Some("constrained-sample")) => "Constrained sampling".into(),
         ("ours", Some("sample")) => "Unconstrained sampling".into(),
         ("ours", Some(other)) => format!("Ours ({other})"),
@@ -193,7 +242,7 @@ fn model_name(spec: &str, served: Option<&str>) -> String {
 fn model(flat: &BTreeMap<String, Value>) -> String {
     let text = |key: &str| flat.get(key).and_then(Value::as_str);
     let served = text("lm.served_model").or(text("served_model"));
-    let phase2 = text("model").or(text("lm.lm")).or(text("lm")).map(|spec| model_name(spec, served));
+    let phase2 = text("model").or(phase2_model(flat).and_then(Value::as_str)).or(text("lm")).map(|spec| model_name(spec, served));
     // A `model` setting is the direct policy's one model: it has no separate explorer.
     let explorer = if text("model").is_some() { None } else { text("explorer") };
     let phase1 = explorer.map(|spec| if spec == "systematic" { "sweep".to_string() } else { model_name(spec, served) });
@@ -231,7 +280,7 @@ pub(crate) fn study(sets: &[RecordSet]) -> Result<Study<'_>, ReportError> {
         .into_values()
         .map(|flat| {
             let agent = flat.get("agent").and_then(Value::as_str).unwrap_or_default().to_string();
-            let mode = flat.get("decode.mode").or(flat.get("mode")).and_then(Value::as_str).map(str::to_string);
+            let mode = phase2_mode(&flat);
             Condition { approach: approach(&agent, mode.as_deref()), model: model(&flat), setting: String::new(), agent, mode, flat }
         })
         .collect();

@@ -150,7 +150,8 @@ fn ablation_table(study: &Study<'_>) -> Result<Table, ReportError> {
         let mode = condition.mode.as_deref().unwrap_or("constrained-mcts");
         let method = match mode {
             "constrained-mcts" => "Ours",
-            "constrained-greedy" | "unconstrained-greedy" => "Greedy",
+            "constrained-greedy" | "unconstrained-greedy" | "chat-greedy" => "Greedy",
+            "thinking" | "thinking-recommended" => "Thinking",
             "unconstrained-mcts" => "MCTS",
             "constrained-sample" | "sample" => "Sampling",
             other => other,
@@ -287,11 +288,14 @@ struct Test {
 }
 
 /// The component-ablation family: `ours` against `ours` differing only in Phase II's mode,
-/// one side the paper's constrained MCTS.
+/// one side the paper's constrained MCTS, the other not thinking (the paper tests thinking
+/// among the main comparisons, as a baseline).
 fn is_ablation(a: &Condition, b: &Condition) -> bool {
     a.agent == "ours"
         && b.agent == "ours"
         && a.without_mode() == b.without_mode()
+        && !a.is_thinking()
+        && !b.is_thinking()
         && (a.mode.as_deref() == Some("constrained-mcts") || b.mode.as_deref() == Some("constrained-mcts"))
 }
 
