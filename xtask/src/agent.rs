@@ -194,6 +194,9 @@ pub struct PhaseTwoRunner {
 impl PhaseTwoRunner {
     pub fn new(planner: &str, lm: &LmArgs, decode: &DecodeArgs, chat: &ChatPlannerArgs, time_limit: f64) -> anyhow::Result<PhaseTwoRunner> {
         if let Some(name) = &chat.chat_planner {
+            if planner != "mcts" {
+                return Err(InputError(format!("--chat-planner plans in place of the decoder, not with --planner {planner}")).into());
+            }
             let mut config = match chat.thinking {
                 None => ChatPlannerConfig::greedy(),
                 Some(Thinking::TemperatureZero) => ChatPlannerConfig::thinking(),
@@ -415,7 +418,12 @@ pub fn run(args: AgentArgs) -> anyhow::Result<ExitCode> {
         let text: String = ep.steps.iter().map(|s| format!("{}\n", s.command)).collect();
         std::fs::write(path, text).with_context(|| format!("cannot write {}", path.display()))?;
     }
-    let record = json!({"task": name, "explorer": args.episode.explorer, "planner": args.planner, "lm": args.episode.lm.lm, "episode": ep});
+    // Who planned: a chat planner in place of the decoder, or `--planner` (with `--lm`).
+    let (planner, lm) = match &args.episode.chat.chat_planner {
+        Some(chat) => ("chat".to_string(), json!(chat)),
+        None => (args.planner.clone(), json!(args.episode.lm.lm)),
+    };
+    let record = json!({"task": name, "explorer": args.episode.explorer, "planner": planner, "lm": lm, "episode": ep});
     if let Some(path) = &args.trace {
         std::fs::write(path, serde_json::to_string_pretty(&record)?).with_context(|| format!("cannot write {}", path.display()))?;
     }

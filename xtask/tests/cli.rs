@@ -489,9 +489,24 @@ fn chat_planner_options_are_checked() {
     // The two thinking conditions by name; another is bad input that lists them.
     #[rustfmt::skip]
     let sampling = xtask(&[
-        "eval", "--benchmark", "alfworld-seen", "--limit", "1", "--chat-planner", "uniform-thinker.gguf", "--thinking", "hot",
+        "eval", "--benchmark", "alfworld-seen", "--limit", "1", "--chat-planner", "smollm2", "--thinking", "hot",
     ]);
     assert_eq!(sampling.status.code(), Some(2), "{}", String::from_utf8_lossy(&sampling.stderr));
     let stderr = String::from_utf8_lossy(&sampling.stderr);
     assert!(stderr.contains("hot") && stderr.contains("temperature-zero") && stderr.contains("recommended"), "{stderr}");
+    #[rustfmt::skip]
+    let astar = xtask(&[
+        "agent", "--benchmark", "virtualhome-rearrange", "--task", "fridge-003", "--planner", "astar", "--chat-planner", "smollm2",
+    ]);
+    assert_eq!(astar.status.code(), Some(2), "{}", String::from_utf8_lossy(&astar.stderr));
+    assert!(String::from_utf8_lossy(&astar.stderr).contains("not with --planner astar"));
+    // Only `ours` plans by a chat model: the planner agent's records would say A*.
+    for agent in ["planner", "direct", "expert"] {
+        #[rustfmt::skip]
+        let other = xtask(&[
+            "eval", "--agent", agent, "--benchmark", "alfworld-seen", "--limit", "1", "--chat-planner", "smollm2",
+        ]);
+        assert_eq!(other.status.code(), Some(2), "{agent}: {}", String::from_utf8_lossy(&other.stderr));
+        assert!(String::from_utf8_lossy(&other.stderr).contains("--chat-planner: a Phase II condition of the agent `ours`"), "{agent}");
+    }
 }
