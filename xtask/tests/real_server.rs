@@ -21,9 +21,10 @@ fn server() -> String {
 fn constrained_mcts_through_the_server_plans_an_alfworld_task() {
     let game = "fixtures/alfworld/valid_seen/pick_and_place_simple-Book-None-Sofa-229/trial_T20190907_042856_259139";
     let tokenizer = model_path().display().to_string();
-    // A budget of simulations, not of seconds: the server has one slot, and the thinking test
-    // beside this one can hold it for minutes on a loaded machine (3 simulations in 120 s once;
-    // alone, 54 simulations reach the goal in 12 s). The time limit only bounds a hung server.
+    // A budget of simulations, not of seconds: the thinking test beside this one shares the
+    // server, and on a loaded machine once held its one slot for minutes (3 simulations in
+    // 120 s; alone, 54 simulations reach the goal in 12 s). The time limit only bounds a hung
+    // server.
     #[rustfmt::skip]
     let output = xtask(&[
         "plan", "--game", game, "--planner", "mcts", "--mode", "constrained-mcts",
@@ -76,30 +77,24 @@ fn thinking_through_the_server_is_recorded_and_reported_as_thinking() {
     #[rustfmt::skip]
     let output = xtask(&[
         "eval", "--benchmark", "alfworld-seen", "--limit", "1", "--explorer", "systematic",
-        "--chat-planner", &server(), "--thinking", "recommended", "--seed", "42", "--fresh", "--out", &dir,
+        "--chat-planner", &server(), "--thinking", "recommended", "--seed", "42", "--fresh", "--out", &dir, "--json",
     ]);
     assert_eq!(output.status.code(), Some(0), "{}", String::from_utf8_lossy(&output.stderr));
-    let file = |suffix: &str| {
-        let found = std::fs::read_dir(out)
-            .expect("the records' folder")
-            .map(|e| e.expect("entry").path())
-            .find(|p| p.file_name().and_then(|n| n.to_str()).is_some_and(|n| n.starts_with("alfworld-seen-ours-") && n.ends_with(suffix)));
-        std::fs::read_to_string(found.unwrap_or_else(|| panic!("no alfworld-seen-ours-*{suffix} in {dir}"))).expect("readable")
-    };
-    let config: serde_json::Value = serde_json::from_str(&file(".config.json")).expect("JSON");
+    let summary: serde_json::Value = serde_json::from_str(String::from_utf8_lossy(&output.stdout).trim()).expect("one JSON object");
+    let records = PathBuf::from(summary["alfworld-seen"]["records"].as_str().expect("the records' file"));
+    let read = |path: PathBuf| std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    let config: serde_json::Value = serde_json::from_str(&read(records.with_extension("config.json"))).expect("JSON");
     assert_eq!((config["planner"].as_str(), config["chat_planner"]["thinking"].as_str()), (Some("chat"), Some("recommended")), "{config}");
     assert_eq!(config["decode"]["seed"], 42, "{config}");
-    let record: serde_json::Value = serde_json::from_str(file(".jsonl").lines().next().expect("a record")).expect("JSON");
+    let record: serde_json::Value = serde_json::from_str(read(records).lines().next().expect("a record")).expect("JSON");
     let episode = &record["episode"];
     let detail = &episode["phase2_detail"];
     assert_eq!((detail["planner"].as_str(), detail["thinking"].as_bool()), (Some("chat"), Some(true)), "{detail}");
     assert_eq!((detail["temperature"].as_f64(), detail["top_k"].as_u64(), detail["seed"].as_u64()), (Some(1.0), Some(20), Some(42)));
     assert_eq!(episode["phase2_calls"], 1, "{episode}");
     assert!(episode["phase2_tokens"].as_u64().is_some_and(|t| t > 0), "the server's count of generated tokens: {episode}");
-    let report = out.join("tables");
-    let status = xtask(&["report", &dir, "--out", &report.display().to_string()]);
-    assert_eq!(status.status.code(), Some(0), "{}", String::from_utf8_lossy(&status.stderr));
-    let markdown = std::fs::read_to_string(report.join("report.md")).expect("report.md");
+    // The report eval writes of its records.
+    let markdown = read(out.join("report/report.md"));
     assert!(markdown.lines().any(|l| l.starts_with("| Thinking, recommended sampling | sweep / ")), "{markdown}");
     assert!(!markdown.lines().any(|l| l.starts_with("| Ours |")), "{markdown}");
 }

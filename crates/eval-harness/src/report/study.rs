@@ -41,9 +41,12 @@ fn phase2_model(flat: &BTreeMap<String, Value>) -> Option<&Value> {
 /// (`decode.mode`, or a `phase2` record's `mode`).
 fn phase2_mode(flat: &BTreeMap<String, Value>) -> Option<String> {
     if flat.get("chat_planner.chat_planner").is_some_and(Value::is_string) {
+        // `thinking: true` is the configuration before aa01b27, which sampled (Qwen3's own
+        // recommendation, temperature 0.6, seeded): a recommended-sampling run, not greedy.
         let mode = match flat.get("chat_planner.thinking") {
             Some(Value::String(s)) if s == "recommended" => "thinking-recommended",
-            Some(Value::String(_) | Value::Bool(true)) => "thinking",
+            Some(Value::Bool(true)) => "thinking-recommended",
+            Some(Value::String(_)) => "thinking",
             _ => "chat-greedy",
         };
         return Some(mode.into());
@@ -383,5 +386,31 @@ fn settings(conditions: &mut [Condition]) {
                 .collect();
             conditions[i].setting = parts.join(", ");
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_chat_planners_thinking_setting_names_its_condition() {
+        let flat = |thinking: Value| {
+            BTreeMap::from([
+                ("decode.mode".to_string(), Value::from("constrained-mcts")),
+                ("chat_planner.chat_planner".to_string(), Value::from("smollm2")),
+                ("chat_planner.thinking".to_string(), thinking),
+            ])
+        };
+        let mode = |thinking: Value| phase2_mode(&flat(thinking));
+        assert_eq!(mode(Value::Null).as_deref(), Some("chat-greedy"));
+        assert_eq!(mode("temperature-zero".into()).as_deref(), Some("thinking"));
+        assert_eq!(mode("recommended".into()).as_deref(), Some("thinking-recommended"));
+        // Before aa01b27 the setting was a flag, and thinking sampled at temperature 0.6.
+        assert_eq!(mode(true.into()).as_deref(), Some("thinking-recommended"));
+        assert_eq!(mode(false.into()).as_deref(), Some("chat-greedy"));
+        let mut decoder = flat(Value::Null);
+        decoder.remove("chat_planner.chat_planner");
+        assert_eq!(phase2_mode(&decoder).as_deref(), Some("constrained-mcts"));
     }
 }
