@@ -27,6 +27,10 @@ pub struct PlanArgs {
     /// Use the heuristic's preferred operators (GBFS).
     #[arg(long)]
     preferred: bool,
+    /// A*: register states up to a permutation of interchangeable objects (orbit search over
+    /// the task's object symmetries; plans stay optimal and name the task's own objects).
+    #[arg(long)]
+    symmetries: bool,
     /// Stop after this many expansions.
     #[arg(long)]
     max_expansions: Option<u64>,
@@ -84,10 +88,14 @@ pub fn plan(args: PlanArgs) -> anyhow::Result<ExitCode> {
         let limit = args.time_limit.unwrap_or(crate::phase2::DEFAULT_TIME_LIMIT);
         return crate::phase2::plan_one(&files, &args.lm, &args.decode, limit, args.out.as_deref(), args.json);
     };
+    if args.symmetries && algorithm != Algorithm::AStar {
+        return Err(crate::input::InputError("--symmetries is a setting of --planner astar".to_string()).into());
+    }
     let model = TransitionModel::new(input::ground(&files)?);
     let mut heuristic = args.heuristic.build(&model);
     let mut config = SearchConfig::new(algorithm);
     config.preferred_operators = args.preferred;
+    config.symmetries = args.symmetries;
     config.max_expansions = args.max_expansions;
     config.time_limit = args.time_limit.map(Duration::from_secs_f64);
     let start = Instant::now();
@@ -113,7 +121,7 @@ pub fn plan(args: PlanArgs) -> anyhow::Result<ExitCode> {
             "{}",
             json!({
                 "task": files.id, "planner": args.planner.to_possible_value().map(|v| v.get_name().to_string()),
-                "heuristic": args.heuristic.name(), "preferred": args.preferred,
+                "heuristic": args.heuristic.name(), "preferred": args.preferred, "symmetries": args.symmetries,
                 "solved": solved, "status": status, "cost": solved.then_some(result.cost), "length": solved.then_some(result.plan.len()),
                 "expanded": result.expanded, "evaluated": result.evaluated, "generated": result.generated, "millis": millis,
             })

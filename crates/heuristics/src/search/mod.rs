@@ -10,6 +10,7 @@
 //! by h then insertion order. Dead ends (h = ∞) are never inserted.
 
 mod registry;
+pub mod symmetry;
 
 use std::cmp::Reverse;
 use std::collections::BinaryHeap;
@@ -21,6 +22,7 @@ use transition_model::{State, TransitionModel};
 
 use crate::Heuristic;
 pub use registry::{StateId, StateRegistry, relevant_facts};
+pub use symmetry::ObjectSymmetries;
 
 /// Which search (command-line names `astar`, `gbfs`, `lazy-gbfs`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, strum::EnumString, strum::IntoStaticStr, strum::VariantNames, strum::VariantArray)]
@@ -54,11 +56,24 @@ pub struct SearchConfig {
     /// The goal-relevant facts states are projected onto ([`relevant_facts`]); computed by
     /// each search when `None`. Set it to share one analysis across many searches.
     pub relevant: Option<Arc<[u64]>>,
+    /// A* only: register states up to a permutation of interchangeable objects
+    /// ([`symmetry::ObjectSymmetries`]; orbit search): plans stay optimal and are the task's
+    /// own, states that differ only in which of several identical objects is where are one.
+    /// Off by default, as in Fast Downward.
+    pub symmetries: bool,
 }
 
 impl SearchConfig {
     pub fn new(algorithm: Algorithm) -> SearchConfig {
-        SearchConfig { algorithm, preferred_operators: false, max_expansions: None, time_limit: None, max_cost: None, relevant: None }
+        SearchConfig {
+            algorithm,
+            preferred_operators: false,
+            max_expansions: None,
+            time_limit: None,
+            max_cost: None,
+            relevant: None,
+            symmetries: false,
+        }
     }
 }
 
@@ -197,6 +212,8 @@ fn finish(
 fn astar(model: &TransitionModel, heuristic: &mut dyn Heuristic, budget: &Budget, initial: State) -> SearchResult {
     let task = model.task();
     let mut space = Space::new(task, &budget.config);
+    let mut symmetries = budget.config.symmetries.then(|| ObjectSymmetries::detect(task)).filter(|s| !s.is_trivial());
+    let (mut perm, mut image) = (Vec::new(), State::empty(task.facts.len()));
     let (mut expanded, mut evaluated, mut generated) = (0u64, 0u64, 0u64);
     let mut open: BinaryHeap<Reverse<(u64, u32, u64, StateId)>> = BinaryHeap::new();
     let mut sequence = 0u64;
@@ -204,6 +221,13 @@ fn astar(model: &TransitionModel, heuristic: &mut dyn Heuristic, budget: &Budget
     evaluated += 1;
     let Some(h) = heuristic.evaluate(&initial) else {
         return finish(SearchStatus::Unsolvable, &space, None, model, (0, evaluated, 0), budget);
+    };
+    let solved = |space: &Space, goal: StateId, counts, symmetries: &Option<ObjectSymmetries>| {
+        let mut result = finish(SearchStatus::Solved, space, Some(goal), model, counts, budget);
+        if let Some(symmetries) = symmetries {
+            result.plan = unpermute(space, root, model, symmetries, &result.plan);
+        }
+        result
     };
     space.nodes[root as usize].g = 0;
     space.nodes[root as usize].h = h;
@@ -221,7 +245,7 @@ fn astar(model: &TransitionModel, heuristic: &mut dyn Heuristic, budget: &Budget
         }
         let state = space.registry.get(id);
         if model.is_goal(&state) {
-            return finish(SearchStatus::Solved, &space, Some(id), model, (expanded, evaluated, generated), budget);
+            return solved(&space, id, (expanded, evaluated, generated), &symmetries);
         }
         if budget.exhausted(expanded) {
             return finish(SearchStatus::OutOfBudget, &space, None, model, (expanded, evaluated, generated), budget);
@@ -231,7 +255,10 @@ fn astar(model: &TransitionModel, heuristic: &mut dyn Heuristic, budget: &Budget
         model.applicable(&state, &mut applicable);
         for &action in &applicable {
             generated += 1;
-            let next = model.apply(&state, action);
+            let mut next = model.apply(&state, action);
+            if let Some(symmetries) = symmetries.as_mut() {
+                canonicalize(symmetries, space.registry.mask(), &mut next, &mut perm, &mut image);
+            }
             let g = node.g + u64::from(task.action(action).cost);
             let (child, new) = space.insert(&next);
             let child_node = &mut space.nodes[child as usize];
@@ -267,6 +294,40 @@ fn astar(model: &TransitionModel, heuristic: &mut dyn Heuristic, budget: &Budget
     }
     let status = if pruned { SearchStatus::OverBound } else { SearchStatus::Unsolvable };
     finish(status, &space, None, model, (expanded, evaluated, generated), budget)
+}
+
+/// `state` as the search registers it under object symmetries: projected (so that the image
+/// depends only on what is stored), then permuted to its image.
+fn canonicalize(
+    symmetries: &mut ObjectSymmetries,
+    mask: Option<&[u64]>,
+    state: &mut State,
+    perm: &mut symmetry::Permutation,
+    image: &mut State,
+) {
+    if let Some(mask) = mask {
+        state.retain(mask);
+    }
+    if symmetries.canonical_permutation(state, perm) {
+        symmetries.permute_state(state, perm, image);
+        std::mem::swap(state, image);
+    }
+}
+
+/// A plan over registered images, from `root`, as the task's own actions: each step's
+/// successor is made again to recover the permutation that made its image.
+fn unpermute(space: &Space, root: StateId, model: &TransitionModel, symmetries: &ObjectSymmetries, plan: &[ActionId]) -> Vec<ActionId> {
+    let mut symmetries = symmetries.clone();
+    let mut state = space.registry.get(root);
+    let (mut perm, mut image) = (Vec::new(), State::empty(model.task().facts.len()));
+    let mut steps = Vec::with_capacity(plan.len());
+    for &action in plan {
+        let mut next = model.apply(&state, action);
+        canonicalize(&mut symmetries, space.registry.mask(), &mut next, &mut perm, &mut image);
+        steps.push((action, perm.clone()));
+        state = next;
+    }
+    symmetries.unpermute_plan(model.task(), &steps)
 }
 
 /// Two open lists (all successors; preferred successors only), alternated; `boost` extra

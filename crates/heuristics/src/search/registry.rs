@@ -90,6 +90,11 @@ impl StateRegistry {
         (id, true)
     }
 
+    /// The facts stored states keep (`None`: all).
+    pub fn mask(&self) -> Option<&[u64]> {
+        self.mask.as_deref()
+    }
+
     /// The stored (projected) state.
     pub fn get(&self, id: StateId) -> State {
         State::from_words(self.slice(id))

@@ -1,0 +1,377 @@
+//! Interchangeable objects, and A* over states up to a permutation of them (orbit search).
+//!
+//! Two objects are interchangeable when swapping them maps the grounded task onto itself:
+//! every fact and action onto a fact and an action, each action's precondition, effects and
+//! cost onto its image's, the initial state and the goal onto themselves. Such swaps generate
+//! a group of permutations, one symmetric group per class of interchangeable objects (five
+//! plates EAI's task asks to put in the dishwasher, gripper's balls), and every permutation in
+//! it maps plans onto plans of the same cost and goal states onto goal states.
+//!
+//! A search that registers each state as a permuted image of itself ([`ObjectSymmetries::canonicalize`])
+//! keeps one of the many states that differ only in which plate went in first: A* stays
+//! optimal (each stored state is a real state reached at the same cost, and the goal is
+//! invariant), and the plan found in the permuted space is mapped back to the task's own
+//! objects step by step ([`ObjectSymmetries::unpermute_plan`]). The image chosen sorts each
+//! class's objects by the facts of the state that mention them, so states that differ by a
+//! permutation of objects whose facts name no other object of their class meet in one image;
+//! where they do (a plate on a plate), the image is still a symmetric state, only not always
+//! the same one (the search is then correct and merges less).
+//!
+//! This is the object-level case of the structural symmetries of Domshlak, Katz and
+//! Shleyfman (ICAPS 2012; Fast Downward's `symmetries` option, which the release we compare
+//! with does not ship). It is written here because no Rust planning library provides it; it
+//! needs only the grounded task, so it works with any heuristic and with conditional effects
+//! and disjunctive conditions, which a graph-automorphism tool on Fast Downward's SAS+ output
+//! would not see.
+
+use hashbrown::{HashMap, HashSet};
+use smallvec::SmallVec;
+
+use grounding::{ActionId, Condition, FactId, ObjectId, Task};
+use transition_model::State;
+
+/// Classes of interchangeable objects of one task, and what canonicalizing a state needs.
+#[derive(Debug, Clone, Default)]
+pub struct ObjectSymmetries {
+    /// Each class sorted by id, at least two objects.
+    classes: Vec<Vec<ObjectId>>,
+    /// For each member (the classes' objects in order), its facts as (fact, key), by key: the
+    /// key names the fact with the member itself and every other member replaced by a marker.
+    member_facts: Vec<Vec<(FactId, u32)>>,
+    /// Facts that mention a member (only these move under a permutation).
+    moving: Vec<FactId>,
+    fact_index: HashMap<(u32, SmallVec<[ObjectId; 4]>), FactId>,
+    /// Each fact's predicate and arguments, by id.
+    atoms: Vec<(u32, SmallVec<[ObjectId; 4]>)>,
+    /// Actions by name: grounding may split one (an `or` in a precondition) into several.
+    action_index: HashMap<ActionName, SmallVec<[ActionId; 2]>>,
+    objects: usize,
+    /// Scratch: the profiles' keys, flat, their ranges per member, and the order.
+    keys: Vec<u32>,
+    ranges: Vec<(u32, u32)>,
+    order: Vec<u32>,
+}
+
+/// An action's schema and arguments.
+type ActionName = (u32, SmallVec<[ObjectId; 6]>);
+
+/// Where an object occurs: (init, goal, negated goal or action; predicate or schema; position).
+type Signature = Vec<(u8, u32, u32)>;
+
+/// A permutation of the task's objects: `perm[o]` is o's image.
+pub type Permutation = Vec<ObjectId>;
+
+impl ObjectSymmetries {
+    /// The classes of interchangeable objects of `task` (none when there are none).
+    pub fn detect(task: &Task) -> ObjectSymmetries {
+        let mut out = ObjectSymmetries { objects: task.objects.len(), ..ObjectSymmetries::default() };
+        out.atoms = task.facts.iter().map(|a| (a.predicate.0, a.args.clone())).collect();
+        out.fact_index = task.facts.iter().enumerate().map(|(i, a)| ((a.predicate.0, a.args.clone()), FactId(i as u32))).collect();
+        for (i, a) in task.actions.iter().enumerate() {
+            out.action_index.entry((a.schema.0, a.args.clone())).or_default().push(ActionId(i as u32));
+        }
+        // Candidates share types and a signature: where they occur in init, goal and actions.
+        let mut signature: Vec<Signature> = vec![Vec::new(); task.objects.len()];
+        for &f in &task.init {
+            let atom = task.fact(f);
+            for (pos, o) in atom.args.iter().enumerate() {
+                signature[o.index()].push((0, atom.predicate.0, pos as u32));
+            }
+        }
+        for disjunct in &task.goal.disjuncts {
+            for literal in disjunct.literals() {
+                let atom = task.fact(literal.fact());
+                for (pos, o) in atom.args.iter().enumerate() {
+                    signature[o.index()].push((1 + u8::from(literal.is_negated()), atom.predicate.0, pos as u32));
+                }
+            }
+        }
+        for action in &task.actions {
+            for (pos, o) in action.args.iter().enumerate() {
+                signature[o.index()].push((3, action.schema.0, pos as u32));
+            }
+        }
+        let mut groups: HashMap<(Vec<String>, Signature), Vec<ObjectId>> = HashMap::new();
+        for (i, mut sig) in signature.into_iter().enumerate() {
+            sig.sort_unstable();
+            let mut types = task.objects[i].types.clone();
+            types.sort();
+            groups.entry((types, sig)).or_default().push(ObjectId(i as u32));
+        }
+        let mut groups: Vec<Vec<ObjectId>> = groups.into_values().filter(|g| g.len() > 1).collect();
+        groups.sort();
+        let init: HashSet<FactId> = task.init.iter().copied().collect();
+        let goal: HashSet<NormCondition> = task.goal.disjuncts.iter().map(|d| NormCondition::of(d, &|f| f)).collect();
+        for group in groups {
+            let mut classes: Vec<Vec<ObjectId>> = Vec::new();
+            for &o in &group {
+                match classes.iter_mut().find(|c| out.swap_is_automorphism(task, &init, &goal, c[0], o)) {
+                    Some(class) => class.push(o),
+                    None => classes.push(vec![o]),
+                }
+            }
+            out.classes.extend(classes.into_iter().filter(|c| c.len() > 1));
+        }
+        // Objects no fluent fact names (constants a grounding left unused) move nothing.
+        let mut named = vec![false; task.objects.len()];
+        for atom in &task.facts {
+            for o in &atom.args {
+                named[o.index()] = true;
+            }
+        }
+        out.classes.retain(|c| named[c[0].index()]);
+        out.classes.sort();
+        out.index_members(task);
+        out
+    }
+
+    /// The classes of interchangeable objects, each sorted, at least two objects each.
+    pub fn classes(&self) -> &[Vec<ObjectId>] {
+        &self.classes
+    }
+
+    /// Whether there is nothing to permute.
+    pub fn is_trivial(&self) -> bool {
+        self.classes.is_empty()
+    }
+
+    fn swap_is_automorphism(&self, task: &Task, init: &HashSet<FactId>, goal: &HashSet<NormCondition>, a: ObjectId, b: ObjectId) -> bool {
+        let swap = |o: ObjectId| {
+            if o == a {
+                b
+            } else if o == b {
+                a
+            } else {
+                o
+            }
+        };
+        let mut fact_image: Vec<FactId> = Vec::with_capacity(task.facts.len());
+        for (i, atom) in task.facts.iter().enumerate() {
+            if !atom.args.iter().any(|&o| o == a || o == b) {
+                fact_image.push(FactId(i as u32));
+                continue;
+            }
+            let args: SmallVec<[ObjectId; 4]> = atom.args.iter().map(|&o| swap(o)).collect();
+            match self.fact_index.get(&(atom.predicate.0, args)) {
+                Some(&f) => fact_image.push(f),
+                None => return false,
+            }
+        }
+        let map = |f: FactId| fact_image[f.index()];
+        if task.init.iter().any(|&f| !init.contains(&map(f))) {
+            return false;
+        }
+        if task.goal.disjuncts.iter().any(|d| !goal.contains(&NormCondition::of(d, &map))) {
+            return false;
+        }
+        task.actions.iter().all(|action| {
+            let moves_fact = |fs: &[FactId]| fs.iter().any(|&f| map(f) != f);
+            let moves = action.args.iter().any(|&o| o == a || o == b)
+                || action.pre.literals().any(|l| map(l.fact()) != l.fact())
+                || moves_fact(&action.add)
+                || moves_fact(&action.del)
+                || action
+                    .conditional
+                    .iter()
+                    .any(|c| c.condition.literals().any(|l| map(l.fact()) != l.fact()) || moves_fact(&c.add) || moves_fact(&c.del));
+            if !moves {
+                return true;
+            }
+            let args: SmallVec<[ObjectId; 6]> = action.args.iter().map(|&o| swap(o)).collect();
+            let Some(candidates) = self.action_index.get(&(action.schema.0, args)) else { return false };
+            let mapped = NormAction::of(action, &map);
+            candidates.iter().map(|&c| task.action(c)).any(|image| image.cost == action.cost && NormAction::of(image, &|f| f) == mapped)
+        })
+    }
+
+    fn index_members(&mut self, task: &Task) {
+        let mut class_of: Vec<Option<u32>> = vec![None; task.objects.len()];
+        let mut member_of: Vec<Option<usize>> = vec![None; task.objects.len()];
+        let mut m = 0;
+        for (c, class) in self.classes.iter().enumerate() {
+            for &o in class {
+                class_of[o.index()] = Some(c as u32);
+                member_of[o.index()] = Some(m);
+                m += 1;
+            }
+        }
+        self.member_facts = vec![Vec::new(); m];
+        let mut keys: HashMap<(u32, Vec<u64>), u32> = HashMap::new();
+        for (i, atom) in task.facts.iter().enumerate() {
+            let members: Vec<usize> = atom.args.iter().filter_map(|o| member_of[o.index()]).collect();
+            if members.is_empty() {
+                continue;
+            }
+            self.moving.push(FactId(i as u32));
+            for (pos, o) in atom.args.iter().enumerate() {
+                let Some(member) = member_of[o.index()] else { continue };
+                // The fact as seen from this member: itself, other members by class, the rest as is.
+                let shape: Vec<u64> = atom
+                    .args
+                    .iter()
+                    .enumerate()
+                    .map(|(p, x)| match class_of[x.index()] {
+                        _ if p == pos => u64::MAX,
+                        Some(c) => (1 << 40) | u64::from(c),
+                        None => u64::from(x.0),
+                    })
+                    .collect();
+                let next = keys.len() as u32;
+                let key = *keys.entry((atom.predicate.0, shape)).or_insert(next);
+                self.member_facts[member].push((FactId(i as u32), key));
+            }
+        }
+        // Keys in the order of the first class's facts are arbitrary but fixed; sort each
+        // member's list by key so that a profile comes out sorted.
+        for list in &mut self.member_facts {
+            list.sort_unstable_by_key(|&(f, k)| (k, f.0));
+        }
+    }
+
+    /// The permutation that takes `state` to the image the search registers, and whether it
+    /// moves anything. Allocates nothing once its scratch has grown.
+    pub fn canonical_permutation(&mut self, state: &State, perm: &mut Permutation) -> bool {
+        perm.clear();
+        perm.extend((0..self.objects as u32).map(ObjectId));
+        let mut moved = false;
+        let mut member = 0;
+        for class in &self.classes {
+            self.keys.clear();
+            self.ranges.clear();
+            for m in member..member + class.len() {
+                let start = self.keys.len() as u32;
+                self.keys.extend(self.member_facts[m].iter().filter(|&&(f, _)| state.contains(f)).map(|&(_, k)| k));
+                self.ranges.push((start, self.keys.len() as u32));
+            }
+            self.order.clear();
+            self.order.extend(0..class.len() as u32);
+            let (keys, ranges) = (&self.keys, &self.ranges);
+            let profile = |i: u32| {
+                let (s, e) = ranges[i as usize];
+                &keys[s as usize..e as usize]
+            };
+            self.order.sort_by(|&x, &y| profile(x).cmp(profile(y)).then(x.cmp(&y)));
+            for (rank, &i) in self.order.iter().enumerate() {
+                perm[class[i as usize].index()] = class[rank];
+                moved |= i as usize != rank;
+            }
+            member += class.len();
+        }
+        moved
+    }
+
+    /// `state` under `perm` (a permutation of the classes' objects), into `out`.
+    pub fn permute_state(&self, state: &State, perm: &Permutation, out: &mut State) {
+        out.clone_from(state);
+        for &f in &self.moving {
+            out.remove(f);
+        }
+        for &f in &self.moving {
+            if state.contains(f) {
+                out.insert(self.fact_image(f, perm));
+            }
+        }
+    }
+
+    fn fact_image(&self, f: FactId, perm: &Permutation) -> FactId {
+        let (predicate, args) = &self.atoms[f.index()];
+        if args.iter().all(|o| perm[o.index()] == *o) {
+            return f;
+        }
+        let args: SmallVec<[ObjectId; 4]> = args.iter().map(|o| perm[o.index()]).collect();
+        // Every fact has an image: the classes were admitted only so.
+        self.fact_index[&(*predicate, args)]
+    }
+
+    /// `action` under `perm`: the action of the image's name whose precondition and effects
+    /// are the images of `action`'s.
+    pub fn action_image(&self, task: &Task, action: ActionId, perm: &Permutation) -> ActionId {
+        let a = task.action(action);
+        let map = |f: FactId| self.fact_image(f, perm);
+        let moves = a.args.iter().any(|o| perm[o.index()] != *o) || NormAction::of(a, &|f| f) != NormAction::of(a, &map);
+        if !moves {
+            return action;
+        }
+        let args: SmallVec<[ObjectId; 6]> = a.args.iter().map(|o| perm[o.index()]).collect();
+        let mapped = NormAction::of(a, &map);
+        // Every action has an image: the classes were admitted only so.
+        *self.action_index[&(a.schema.0, args)]
+            .iter()
+            .find(|&&c| task.action(c).cost == a.cost && NormAction::of(task.action(c), &|f| f) == mapped)
+            .expect("an automorphism maps every action onto an action")
+    }
+
+    /// A plan found over registered images, as the task's own actions: `steps` holds each
+    /// step's action (as applied to the registered state before it) and the permutation that
+    /// made the registered state after it from that action's successor, in order.
+    pub fn unpermute_plan(&self, task: &Task, steps: &[(ActionId, Permutation)]) -> Vec<ActionId> {
+        // The real state is π(image); π starts as the identity and after a step whose successor
+        // σ made the image, π becomes π ∘ σ⁻¹.
+        let mut pi: Permutation = (0..self.objects as u32).map(ObjectId).collect();
+        let mut inverse: Permutation = pi.clone();
+        let mut plan = Vec::with_capacity(steps.len());
+        for (action, sigma) in steps {
+            plan.push(self.action_image(task, *action, &pi));
+            for (o, &image) in sigma.iter().enumerate() {
+                inverse[image.index()] = ObjectId(o as u32);
+            }
+            pi = inverse.iter().map(|&o| pi[o.index()]).collect();
+        }
+        plan
+    }
+}
+
+/// A condition with its facts mapped and every part sorted, for comparison.
+#[derive(Debug, Clone, PartialEq, Eq, Hash)]
+struct NormCondition {
+    pos: Vec<FactId>,
+    neg: Vec<FactId>,
+    clauses: Vec<Vec<(FactId, bool)>>,
+}
+
+impl NormCondition {
+    fn of(c: &Condition, map: &dyn Fn(FactId) -> FactId) -> NormCondition {
+        let sorted = |fs: &[FactId]| {
+            let mut v: Vec<FactId> = fs.iter().map(|&f| map(f)).collect();
+            v.sort_unstable();
+            v.dedup();
+            v
+        };
+        let mut clauses: Vec<Vec<(FactId, bool)>> = c
+            .clauses
+            .iter()
+            .map(|clause| {
+                let mut v: Vec<(FactId, bool)> = clause.iter().map(|l| (map(l.fact()), l.is_negated())).collect();
+                v.sort_unstable();
+                v.dedup();
+                v
+            })
+            .collect();
+        clauses.sort();
+        clauses.dedup();
+        NormCondition { pos: sorted(&c.pos), neg: sorted(&c.neg), clauses }
+    }
+}
+
+#[derive(Debug, PartialEq, Eq)]
+struct NormAction {
+    pre: NormCondition,
+    add: Vec<FactId>,
+    del: Vec<FactId>,
+    conditional: Vec<(NormCondition, Vec<FactId>, Vec<FactId>)>,
+}
+
+impl NormAction {
+    fn of(a: &grounding::Action, map: &dyn Fn(FactId) -> FactId) -> NormAction {
+        let sorted = |fs: &[FactId]| {
+            let mut v: Vec<FactId> = fs.iter().map(|&f| map(f)).collect();
+            v.sort_unstable();
+            v.dedup();
+            v
+        };
+        let mut conditional: Vec<(NormCondition, Vec<FactId>, Vec<FactId>)> =
+            a.conditional.iter().map(|c| (NormCondition::of(&c.condition, map), sorted(&c.add), sorted(&c.del))).collect();
+        conditional.sort_by(|x, y| (&x.1, &x.2, &x.0.pos, &x.0.neg, &x.0.clauses).cmp(&(&y.1, &y.2, &y.0.pos, &y.0.neg, &y.0.clauses)));
+        NormAction { pre: NormCondition::of(&a.pre, map), add: sorted(&a.add), del: sorted(&a.del), conditional }
+    }
+}
