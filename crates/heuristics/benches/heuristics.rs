@@ -74,5 +74,47 @@ fn bench(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, bench);
+/// What A* with `SearchConfig::symmetries` adds per generated state: the image's permutation
+/// and the permuted state, on random-walk states of tasks with interchangeable objects (an
+/// LM-cut evaluation of the same states is in `heuristic`; Fast Downward 26.6 from PyPI has no
+/// symmetries to compare with).
+fn symmetry(c: &mut Criterion) {
+    let ipc = load(Benchmark::Ipc).expect("fixtures");
+    let mut group = c.benchmark_group("symmetry");
+    for id in ["gripper/instance-5", "gripper/instance-20"] {
+        let files = ipc.iter().find(|t| t.id == id).expect("instance");
+        let model = model(files);
+        let mask = heuristics::search::relevant_facts(model.task());
+        let states: Vec<State> = model
+            .random_walk(0x9E37_79B9_7F4A_7C15, 200)
+            .into_iter()
+            .map(|mut s| {
+                s.retain(&mask);
+                s
+            })
+            .collect();
+        let mut symmetries = heuristics::search::ObjectSymmetries::detect(model.task());
+        eprintln!("{id}: {} classes, {} states per iteration", symmetries.classes().len(), states.len());
+        let (mut perm, mut image) = (Vec::new(), State::empty(model.task().facts.len()));
+        group.bench_function(format!("{id}/image"), |b| {
+            b.iter(|| {
+                let mut moved = 0;
+                for state in &states {
+                    if symmetries.canonical_permutation(state, &mut perm) {
+                        symmetries.permute_state(state, &perm, &mut image);
+                        moved += 1;
+                    }
+                }
+                moved
+            })
+        });
+        group.bench_function(format!("{id}/lmcut"), |b| {
+            let mut lmcut = heuristics::LmCut::new(&model);
+            b.iter(|| states.iter().map(|s| u64::from(heuristics::Heuristic::evaluate(&mut lmcut, s).unwrap_or(0))).sum::<u64>())
+        });
+    }
+    group.finish();
+}
+
+criterion_group!(benches, bench, symmetry);
 criterion_main!(benches);
