@@ -7,7 +7,8 @@
 //! can be much smaller. Heuristics see projected states too, with unchanged values: the delete
 //! relaxation keeps only goal-relevant operators, whose preconditions are all relevant facts.
 //! Open lists break ties like Fast Downward's: A* orders by (f, h) then insertion order; GBFS
-//! by h then insertion order. Dead ends (h = ∞) are never inserted.
+//! by h then insertion order. Dead ends (h = ∞) are never inserted. A* can register states up
+//! to a permutation of interchangeable objects ([`SearchConfig::symmetries`], [`symmetry`]).
 
 mod registry;
 pub mod symmetry;
