@@ -7,7 +7,7 @@
 //! plates EAI's task asks to put in the dishwasher, gripper's balls), and every permutation in
 //! it maps plans onto plans of the same cost and goal states onto goal states.
 //!
-//! A search that registers each state as a permuted image of itself ([`ObjectSymmetries::canonicalize`])
+//! A search that registers each state as a permuted image of itself ([`ObjectSymmetries::canonical_permutation`])
 //! keeps one of the many states that differ only in which plate went in first: A* stays
 //! optimal (each stored state is a real state reached at the same cost, and the goal is
 //! invariant), and the plan found in the permuted space is mapped back to the task's own
