@@ -83,14 +83,14 @@ pub fn plan_text(model: &TransitionModel, plan: &[grounding::ActionId], cost: u6
 }
 
 pub fn plan(args: PlanArgs) -> anyhow::Result<ExitCode> {
+    if args.symmetries && args.planner != Planner::Astar {
+        return Err(crate::input::InputError("--symmetries is a setting of --planner astar".to_string()).into());
+    }
     let files = args.task.load()?;
     let Some(algorithm) = args.planner.algorithm() else {
         let limit = args.time_limit.unwrap_or(crate::phase2::DEFAULT_TIME_LIMIT);
         return crate::phase2::plan_one(&files, &args.lm, &args.decode, limit, args.out.as_deref(), args.json);
     };
-    if args.symmetries && algorithm != Algorithm::AStar {
-        return Err(crate::input::InputError("--symmetries is a setting of --planner astar".to_string()).into());
-    }
     let model = TransitionModel::new(input::ground(&files)?);
     let mut heuristic = args.heuristic.build(&model);
     let mut config = SearchConfig::new(algorithm);

@@ -164,9 +164,11 @@ fn plan_with_symmetries_finds_the_optimal_gripper_plan_in_a_fraction_of_the_expa
     // Plain A* expands 10,528 states here (Fast Downward 10,531), orbit search 38.
     assert!(orbit["expanded"].as_u64().unwrap() * 100 < plain["expanded"].as_u64().unwrap(), "{plain} {orbit}");
     // Only A* takes it: exit 2 and the reason.
-    let output = xtask(&["plan", "--domain", &domain, "--problem", &problem, "--planner", "lazy-gbfs", "--symmetries"]);
-    assert_eq!(output.status.code(), Some(2));
-    assert!(String::from_utf8_lossy(&output.stderr).contains("--symmetries is a setting of --planner astar"));
+    for planner in ["lazy-gbfs", "mcts"] {
+        let output = xtask(&["plan", "--domain", &domain, "--problem", &problem, "--planner", planner, "--symmetries"]);
+        assert_eq!(output.status.code(), Some(2), "{planner}");
+        assert!(String::from_utf8_lossy(&output.stderr).contains("--symmetries is a setting of --planner astar"), "{planner}");
+    }
 }
 
 #[test]

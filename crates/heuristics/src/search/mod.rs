@@ -223,7 +223,7 @@ fn astar(model: &TransitionModel, heuristic: &mut dyn Heuristic, budget: &Budget
     let Some(h) = heuristic.evaluate(&initial) else {
         return finish(SearchStatus::Unsolvable, &space, None, model, (0, evaluated, 0), budget);
     };
-    let solved = |space: &Space, goal: StateId, counts, symmetries: &Option<ObjectSymmetries>| {
+    let solved = |space: &Space, goal: StateId, counts, symmetries: &mut Option<ObjectSymmetries>| {
         let mut result = finish(SearchStatus::Solved, space, Some(goal), model, counts, budget);
         if let Some(symmetries) = symmetries {
             result.plan = unpermute(space, root, model, symmetries, &result.plan);
@@ -246,7 +246,7 @@ fn astar(model: &TransitionModel, heuristic: &mut dyn Heuristic, budget: &Budget
         }
         let state = space.registry.get(id);
         if model.is_goal(&state) {
-            return solved(&space, id, (expanded, evaluated, generated), &symmetries);
+            return solved(&space, id, (expanded, evaluated, generated), &mut symmetries);
         }
         if budget.exhausted(expanded) {
             return finish(SearchStatus::OutOfBudget, &space, None, model, (expanded, evaluated, generated), budget);
@@ -317,14 +317,13 @@ fn canonicalize(
 
 /// A plan over registered images, from `root`, as the task's own actions: each step's
 /// successor is made again to recover the permutation that made its image.
-fn unpermute(space: &Space, root: StateId, model: &TransitionModel, symmetries: &ObjectSymmetries, plan: &[ActionId]) -> Vec<ActionId> {
-    let mut symmetries = symmetries.clone();
+fn unpermute(space: &Space, root: StateId, model: &TransitionModel, symmetries: &mut ObjectSymmetries, plan: &[ActionId]) -> Vec<ActionId> {
     let mut state = space.registry.get(root);
     let (mut perm, mut image) = (Vec::new(), State::empty(model.task().facts.len()));
     let mut steps = Vec::with_capacity(plan.len());
     for &action in plan {
         let mut next = model.apply(&state, action);
-        canonicalize(&mut symmetries, space.registry.mask(), &mut next, &mut perm, &mut image);
+        canonicalize(symmetries, space.registry.mask(), &mut next, &mut perm, &mut image);
         steps.push((action, perm.clone()));
         state = next;
     }

@@ -27,7 +27,7 @@
 use hashbrown::{HashMap, HashSet};
 use smallvec::SmallVec;
 
-use grounding::{ActionId, Condition, FactId, ObjectId, Task};
+use grounding::{ActionId, Atom, Condition, FactId, ObjectId, Task};
 use transition_model::State;
 
 /// Classes of interchangeable objects of one task, and what canonicalizing a state needs.
@@ -40,9 +40,9 @@ pub struct ObjectSymmetries {
     member_facts: Vec<Vec<(FactId, u32)>>,
     /// Facts that mention a member (only these move under a permutation).
     moving: Vec<FactId>,
-    fact_index: HashMap<(u32, SmallVec<[ObjectId; 4]>), FactId>,
-    /// Each fact's predicate and arguments, by id.
-    atoms: Vec<(u32, SmallVec<[ObjectId; 4]>)>,
+    fact_index: HashMap<Atom, FactId>,
+    /// The task's facts, by id (for their images).
+    atoms: Vec<Atom>,
     /// Actions by name: grounding may split one (an `or` in a precondition) into several.
     action_index: HashMap<ActionName, SmallVec<[ActionId; 2]>>,
     objects: usize,
@@ -65,10 +65,17 @@ impl ObjectSymmetries {
     /// The classes of interchangeable objects of `task` (none when there are none).
     pub fn detect(task: &Task) -> ObjectSymmetries {
         let mut out = ObjectSymmetries { objects: task.objects.len(), ..ObjectSymmetries::default() };
-        out.atoms = task.facts.iter().map(|a| (a.predicate.0, a.args.clone())).collect();
-        out.fact_index = task.facts.iter().enumerate().map(|(i, a)| ((a.predicate.0, a.args.clone()), FactId(i as u32))).collect();
+        out.atoms = task.facts.clone();
+        out.fact_index = task.facts.iter().enumerate().map(|(i, a)| (a.clone(), FactId(i as u32))).collect();
         for (i, a) in task.actions.iter().enumerate() {
             out.action_index.entry((a.schema.0, a.args.clone())).or_default().push(ActionId(i as u32));
+        }
+        // Objects no fluent fact names (constants a grounding left unused) move nothing.
+        let mut named = vec![false; task.objects.len()];
+        for atom in &task.facts {
+            for o in &atom.args {
+                named[o.index()] = true;
+            }
         }
         // Candidates share types and a signature: where they occur in init, goal and actions.
         let mut signature: Vec<Signature> = vec![Vec::new(); task.objects.len()];
@@ -92,7 +99,7 @@ impl ObjectSymmetries {
             }
         }
         let mut groups: HashMap<(Vec<String>, Signature), Vec<ObjectId>> = HashMap::new();
-        for (i, mut sig) in signature.into_iter().enumerate() {
+        for (i, mut sig) in signature.into_iter().enumerate().filter(|&(i, _)| named[i]) {
             sig.sort_unstable();
             let mut types = task.objects[i].types.clone();
             types.sort();
@@ -102,24 +109,18 @@ impl ObjectSymmetries {
         groups.sort();
         let init: HashSet<FactId> = task.init.iter().copied().collect();
         let goal: HashSet<NormCondition> = task.goal.disjuncts.iter().map(|d| NormCondition::of(d, &|f| f)).collect();
+        let actions: Vec<NormAction> =
+            if groups.is_empty() { Vec::new() } else { task.actions.iter().map(|a| NormAction::of(a, &|f| f)).collect() };
         for group in groups {
             let mut classes: Vec<Vec<ObjectId>> = Vec::new();
             for &o in &group {
-                match classes.iter_mut().find(|c| out.swap_is_automorphism(task, &init, &goal, c[0], o)) {
+                match classes.iter_mut().find(|c| out.swap_is_automorphism(task, &init, &goal, &actions, c[0], o)) {
                     Some(class) => class.push(o),
                     None => classes.push(vec![o]),
                 }
             }
             out.classes.extend(classes.into_iter().filter(|c| c.len() > 1));
         }
-        // Objects no fluent fact names (constants a grounding left unused) move nothing.
-        let mut named = vec![false; task.objects.len()];
-        for atom in &task.facts {
-            for o in &atom.args {
-                named[o.index()] = true;
-            }
-        }
-        out.classes.retain(|c| named[c[0].index()]);
         out.classes.sort();
         out.index_members(task);
         out
@@ -135,7 +136,17 @@ impl ObjectSymmetries {
         self.classes.is_empty()
     }
 
-    fn swap_is_automorphism(&self, task: &Task, init: &HashSet<FactId>, goal: &HashSet<NormCondition>, a: ObjectId, b: ObjectId) -> bool {
+    /// Whether swapping `a` and `b` maps the task onto itself (`actions`: each action's own
+    /// [`NormAction`]).
+    fn swap_is_automorphism(
+        &self,
+        task: &Task,
+        init: &HashSet<FactId>,
+        goal: &HashSet<NormCondition>,
+        actions: &[NormAction],
+        a: ObjectId,
+        b: ObjectId,
+    ) -> bool {
         let swap = |o: ObjectId| {
             if o == a {
                 b
@@ -151,8 +162,8 @@ impl ObjectSymmetries {
                 fact_image.push(FactId(i as u32));
                 continue;
             }
-            let args: SmallVec<[ObjectId; 4]> = atom.args.iter().map(|&o| swap(o)).collect();
-            match self.fact_index.get(&(atom.predicate.0, args)) {
+            let image = Atom { predicate: atom.predicate, args: atom.args.iter().map(|&o| swap(o)).collect() };
+            match self.fact_index.get(&image) {
                 Some(&f) => fact_image.push(f),
                 None => return false,
             }
@@ -180,7 +191,7 @@ impl ObjectSymmetries {
             let args: SmallVec<[ObjectId; 6]> = action.args.iter().map(|&o| swap(o)).collect();
             let Some(candidates) = self.action_index.get(&(action.schema.0, args)) else { return false };
             let mapped = NormAction::of(action, &map);
-            candidates.iter().map(|&c| task.action(c)).any(|image| image.cost == action.cost && NormAction::of(image, &|f| f) == mapped)
+            candidates.iter().any(|&c| task.action(c).cost == action.cost && actions[c.index()] == mapped)
         })
     }
 
@@ -198,8 +209,7 @@ impl ObjectSymmetries {
         self.member_facts = vec![Vec::new(); m];
         let mut keys: HashMap<(u32, Vec<u64>), u32> = HashMap::new();
         for (i, atom) in task.facts.iter().enumerate() {
-            let members: Vec<usize> = atom.args.iter().filter_map(|o| member_of[o.index()]).collect();
-            if members.is_empty() {
+            if !atom.args.iter().any(|o| member_of[o.index()].is_some()) {
                 continue;
             }
             self.moving.push(FactId(i as u32));
@@ -274,26 +284,24 @@ impl ObjectSymmetries {
     }
 
     fn fact_image(&self, f: FactId, perm: &Permutation) -> FactId {
-        let (predicate, args) = &self.atoms[f.index()];
-        if args.iter().all(|o| perm[o.index()] == *o) {
+        let atom = &self.atoms[f.index()];
+        if atom.args.iter().all(|o| perm[o.index()] == *o) {
             return f;
         }
-        let args: SmallVec<[ObjectId; 4]> = args.iter().map(|o| perm[o.index()]).collect();
+        let image = Atom { predicate: atom.predicate, args: atom.args.iter().map(|o| perm[o.index()]).collect() };
         // Every fact has an image: the classes were admitted only so.
-        self.fact_index[&(*predicate, args)]
+        self.fact_index[&image]
     }
 
     /// `action` under `perm`: the action of the image's name whose precondition and effects
     /// are the images of `action`'s.
     pub fn action_image(&self, task: &Task, action: ActionId, perm: &Permutation) -> ActionId {
         let a = task.action(action);
-        let map = |f: FactId| self.fact_image(f, perm);
-        let moves = a.args.iter().any(|o| perm[o.index()] != *o) || NormAction::of(a, &|f| f) != NormAction::of(a, &map);
-        if !moves {
+        let mapped = NormAction::of(a, &|f| self.fact_image(f, perm));
+        if a.args.iter().all(|o| perm[o.index()] == *o) && mapped == NormAction::of(a, &|f| f) {
             return action;
         }
         let args: SmallVec<[ObjectId; 6]> = a.args.iter().map(|o| perm[o.index()]).collect();
-        let mapped = NormAction::of(a, &map);
         // Every action has an image: the classes were admitted only so.
         *self.action_index[&(a.schema.0, args)]
             .iter()
@@ -321,8 +329,16 @@ impl ObjectSymmetries {
     }
 }
 
+/// `facts` mapped, sorted, without repeats.
+fn mapped_set(facts: &[FactId], map: &dyn Fn(FactId) -> FactId) -> Vec<FactId> {
+    let mut v: Vec<FactId> = facts.iter().map(|&f| map(f)).collect();
+    v.sort_unstable();
+    v.dedup();
+    v
+}
+
 /// A condition with its facts mapped and every part sorted, for comparison.
-#[derive(Debug, Clone, PartialEq, Eq, Hash)]
+#[derive(Debug, Clone, PartialEq, Eq, Hash, PartialOrd, Ord)]
 struct NormCondition {
     pos: Vec<FactId>,
     neg: Vec<FactId>,
@@ -331,12 +347,6 @@ struct NormCondition {
 
 impl NormCondition {
     fn of(c: &Condition, map: &dyn Fn(FactId) -> FactId) -> NormCondition {
-        let sorted = |fs: &[FactId]| {
-            let mut v: Vec<FactId> = fs.iter().map(|&f| map(f)).collect();
-            v.sort_unstable();
-            v.dedup();
-            v
-        };
         let mut clauses: Vec<Vec<(FactId, bool)>> = c
             .clauses
             .iter()
@@ -349,7 +359,7 @@ impl NormCondition {
             .collect();
         clauses.sort();
         clauses.dedup();
-        NormCondition { pos: sorted(&c.pos), neg: sorted(&c.neg), clauses }
+        NormCondition { pos: mapped_set(&c.pos, map), neg: mapped_set(&c.neg, map), clauses }
     }
 }
 
@@ -363,15 +373,12 @@ struct NormAction {
 
 impl NormAction {
     fn of(a: &grounding::Action, map: &dyn Fn(FactId) -> FactId) -> NormAction {
-        let sorted = |fs: &[FactId]| {
-            let mut v: Vec<FactId> = fs.iter().map(|&f| map(f)).collect();
-            v.sort_unstable();
-            v.dedup();
-            v
-        };
-        let mut conditional: Vec<(NormCondition, Vec<FactId>, Vec<FactId>)> =
-            a.conditional.iter().map(|c| (NormCondition::of(&c.condition, map), sorted(&c.add), sorted(&c.del))).collect();
-        conditional.sort_by(|x, y| (&x.1, &x.2, &x.0.pos, &x.0.neg, &x.0.clauses).cmp(&(&y.1, &y.2, &y.0.pos, &y.0.neg, &y.0.clauses)));
-        NormAction { pre: NormCondition::of(&a.pre, map), add: sorted(&a.add), del: sorted(&a.del), conditional }
+        let mut conditional: Vec<(NormCondition, Vec<FactId>, Vec<FactId>)> = a
+            .conditional
+            .iter()
+            .map(|c| (NormCondition::of(&c.condition, map), mapped_set(&c.add, map), mapped_set(&c.del, map)))
+            .collect();
+        conditional.sort();
+        NormAction { pre: NormCondition::of(&a.pre, map), add: mapped_set(&a.add, map), del: mapped_set(&a.del, map), conditional }
     }
 }
