@@ -98,6 +98,13 @@ pub struct EpisodeArgs {
     /// (`false`).
     #[arg(long, default_value_t = true, action = clap::ArgAction::Set)]
     pub reexplore: bool,
+    /// With A* in Phase II (`agent --planner astar`, `eval --agent planner`): search states up to
+    /// interchangeable objects, as `plan --symmetries` does. Plans as short as without it, often
+    /// after far fewer expansions where the goal names several alike objects (five plates for
+    /// the dishwasher); a plan may name other objects among alike ones, so it is part of the
+    /// run's configuration.
+    #[arg(long)]
+    pub symmetries: bool,
     /// Keep Phase I's model replies in this file (JSON lines, keyed by the model file's digest
     /// or the server and served model, and the whole request): a request asked again is
     /// answered from it. Runs of Phase II conditions that share an explorer then plan from the
@@ -189,10 +196,22 @@ pub struct PhaseTwoRunner {
     vocab: Option<Arc<token_constraint::Vocabulary>>,
     decode: DecodeArgs,
     time_limit: f64,
+    /// A* over states up to interchangeable objects (`--symmetries`).
+    symmetries: bool,
 }
 
 impl PhaseTwoRunner {
-    pub fn new(planner: &str, lm: &LmArgs, decode: &DecodeArgs, chat: &ChatPlannerArgs, time_limit: f64) -> anyhow::Result<PhaseTwoRunner> {
+    pub fn new(
+        planner: &str,
+        lm: &LmArgs,
+        decode: &DecodeArgs,
+        chat: &ChatPlannerArgs,
+        time_limit: f64,
+        symmetries: bool,
+    ) -> anyhow::Result<PhaseTwoRunner> {
+        if symmetries && planner != "astar" {
+            return Err(InputError(format!("--symmetries is a setting of --planner astar, not --planner {planner}")).into());
+        }
         if let Some(name) = &chat.chat_planner {
             if planner != "mcts" {
                 return Err(InputError(format!("--chat-planner plans in place of the decoder, not with --planner {planner}")).into());
@@ -204,7 +223,15 @@ impl PhaseTwoRunner {
             };
             config.prompt = decode.prompt_options();
             let chat = Some((chat_model(name, &lm.served_model)?, config));
-            return Ok(PhaseTwoRunner { planner: "chat".into(), chat, lm: None, vocab: None, decode: decode.clone(), time_limit });
+            return Ok(PhaseTwoRunner {
+                planner: "chat".into(),
+                chat,
+                lm: None,
+                vocab: None,
+                decode: decode.clone(),
+                time_limit,
+                symmetries,
+            });
         }
         let (model, vocab) = if planner == "mcts" {
             decode.config(time_limit)?;
@@ -214,7 +241,7 @@ impl PhaseTwoRunner {
         } else {
             (None, None)
         };
-        Ok(PhaseTwoRunner { planner: planner.to_string(), chat: None, lm: model, vocab, decode: decode.clone(), time_limit })
+        Ok(PhaseTwoRunner { planner: planner.to_string(), chat: None, lm: model, vocab, decode: decode.clone(), time_limit, symmetries })
     }
 
     pub fn plan(&mut self, grounded: &Grounded) -> Result<PhaseTwo, String> {
@@ -225,6 +252,7 @@ impl PhaseTwoRunner {
         if self.planner == "astar" {
             let mut config = heuristics::search::SearchConfig::new(heuristics::search::Algorithm::AStar);
             config.time_limit = Some(Duration::from_secs_f64(self.time_limit));
+            config.symmetries = self.symmetries;
             // Unit costs: a plan's cost is its length, and no longer plan can finish in the
             // steps the episode has left (as MCTS's action bound).
             if model.task().has_unit_costs() {
@@ -234,15 +262,20 @@ impl PhaseTwoRunner {
                 Ok(actions) => actions,
                 Err(status @ (SearchStatus::OverBound | SearchStatus::OutOfBudget)) => {
                     let why = format!("{status:?}: no plan within {} steps", grounded.steps_left);
-                    return Ok(PhaseTwo {
-                        no_plan: Some(why),
-                        detail: json!({"planner": "astar", "stop": format!("{status:?}")}),
-                        ..PhaseTwo::default()
-                    });
+                    let mut detail = json!({"planner": "astar", "stop": format!("{status:?}")});
+                    if self.symmetries {
+                        detail["symmetries"] = json!(true);
+                    }
+                    return Ok(PhaseTwo { no_plan: Some(why), detail, ..PhaseTwo::default() });
                 }
                 Err(status) => return Err(format!("{status:?}")),
             };
-            return Ok(PhaseTwo { actions, detail: json!({"planner": "astar"}), ..PhaseTwo::default() });
+            // Named only where it is on: other records stay as they were.
+            let mut detail = json!({"planner": "astar"});
+            if self.symmetries {
+                detail["symmetries"] = json!(true);
+            }
+            return Ok(PhaseTwo { actions, detail, ..PhaseTwo::default() });
         }
         let (Some(lm), Some(vocab)) = (self.lm.as_mut(), self.vocab.as_ref()) else { return Err("no language model".into()) };
         let initial = model.initial_state();
@@ -392,8 +425,14 @@ pub fn episode<E: Environment + Judge>(
 
 pub fn run(args: AgentArgs) -> anyhow::Result<ExitCode> {
     let mut policy = explorer(&args.episode.explorer, &args.episode.lm.served_model, args.episode.chat_cache.as_deref())?;
-    let mut phase2 =
-        PhaseTwoRunner::new(&args.planner, &args.episode.lm, &args.episode.decode, &args.episode.chat, args.episode.time_limit)?;
+    let mut phase2 = PhaseTwoRunner::new(
+        &args.planner,
+        &args.episode.lm,
+        &args.episode.decode,
+        &args.episode.chat,
+        args.episode.time_limit,
+        args.episode.symmetries,
+    )?;
     let (ep, name) = if let Some(game) = &args.which.game {
         let (mut env, mut adapter, goal) = alfworld(game)?;
         let config = EpisodeConfig {

@@ -383,6 +383,10 @@ fn config(args: &EvalArgs, suite: Suite) -> anyhow::Result<Value> {
             config.as_object_mut().expect("object").insert("frontier".into(), json!(args.episode.frontier));
             config.as_object_mut().expect("object").insert("narrowing".into(), json!(args.episode.narrowing));
         }
+        // Only where it is on: the hashes of other runs stay as they were.
+        if args.episode.symmetries {
+            config.as_object_mut().expect("object").insert("symmetries".into(), json!(true));
+        }
         // Only where the explorer is served: the hashes of other runs stay as they were.
         if let Some(served) = served_model(args) {
             config.as_object_mut().expect("object").insert("served_model".into(), json!(served));
@@ -419,6 +423,13 @@ pub fn run(args: EvalArgs) -> anyhow::Result<ExitCode> {
     if args.episode.chat.chat_planner.is_some() && args.agent != AgentName::Ours {
         return Err(InputError(format!(
             "--chat-planner: a Phase II condition of the agent `ours`; the {} agent does not plan by a chat model",
+            serde_json::to_value(args.agent)?.as_str().unwrap_or_default()
+        ))
+        .into());
+    }
+    if args.episode.symmetries && args.agent != AgentName::Planner {
+        return Err(InputError(format!(
+            "--symmetries is a setting of the planner agent's A*; the {} agent does not plan by A*",
             serde_json::to_value(args.agent)?.as_str().unwrap_or_default()
         ))
         .into());
@@ -511,7 +522,14 @@ fn run_once(args: &EvalArgs) -> anyhow::Result<(serde_json::Map<String, Value>, 
         agent => {
             let planner = if agent == AgentName::Ours { "mcts" } else { "astar" };
             let policy = explorer(&args.episode.explorer, &args.episode.lm.served_model, args.episode.chat_cache.as_deref())?;
-            let phase2 = PhaseTwoRunner::new(planner, &args.episode.lm, &args.episode.decode, &args.episode.chat, args.episode.time_limit)?;
+            let phase2 = PhaseTwoRunner::new(
+                planner,
+                &args.episode.lm,
+                &args.episode.decode,
+                &args.episode.chat,
+                args.episode.time_limit,
+                args.episode.symmetries,
+            )?;
             Runner::Embodied(Box::new(Embodied { args, policy, phase2 }))
         }
     };

@@ -501,6 +501,57 @@ fn time_limits_that_are_not_positive_seconds_are_bad_input() {
     }
 }
 
+/// Phase II's A* over states up to interchangeable objects. EAI 783_1 puts five alike plates in
+/// the dishwasher: plain A* with LM-cut expands 22,092 states of its hand-over (108 s in the dev
+/// profile) through the plates' orderings, orbit search 820, and both find a 16-step plan.
+#[test]
+fn agent_plans_by_a_star_up_to_interchangeable_objects() {
+    let output = xtask(&["agent", "--benchmark", "virtualhome-eai", "--task", "783_1", "--planner", "astar", "--symmetries", "--json"]);
+    assert_eq!(output.status.code(), Some(0), "{}", String::from_utf8_lossy(&output.stderr));
+    let value: serde_json::Value = serde_json::from_str(&stdout(&output)).expect("one JSON object");
+    let episode = &value["episode"];
+    assert_eq!(episode["success"], true, "{episode}");
+    assert_eq!(episode["plan"].as_array().map(Vec::len), Some(16), "the optimal length: {episode}");
+    assert_eq!(episode["phase2_detail"], serde_json::json!({"planner": "astar", "symmetries": true}));
+    // A setting of A* only: exit 2 with the reason, for `agent` and for `eval`.
+    let mcts = xtask(&["agent", "--benchmark", "virtualhome-eai", "--task", "783_1", "--planner", "mcts", "--symmetries"]);
+    assert_eq!(mcts.status.code(), Some(2), "{}", String::from_utf8_lossy(&mcts.stderr));
+    assert!(String::from_utf8_lossy(&mcts.stderr).contains("--symmetries is a setting of --planner astar"));
+    for agent in ["ours", "direct", "expert"] {
+        let other = xtask(&["eval", "--agent", agent, "--benchmark", "alfworld-seen", "--limit", "1", "--symmetries"]);
+        assert_eq!(other.status.code(), Some(2), "{agent}: {}", String::from_utf8_lossy(&other.stderr));
+        assert!(String::from_utf8_lossy(&other.stderr).contains("a setting of the planner agent's A*"), "{agent}");
+    }
+}
+
+/// `eval --agent planner --symmetries` is another configuration: its own record file, the
+/// setting in its configuration; without it, the configuration has no such key (the hashes of
+/// the runs before it stay as they were).
+#[test]
+fn eval_names_the_planner_agents_symmetries_in_its_configuration() {
+    let tmp = scratch_dir("xtask-cli-");
+    let out = tmp.path().display().to_string();
+    let mut configs = Vec::new();
+    for extra in [&[][..], &["--symmetries"][..]] {
+        let mut args = vec!["eval", "--agent", "planner", "--benchmark", "virtualhome-rearrange", "--limit", "1", "--out", &out, "--json"];
+        args.extend_from_slice(extra);
+        let output = xtask(&args);
+        assert_eq!(output.status.code(), Some(0), "{extra:?}: {}", String::from_utf8_lossy(&output.stderr));
+        let files: Vec<PathBuf> = std::fs::read_dir(tmp.path())
+            .expect("records folder")
+            .map(|e| e.expect("entry").path())
+            .filter(|p| p.to_string_lossy().ends_with(".config.json"))
+            .collect();
+        assert_eq!(files.len(), configs.len() + 1, "one more configuration: {files:?}");
+        let new = files.iter().find(|f| !configs.iter().any(|(g, _): &(PathBuf, serde_json::Value)| g == *f)).expect("a new file");
+        let config: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(new).expect("read")).expect("JSON");
+        configs.push((new.clone(), config));
+    }
+    let (plain, orbit) = (&configs[0].1, &configs[1].1);
+    assert!(plain.get("symmetries").is_none(), "{plain}");
+    assert_eq!(orbit["symmetries"], true, "{orbit}");
+}
+
 /// The chat planner (unconstrained thinking / greedy through a chat model): `--thinking` needs
 /// it, and an unknown model is bad input before any episode runs.
 #[test]
