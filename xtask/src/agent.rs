@@ -201,14 +201,10 @@ pub struct PhaseTwoRunner {
 }
 
 impl PhaseTwoRunner {
-    pub fn new(
-        planner: &str,
-        lm: &LmArgs,
-        decode: &DecodeArgs,
-        chat: &ChatPlannerArgs,
-        time_limit: f64,
-        symmetries: bool,
-    ) -> anyhow::Result<PhaseTwoRunner> {
+    /// Phase II by `planner` (`mcts` or `astar`) with the episode's Phase II settings.
+    pub fn new(planner: &str, episode: &EpisodeArgs) -> anyhow::Result<PhaseTwoRunner> {
+        let EpisodeArgs { lm, decode, chat, time_limit, symmetries, .. } = episode;
+        let (time_limit, symmetries) = (*time_limit, *symmetries);
         if symmetries && planner != "astar" {
             return Err(InputError(format!("--symmetries is a setting of --planner astar, not --planner {planner}")).into());
         }
@@ -425,14 +421,7 @@ pub fn episode<E: Environment + Judge>(
 
 pub fn run(args: AgentArgs) -> anyhow::Result<ExitCode> {
     let mut policy = explorer(&args.episode.explorer, &args.episode.lm.served_model, args.episode.chat_cache.as_deref())?;
-    let mut phase2 = PhaseTwoRunner::new(
-        &args.planner,
-        &args.episode.lm,
-        &args.episode.decode,
-        &args.episode.chat,
-        args.episode.time_limit,
-        args.episode.symmetries,
-    )?;
+    let mut phase2 = PhaseTwoRunner::new(&args.planner, &args.episode)?;
     let (ep, name) = if let Some(game) = &args.which.game {
         let (mut env, mut adapter, goal) = alfworld(game)?;
         let config = EpisodeConfig {

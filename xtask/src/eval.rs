@@ -522,14 +522,7 @@ fn run_once(args: &EvalArgs) -> anyhow::Result<(serde_json::Map<String, Value>, 
         agent => {
             let planner = if agent == AgentName::Ours { "mcts" } else { "astar" };
             let policy = explorer(&args.episode.explorer, &args.episode.lm.served_model, args.episode.chat_cache.as_deref())?;
-            let phase2 = PhaseTwoRunner::new(
-                planner,
-                &args.episode.lm,
-                &args.episode.decode,
-                &args.episode.chat,
-                args.episode.time_limit,
-                args.episode.symmetries,
-            )?;
+            let phase2 = PhaseTwoRunner::new(planner, &args.episode)?;
             Runner::Embodied(Box::new(Embodied { args, policy, phase2 }))
         }
     };
