@@ -254,23 +254,20 @@ impl PhaseTwoRunner {
             if model.task().has_unit_costs() {
                 config.max_cost = Some(grounded.steps_left as u64);
             }
-            let actions = match heuristics::search::optimal_plan_with(model, &config) {
-                Ok(actions) => actions,
-                Err(status @ (SearchStatus::OverBound | SearchStatus::OutOfBudget)) => {
-                    let why = format!("{status:?}: no plan within {} steps", grounded.steps_left);
-                    let mut detail = json!({"planner": "astar", "stop": format!("{status:?}")});
-                    if self.symmetries {
-                        detail["symmetries"] = json!(true);
-                    }
-                    return Ok(PhaseTwo { no_plan: Some(why), detail, ..PhaseTwo::default() });
-                }
-                Err(status) => return Err(format!("{status:?}")),
-            };
-            // Named only where it is on: other records stay as they were.
+            // `symmetries` named only where it is on: other records stay as they were.
             let mut detail = json!({"planner": "astar"});
             if self.symmetries {
                 detail["symmetries"] = json!(true);
             }
+            let actions = match heuristics::search::optimal_plan_with(model, &config) {
+                Ok(actions) => actions,
+                Err(status @ (SearchStatus::OverBound | SearchStatus::OutOfBudget)) => {
+                    let why = format!("{status:?}: no plan within {} steps", grounded.steps_left);
+                    detail["stop"] = json!(format!("{status:?}"));
+                    return Ok(PhaseTwo { no_plan: Some(why), detail, ..PhaseTwo::default() });
+                }
+                Err(status) => return Err(format!("{status:?}")),
+            };
             return Ok(PhaseTwo { actions, detail, ..PhaseTwo::default() });
         }
         let (Some(lm), Some(vocab)) = (self.lm.as_mut(), self.vocab.as_ref()) else { return Err("no language model".into()) };

@@ -531,23 +531,19 @@ fn agent_plans_by_a_star_up_to_interchangeable_objects() {
 fn eval_names_the_planner_agents_symmetries_in_its_configuration() {
     let tmp = scratch_dir("xtask-cli-");
     let out = tmp.path().display().to_string();
-    let mut configs = Vec::new();
+    let mut runs = Vec::new();
     for extra in [&[][..], &["--symmetries"][..]] {
         let mut args = vec!["eval", "--agent", "planner", "--benchmark", "virtualhome-rearrange", "--limit", "1", "--out", &out, "--json"];
         args.extend_from_slice(extra);
         let output = xtask(&args);
         assert_eq!(output.status.code(), Some(0), "{extra:?}: {}", String::from_utf8_lossy(&output.stderr));
-        let files: Vec<PathBuf> = std::fs::read_dir(tmp.path())
-            .expect("records folder")
-            .map(|e| e.expect("entry").path())
-            .filter(|p| p.to_string_lossy().ends_with(".config.json"))
-            .collect();
-        assert_eq!(files.len(), configs.len() + 1, "one more configuration: {files:?}");
-        let new = files.iter().find(|f| !configs.iter().any(|(g, _): &(PathBuf, serde_json::Value)| g == *f)).expect("a new file");
-        let config: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(new).expect("read")).expect("JSON");
-        configs.push((new.clone(), config));
+        let summary: serde_json::Value = serde_json::from_str(stdout(&output).trim()).expect("one JSON object");
+        let records = PathBuf::from(summary["virtualhome-rearrange"]["records"].as_str().expect("the records' path"));
+        let config = std::fs::read_to_string(records.with_extension("config.json")).expect("the configuration beside them");
+        runs.push((records, serde_json::from_str::<serde_json::Value>(&config).expect("JSON")));
     }
-    let (plain, orbit) = (&configs[0].1, &configs[1].1);
+    assert_ne!(runs[0].0, runs[1].0, "one record file per configuration");
+    let (plain, orbit) = (&runs[0].1, &runs[1].1);
     assert!(plain.get("symmetries").is_none(), "{plain}");
     assert_eq!(orbit["symmetries"], true, "{orbit}");
 }
