@@ -159,3 +159,60 @@ fn gripper_needs_a_few_dozen_expansions_where_fast_downward_needs_thousands_or_t
     let model = TransitionModel::new(task_of(&files.domain, &files.problem));
     assert!(astar(&model, false).expanded > 1_000);
 }
+
+/// A hand-over of `fixtures/virtualhome-eai/handovers/`, grounded over the sound domain.
+fn handover(id: &str) -> grounding::Task {
+    let root = benchmark_data::fixtures_dir().join("virtualhome-eai");
+    let read = |path: std::path::PathBuf| std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    task_of(&read(root.join("virtualhome-sound.pddl")), &read(root.join(format!("handovers/{id}.pddl"))))
+}
+
+/// `detect` looks only at the facts and actions a swap moves, and compares an action whose name
+/// the swap keeps with its image on the moved parts only; the definition compares every action
+/// whole. They must agree on every task: the IPC fixtures (those under 20,000 ground actions)
+/// and two EAI hand-overs, whose walk actions carry a conditional effect per object and pair of
+/// objects.
+#[test]
+fn detect_finds_the_classes_the_definition_finds() {
+    let mut compared = 0;
+    let mut with_classes = 0;
+    let ipc_tasks = load(Benchmark::Ipc).expect("fixtures");
+    let tasks = ipc_tasks
+        .iter()
+        .map(|files| (files.id.clone(), task_of(&files.domain, &files.problem)))
+        .filter(|(_, task)| task.actions.len() < 20_000)
+        .chain(["783_1", "826_1"].map(|id| (id.to_string(), handover(id))));
+    for (id, task) in tasks {
+        let fast = class_names(&task, &ObjectSymmetries::detect(&task));
+        assert_eq!(fast, class_names(&task, &ObjectSymmetries::detect_by_definition(&task)), "{id}");
+        compared += 1;
+        with_classes += usize::from(!fast.is_empty());
+    }
+    assert!(compared >= 50 && with_classes >= 20, "{compared} tasks compared, {with_classes} with classes");
+    // The five plates 783_1 asks to put in the dishwasher, found on both ways.
+    let task = handover("783_1");
+    let classes = class_names(&task, &ObjectSymmetries::detect(&task));
+    assert!(classes.contains(&["plate_1", "plate_2", "plate_3", "plate_4", "plate_5"].map(String::from).to_vec()), "{classes:?}");
+}
+
+/// A precondition's clause (a disjunction under a conjunction) is part of the action: a static
+/// fact that leaves the clause `(or (p b) (q b))` on `finish` and none for `a` makes `a` and `b`
+/// differ, though no action takes them as arguments differently and nothing else tells them apart.
+#[test]
+fn a_clause_that_names_one_object_only_tells_it_apart() {
+    let domain = "(define (domain d) (:requirements :typing :disjunctive-preconditions :universal-preconditions)
+        (:types thing) (:predicates (p ?o - thing) (q ?o - thing) (s ?o - thing) (done))
+        (:action set-p :parameters (?o - thing) :effect (p ?o))
+        (:action set-q :parameters (?o - thing) :effect (q ?o))
+        (:action finish :parameters () :precondition (forall (?o - thing) (or (p ?o) (q ?o) (s ?o))) :effect (done)))";
+    let problem = |init: &str| format!("(define (problem x) (:domain d) (:objects a b c - thing) (:init {init}) (:goal (done)))");
+    let task = task_of(domain, &problem("(s a)"));
+    let finish = task.actions.iter().find(|a| task.schemas[a.schema.index()].name == "finish").expect("finish");
+    assert_eq!(finish.pre.clauses.len(), 2, "one clause for b, one for c: {:?}", finish.pre);
+    for symmetries in [ObjectSymmetries::detect(&task), ObjectSymmetries::detect_by_definition(&task)] {
+        assert_eq!(class_names(&task, &symmetries), [vec!["b", "c"]]);
+    }
+    // Without the static fact all three are alike.
+    let task = task_of(domain, &problem(""));
+    assert_eq!(class_names(&task, &ObjectSymmetries::detect(&task)), [vec!["a", "b", "c"]]);
+}

@@ -63,50 +63,43 @@ pub type Permutation = Vec<ObjectId>;
 
 impl ObjectSymmetries {
     /// The classes of interchangeable objects of `task` (none when there are none).
+    ///
+    /// Each candidate swap is checked as [`ObjectSymmetries::detect_by_definition`] does, with
+    /// the same result, but only against the actions that mention one of the two objects (an
+    /// index built once); an action whose name the swap keeps is compared with its image on the
+    /// parts that mention them only, the others through canonical encodings made in reused
+    /// buffers, and an action found as another's image is not checked again (a swap is its own
+    /// inverse). On EAI's hand-over of task 580_1 (209,055 actions; a walk action carries a
+    /// conditional effect per object and pair of objects) a swap of two hangers moves about
+    /// 20,000 actions; `cargo bench -p heuristics -- symmetry-detect` compares the two.
     pub fn detect(task: &Task) -> ObjectSymmetries {
-        let mut out = ObjectSymmetries { objects: task.objects.len(), ..ObjectSymmetries::default() };
-        out.atoms = task.facts.clone();
-        out.fact_index = task.facts.iter().enumerate().map(|(i, a)| (a.clone(), FactId(i as u32))).collect();
-        for (i, a) in task.actions.iter().enumerate() {
-            out.action_index.entry((a.schema.0, a.args.clone())).or_default().push(ActionId(i as u32));
-        }
-        // Objects no fluent fact names (constants a grounding left unused) move nothing.
-        let mut named = vec![false; task.objects.len()];
-        for atom in &task.facts {
-            for o in &atom.args {
-                named[o.index()] = true;
-            }
-        }
-        // Candidates share types and a signature: where they occur in init, goal and actions.
-        let mut signature: Vec<Signature> = vec![Vec::new(); task.objects.len()];
-        for &f in &task.init {
-            let atom = task.fact(f);
-            for (pos, o) in atom.args.iter().enumerate() {
-                signature[o.index()].push((0, atom.predicate.0, pos as u32));
-            }
-        }
-        for disjunct in &task.goal.disjuncts {
-            for literal in disjunct.literals() {
-                let atom = task.fact(literal.fact());
-                for (pos, o) in atom.args.iter().enumerate() {
-                    signature[o.index()].push((1 + u8::from(literal.is_negated()), atom.predicate.0, pos as u32));
+        let mut out = ObjectSymmetries::indexed(task);
+        let groups = candidate_groups(task);
+        if !groups.is_empty() {
+            let mut checker = Checker::new(task, &out.fact_index, &out.action_index, &groups);
+            for group in &groups {
+                let mut classes: Vec<Vec<ObjectId>> = Vec::new();
+                for &o in group {
+                    match classes.iter_mut().find(|c| checker.swap_is_automorphism(c[0], o)) {
+                        Some(class) => class.push(o),
+                        None => classes.push(vec![o]),
+                    }
                 }
+                out.classes.extend(classes.into_iter().filter(|c| c.len() > 1));
             }
         }
-        for action in &task.actions {
-            for (pos, o) in action.args.iter().enumerate() {
-                signature[o.index()].push((3, action.schema.0, pos as u32));
-            }
-        }
-        let mut groups: HashMap<(Vec<String>, Signature), Vec<ObjectId>> = HashMap::new();
-        for (i, mut sig) in signature.into_iter().enumerate().filter(|&(i, _)| named[i]) {
-            sig.sort_unstable();
-            let mut types = task.objects[i].types.clone();
-            types.sort();
-            groups.entry((types, sig)).or_default().push(ObjectId(i as u32));
-        }
-        let mut groups: Vec<Vec<ObjectId>> = groups.into_values().filter(|g| g.len() > 1).collect();
-        groups.sort();
+        out.classes.sort();
+        out.index_members(task);
+        out
+    }
+
+    /// The classes of [`ObjectSymmetries::detect`], found by the definition: every candidate
+    /// swap checked against every action, each compared whole with its image. Slow on large
+    /// tasks; kept as the reference `detect` is tested and measured against.
+    #[doc(hidden)]
+    pub fn detect_by_definition(task: &Task) -> ObjectSymmetries {
+        let mut out = ObjectSymmetries::indexed(task);
+        let groups = candidate_groups(task);
         let init: HashSet<FactId> = task.init.iter().copied().collect();
         let goal: HashSet<NormCondition> = task.goal.disjuncts.iter().map(|d| NormCondition::of(d, &|f| f)).collect();
         let actions: Vec<NormAction> =
@@ -123,6 +116,17 @@ impl ObjectSymmetries {
         }
         out.classes.sort();
         out.index_members(task);
+        out
+    }
+
+    /// No classes yet; the indexes every detection needs.
+    fn indexed(task: &Task) -> ObjectSymmetries {
+        let mut out = ObjectSymmetries { objects: task.objects.len(), ..ObjectSymmetries::default() };
+        out.atoms = task.facts.clone();
+        out.fact_index = task.facts.iter().enumerate().map(|(i, a)| (a.clone(), FactId(i as u32))).collect();
+        for (i, a) in task.actions.iter().enumerate() {
+            out.action_index.entry((a.schema.0, a.args.clone())).or_default().push(ActionId(i as u32));
+        }
         out
     }
 
@@ -178,13 +182,13 @@ impl ObjectSymmetries {
         task.actions.iter().all(|action| {
             let moves_fact = |fs: &[FactId]| fs.iter().any(|&f| map(f) != f);
             let moves = action.args.iter().any(|&o| o == a || o == b)
-                || action.pre.literals().any(|l| map(l.fact()) != l.fact())
+                || condition_facts(&action.pre).any(|f| map(f) != f)
                 || moves_fact(&action.add)
                 || moves_fact(&action.del)
                 || action
                     .conditional
                     .iter()
-                    .any(|c| c.condition.literals().any(|l| map(l.fact()) != l.fact()) || moves_fact(&c.add) || moves_fact(&c.del));
+                    .any(|c| condition_facts(&c.condition).any(|f| map(f) != f) || moves_fact(&c.add) || moves_fact(&c.del));
             if !moves {
                 return true;
             }
@@ -327,6 +331,381 @@ impl ObjectSymmetries {
         }
         plan
     }
+}
+
+/// Objects that may be interchangeable, in groups: those of the same types whose occurrences
+/// in the initial state, the goal and the actions' arguments look alike (by predicate or
+/// schema and position), each group sorted, at least two objects each, the groups sorted.
+fn candidate_groups(task: &Task) -> Vec<Vec<ObjectId>> {
+    // Objects no fluent fact names (constants a grounding left unused) move nothing.
+    let mut named = vec![false; task.objects.len()];
+    for atom in &task.facts {
+        for o in &atom.args {
+            named[o.index()] = true;
+        }
+    }
+    let mut signature: Vec<Signature> = vec![Vec::new(); task.objects.len()];
+    for &f in &task.init {
+        let atom = task.fact(f);
+        for (pos, o) in atom.args.iter().enumerate() {
+            signature[o.index()].push((0, atom.predicate.0, pos as u32));
+        }
+    }
+    for disjunct in &task.goal.disjuncts {
+        for literal in disjunct.literals() {
+            let atom = task.fact(literal.fact());
+            for (pos, o) in atom.args.iter().enumerate() {
+                signature[o.index()].push((1 + u8::from(literal.is_negated()), atom.predicate.0, pos as u32));
+            }
+        }
+    }
+    for action in &task.actions {
+        for (pos, o) in action.args.iter().enumerate() {
+            signature[o.index()].push((3, action.schema.0, pos as u32));
+        }
+    }
+    let mut groups: HashMap<(Vec<String>, Signature), Vec<ObjectId>> = HashMap::new();
+    for (i, mut sig) in signature.into_iter().enumerate().filter(|&(i, _)| named[i]) {
+        sig.sort_unstable();
+        let mut types = task.objects[i].types.clone();
+        types.sort();
+        groups.entry((types, sig)).or_default().push(ObjectId(i as u32));
+    }
+    let mut groups: Vec<Vec<ObjectId>> = groups.into_values().filter(|g| g.len() > 1).collect();
+    groups.sort();
+    groups
+}
+
+/// Every fact a condition names: its literals' and its clauses'.
+fn condition_facts(c: &Condition) -> impl Iterator<Item = FactId> + '_ {
+    c.pos.iter().chain(&c.neg).copied().chain(c.clauses.iter().flatten().map(|l| l.fact()))
+}
+
+/// Every fact an action names, in its precondition, effects and conditional effects.
+fn action_facts(a: &grounding::Action) -> impl Iterator<Item = FactId> + '_ {
+    condition_facts(&a.pre)
+        .chain(a.add.iter().chain(&a.del).copied())
+        .chain(a.conditional.iter().flat_map(|c| condition_facts(&c.condition).chain(c.add.iter().chain(&c.del).copied())))
+}
+
+/// Checks swaps of two objects of the candidate groups for being automorphisms of one task,
+/// looking only at what the swap moves: the facts that name the two objects (each object's
+/// list, built once) and the actions that mention them anywhere (likewise).
+struct Checker<'t> {
+    task: &'t Task,
+    fact_index: &'t HashMap<Atom, FactId>,
+    action_index: &'t HashMap<ActionName, SmallVec<[ActionId; 2]>>,
+    in_init: Vec<bool>,
+    goal: HashSet<NormCondition>,
+    /// For each object of a candidate group, the facts that name it (empty for the others).
+    facts_of: Vec<Vec<FactId>>,
+    /// For each object of a candidate group, the actions that name it anywhere, ascending.
+    actions_of: Vec<Vec<ActionId>>,
+    /// Canonical encodings of the actions an image was compared with, made when first needed.
+    encoded: Vec<Option<Box<[u32]>>>,
+    /// Scratch, the identity between checks: each fact's image under the swap checked.
+    fact_image: Vec<FactId>,
+    moved: Vec<FactId>,
+    /// Scratch: the last check that listed an action.
+    listed: Vec<u32>,
+    checks: u32,
+    encoder: Encoder,
+    /// Scratch: an image's encoding, and the moved parts of an action and of its image.
+    image: Vec<u32>,
+    before: Encoder,
+    after: Encoder,
+}
+
+impl<'t> Checker<'t> {
+    fn new(
+        task: &'t Task,
+        fact_index: &'t HashMap<Atom, FactId>,
+        action_index: &'t HashMap<ActionName, SmallVec<[ActionId; 2]>>,
+        groups: &[Vec<ObjectId>],
+    ) -> Checker<'t> {
+        // Literal numbers (fact << 1 | negated) stay below the encoder's separators.
+        debug_assert!(task.facts.len() < (1 << 31) - 2);
+        let mut candidate = vec![false; task.objects.len()];
+        for &o in groups.iter().flatten() {
+            candidate[o.index()] = true;
+        }
+        let mut facts_of: Vec<Vec<FactId>> = vec![Vec::new(); task.objects.len()];
+        // Per fact, the candidates it names (at most its arity), for the action index below.
+        let mut fact_candidates: Vec<SmallVec<[ObjectId; 2]>> = vec![SmallVec::new(); task.facts.len()];
+        for (i, atom) in task.facts.iter().enumerate() {
+            for &o in &atom.args {
+                if candidate[o.index()] && !fact_candidates[i].contains(&o) {
+                    fact_candidates[i].push(o);
+                    facts_of[o.index()].push(FactId(i as u32));
+                }
+            }
+        }
+        let mut actions_of: Vec<Vec<ActionId>> = vec![Vec::new(); task.objects.len()];
+        let mut last: Vec<u32> = vec![u32::MAX; task.objects.len()];
+        for (i, action) in task.actions.iter().enumerate() {
+            let mut note = |o: ObjectId| {
+                if last[o.index()] != i as u32 {
+                    last[o.index()] = i as u32;
+                    actions_of[o.index()].push(ActionId(i as u32));
+                }
+            };
+            for &o in action.args.iter().filter(|o| candidate[o.index()]) {
+                note(o);
+            }
+            for f in action_facts(action) {
+                for &o in &fact_candidates[f.index()] {
+                    note(o);
+                }
+            }
+        }
+        let mut in_init = vec![false; task.facts.len()];
+        for &f in &task.init {
+            in_init[f.index()] = true;
+        }
+        Checker {
+            task,
+            fact_index,
+            action_index,
+            in_init,
+            goal: task.goal.disjuncts.iter().map(|d| NormCondition::of(d, &|f| f)).collect(),
+            facts_of,
+            actions_of,
+            encoded: vec![None; task.actions.len()],
+            fact_image: (0..task.facts.len() as u32).map(FactId).collect(),
+            moved: Vec::new(),
+            listed: vec![0; task.actions.len()],
+            checks: 0,
+            encoder: Encoder::default(),
+            image: Vec::new(),
+            before: Encoder::default(),
+            after: Encoder::default(),
+        }
+    }
+
+    /// Whether swapping `a` and `b` maps the task onto itself.
+    fn swap_is_automorphism(&mut self, a: ObjectId, b: ObjectId) -> bool {
+        let holds = self.map_facts(a, b) && self.check(a, b);
+        for &f in &self.moved {
+            self.fact_image[f.index()] = f;
+        }
+        self.moved.clear();
+        holds
+    }
+
+    /// Fills `fact_image` for the facts that name `a` or `b`; false if one has no image.
+    fn map_facts(&mut self, a: ObjectId, b: ObjectId) -> bool {
+        for &f in self.facts_of[a.index()].iter().chain(&self.facts_of[b.index()]) {
+            if self.fact_image[f.index()] != f {
+                continue; // it names both
+            }
+            let atom = &self.task.facts[f.index()];
+            let image = Atom { predicate: atom.predicate, args: atom.args.iter().map(|&o| swap(o, a, b)).collect() };
+            // An atom that names a or b differs from its image: the swap moves every such fact.
+            let Some(&g) = self.fact_index.get(&image) else { return false };
+            self.fact_image[f.index()] = g;
+            self.moved.push(f);
+        }
+        true
+    }
+
+    fn check(&mut self, a: ObjectId, b: ObjectId) -> bool {
+        let Checker { task, action_index, fact_image, in_init, goal, moved, .. } = self;
+        let (task, map) = (*task, |f: FactId| fact_image[f.index()]);
+        // The moved facts map onto one another, so init maps onto itself when no initial fact
+        // maps outside it.
+        if moved.iter().any(|&f| in_init[f.index()] && !in_init[map(f).index()]) {
+            return false;
+        }
+        if task.goal.disjuncts.iter().any(|d| !goal.contains(&NormCondition::of(d, &map))) {
+            return false;
+        }
+        self.checks += 1;
+        let stamp = self.checks;
+        // `b`'s actions first: `a` stays the same over the checks of its class, so the images
+        // found among its actions are encoded once and reused.
+        for o in [b, a] {
+            for &id in &self.actions_of[o.index()] {
+                if self.listed[id.index()] == stamp {
+                    continue;
+                }
+                self.listed[id.index()] = stamp;
+                let action = task.action(id);
+                let args_move = action.args.iter().any(|&x| x == a || x == b);
+                if !args_move && maps_onto_itself(action, &map, &mut self.before, &mut self.after) {
+                    continue;
+                }
+                // The image is an action of the swapped name (split actions share one).
+                let args: SmallVec<[ObjectId; 6]> = action.args.iter().map(|&x| swap(x, a, b)).collect();
+                let Some(candidates) = action_index.get(&(action.schema.0, args)) else { return false };
+                self.encoder.action(action, &map, &mut self.image);
+                let (encoder, encoded, image) = (&mut self.encoder, &mut self.encoded, &self.image);
+                let found = candidates.iter().copied().find(|&c| {
+                    let candidate = task.action(c);
+                    candidate.cost == action.cost
+                        && **encoded[c.index()].get_or_insert_with(|| {
+                            let mut out = Vec::new();
+                            encoder.action(candidate, &|f| f, &mut out);
+                            out.into_boxed_slice()
+                        }) == **image
+                });
+                let Some(found) = found else { return false };
+                // A swap is its own inverse: the image found maps back onto this action, so
+                // it needs no check of its own.
+                self.listed[found.index()] = stamp;
+            }
+        }
+        true
+    }
+}
+
+/// `o` under the swap of `a` and `b`.
+fn swap(o: ObjectId, a: ObjectId, b: ObjectId) -> ObjectId {
+    if o == a {
+        b
+    } else if o == b {
+        a
+    } else {
+        o
+    }
+}
+
+/// Whether `map` takes `action` onto itself (as [`NormAction`]s), comparing only the parts
+/// that name a fact `map` moves: the precondition if it does, each such add and delete, and
+/// the conditional effects that do (a multiset, as `NormAction` keeps them).
+fn maps_onto_itself(action: &grounding::Action, map: &dyn Fn(FactId) -> FactId, before: &mut Encoder, after: &mut Encoder) -> bool {
+    let moves = |f: FactId| map(f) != f;
+    // Sorted sets: each moved fact's image must be in the set (the map is a bijection).
+    let closed = |set: &[FactId]| set.iter().all(|&f| !moves(f) || set.binary_search(&map(f)).is_ok());
+    if !closed(&action.add) || !closed(&action.del) {
+        return false;
+    }
+    if condition_facts(&action.pre).any(moves) {
+        before.begin();
+        after.begin();
+        before.condition(&action.pre, &|f| f);
+        after.condition(&action.pre, map);
+        if before.items != after.items {
+            return false;
+        }
+    }
+    before.begin();
+    after.begin();
+    for c in &action.conditional {
+        if condition_facts(&c.condition).chain(c.add.iter().chain(&c.del).copied()).any(moves) {
+            before.effect(c, &|f| f);
+            after.effect(c, map);
+        }
+    }
+    before.sorted_groups() == after.sorted_groups()
+}
+
+/// Canonical encodings of actions under a map of facts, into reused buffers: the same
+/// sequence of numbers exactly when the mapped [`NormAction`]s are equal. Each set is sorted
+/// and without repeats, clauses sorted and without repeats, conditional effects sorted (as a
+/// multiset); every part ends with a separator no fact or literal number takes.
+#[derive(Debug, Default)]
+struct Encoder {
+    /// The encoding being built (or the current group's, see [`Encoder::effect`]).
+    items: Vec<u32>,
+    /// Whole groups (conditional effects) and their ranges in `groups`, to be sorted.
+    groups: Vec<u32>,
+    ranges: Vec<(u32, u32)>,
+    /// Clauses of the condition being encoded, and their ranges.
+    clauses: Vec<u32>,
+    clause_ranges: Vec<(u32, u32)>,
+    sorted: Vec<u32>,
+}
+
+const END_SET: u32 = u32::MAX;
+const END_CLAUSE: u32 = u32::MAX - 1;
+const END_EFFECT: u32 = u32::MAX - 2;
+
+impl Encoder {
+    fn begin(&mut self) {
+        self.items.clear();
+        self.groups.clear();
+        self.ranges.clear();
+    }
+
+    /// `action` under `map`, into `out`.
+    fn action(&mut self, action: &grounding::Action, map: &dyn Fn(FactId) -> FactId, out: &mut Vec<u32>) {
+        self.begin();
+        self.condition(&action.pre, map);
+        self.set(&action.add, map);
+        self.set(&action.del, map);
+        for c in &action.conditional {
+            self.effect(c, map);
+        }
+        out.clear();
+        out.extend_from_slice(&self.items);
+        out.extend_from_slice(self.sorted_groups());
+    }
+
+    /// A conditional effect as one group, kept apart until [`Encoder::sorted_groups`].
+    fn effect(&mut self, c: &grounding::ConditionalEffect, map: &dyn Fn(FactId) -> FactId) {
+        let mark = self.items.len();
+        self.condition(&c.condition, map);
+        self.set(&c.add, map);
+        self.set(&c.del, map);
+        let start = self.groups.len() as u32;
+        self.groups.extend_from_slice(&self.items[mark..]);
+        self.groups.push(END_EFFECT);
+        self.ranges.push((start, self.groups.len() as u32));
+        self.items.truncate(mark);
+    }
+
+    /// The groups, sorted (repeats kept), one after another.
+    fn sorted_groups(&mut self) -> &[u32] {
+        let groups = &self.groups;
+        self.ranges.sort_unstable_by(|x, y| groups[x.0 as usize..x.1 as usize].cmp(&groups[y.0 as usize..y.1 as usize]));
+        self.sorted.clear();
+        for &(s, e) in &self.ranges {
+            self.sorted.extend_from_slice(&groups[s as usize..e as usize]);
+        }
+        &self.sorted
+    }
+
+    fn set(&mut self, facts: &[FactId], map: &dyn Fn(FactId) -> FactId) {
+        let start = self.items.len();
+        self.items.extend(facts.iter().map(|&f| map(f).0));
+        sort_dedup_tail(&mut self.items, start);
+        self.items.push(END_SET);
+    }
+
+    fn condition(&mut self, c: &Condition, map: &dyn Fn(FactId) -> FactId) {
+        self.set(&c.pos, map);
+        self.set(&c.neg, map);
+        self.clauses.clear();
+        self.clause_ranges.clear();
+        for clause in &c.clauses {
+            let start = self.clauses.len();
+            self.clauses.extend(clause.iter().map(|l| map(l.fact()).0 << 1 | u32::from(l.is_negated())));
+            sort_dedup_tail(&mut self.clauses, start);
+            self.clause_ranges.push((start as u32, self.clauses.len() as u32));
+        }
+        let clauses = &self.clauses;
+        let slice = |r: &(u32, u32)| &clauses[r.0 as usize..r.1 as usize];
+        self.clause_ranges.sort_unstable_by(|x, y| slice(x).cmp(slice(y)));
+        self.clause_ranges.dedup_by(|x, y| slice(x) == slice(y));
+        for r in &self.clause_ranges {
+            self.items.extend_from_slice(slice(r));
+            self.items.push(END_CLAUSE);
+        }
+        self.items.push(END_SET);
+    }
+}
+
+/// Sorts `v[start..]` and drops its repeats.
+fn sort_dedup_tail(v: &mut Vec<u32>, start: usize) {
+    v[start..].sort_unstable();
+    let mut kept = start;
+    for i in start..v.len() {
+        if kept == start || v[i] != v[kept - 1] {
+            v[kept] = v[i];
+            kept += 1;
+        }
+    }
+    v.truncate(kept);
 }
 
 /// `facts` mapped, sorted, without repeats.
