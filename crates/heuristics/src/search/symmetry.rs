@@ -77,18 +77,8 @@ impl ObjectSymmetries {
         let groups = candidate_groups(task);
         if !groups.is_empty() {
             let mut checker = Checker::new(task, &out.fact_index, &out.action_index, &groups);
-            for group in &groups {
-                let mut classes: Vec<Vec<ObjectId>> = Vec::new();
-                for &o in group {
-                    match classes.iter_mut().find(|c| checker.swap_is_automorphism(c[0], o)) {
-                        Some(class) => class.push(o),
-                        None => classes.push(vec![o]),
-                    }
-                }
-                out.classes.extend(classes.into_iter().filter(|c| c.len() > 1));
-            }
+            out.classes = classes_by_swaps(&groups, |a, b| checker.swap_is_automorphism(a, b));
         }
-        out.classes.sort();
         out.index_members(task);
         out
     }
@@ -104,17 +94,7 @@ impl ObjectSymmetries {
         let goal: HashSet<NormCondition> = task.goal.disjuncts.iter().map(|d| NormCondition::of(d, &|f| f)).collect();
         let actions: Vec<NormAction> =
             if groups.is_empty() { Vec::new() } else { task.actions.iter().map(|a| NormAction::of(a, &|f| f)).collect() };
-        for group in groups {
-            let mut classes: Vec<Vec<ObjectId>> = Vec::new();
-            for &o in &group {
-                match classes.iter_mut().find(|c| out.swap_is_automorphism(task, &init, &goal, &actions, c[0], o)) {
-                    Some(class) => class.push(o),
-                    None => classes.push(vec![o]),
-                }
-            }
-            out.classes.extend(classes.into_iter().filter(|c| c.len() > 1));
-        }
-        out.classes.sort();
+        out.classes = classes_by_swaps(&groups, |a, b| out.swap_is_automorphism(task, &init, &goal, &actions, a, b));
         out.index_members(task);
         out
     }
@@ -331,6 +311,25 @@ impl ObjectSymmetries {
         }
         plan
     }
+}
+
+/// The classes of interchangeable objects within each group, given which swaps map the task
+/// onto itself: such swaps make an equivalence relation (two of them compose to a third), so
+/// each object is checked against one member of each class so far. Sorted, each at least two.
+fn classes_by_swaps(groups: &[Vec<ObjectId>], mut is_automorphism: impl FnMut(ObjectId, ObjectId) -> bool) -> Vec<Vec<ObjectId>> {
+    let mut out = Vec::new();
+    for group in groups {
+        let mut classes: Vec<Vec<ObjectId>> = Vec::new();
+        for &o in group {
+            match classes.iter_mut().find(|c| is_automorphism(c[0], o)) {
+                Some(class) => class.push(o),
+                None => classes.push(vec![o]),
+            }
+        }
+        out.extend(classes.into_iter().filter(|c| c.len() > 1));
+    }
+    out.sort();
+    out
 }
 
 /// Objects that may be interchangeable, in groups: those of the same types whose occurrences
