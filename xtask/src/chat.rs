@@ -47,10 +47,14 @@ pub struct ChatArgs {
     /// Sampling temperature (0: greedy) [default: greedy here, the server's default there].
     #[arg(long)]
     temperature: Option<f64>,
+    /// Nucleus sampling: sample among the most likely tokens that together hold this much
+    /// probability [default: all, here; the server's default there].
     #[arg(long)]
     top_p: Option<f64>,
+    /// Sample among this many most likely tokens [default: all, here; the server's default there].
     #[arg(long)]
     top_k: Option<u32>,
+    /// Seed of the sampler (a sampled reply is the same for the same seed).
     #[arg(long)]
     seed: Option<u64>,
     /// Qwen3's thinking mode (`chat_template_kwargs.enable_thinking`).

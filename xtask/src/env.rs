@@ -23,6 +23,7 @@ pub struct EnvArgs {
     /// them; VirtualHome: a seeded random program, each step an action on a visible object.
     #[arg(long, value_name = "N")]
     random: Option<usize>,
+    /// Seed of the `--random` steps.
     #[arg(long, default_value_t = 0)]
     seed: u64,
     /// JSON lines `{step, command, observation, admissible, won}` (step 0 is the reset), as

