@@ -64,7 +64,7 @@ pub struct ChatArgs {
     #[arg(long)]
     api_key_env: Option<String>,
     /// Seconds one attempt may take (DNS, connect, request and reply).
-    #[arg(long, default_value_t = 120.0)]
+    #[arg(long, default_value_t = 120.0, value_parser = crate::input::positive_seconds)]
     timeout: f64,
     /// Further attempts after a transient failure.
     #[arg(long, default_value_t = 3)]
@@ -95,9 +95,6 @@ fn model_for(args: &ChatArgs) -> anyhow::Result<Box<dyn ChatModel>> {
     if let Some(url) = args.model.strip_prefix("openai:") {
         let mut config = ClientConfig::new(url, &args.served_model);
         config.api_key_env.clone_from(&args.api_key_env);
-        if !(args.timeout > 0.0 && args.timeout.is_finite()) {
-            anyhow::bail!(InputError(format!("--timeout {}: expected a positive number of seconds", args.timeout)));
-        }
         config.retry = RetryPolicy { timeout: Duration::from_secs_f64(args.timeout), max_retries: args.retries, ..RetryPolicy::default() };
         return Ok(Box::new(ChatClient::new(config).map_err(|e| InputError(e.to_string()))?));
     }

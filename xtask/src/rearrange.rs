@@ -139,6 +139,15 @@ pub fn run(args: RearrangeArgs) -> anyhow::Result<ExitCode> {
     for (f, family) in FAMILIES.iter().enumerate() {
         let classes: Vec<&str> = family.classes.iter().copied().filter(|c| templates.contains_key(*c)).collect();
         let bases: Vec<&Value> = scenes.iter().filter(|s| node_of_class(s, family.appliance).is_some()).collect();
+        if bases.is_empty() {
+            return Err(InputError(format!(
+                "--scenes {}: no scene has a {} (the {} family's appliance)",
+                args.scenes.display(),
+                family.appliance,
+                family.id
+            ))
+            .into());
+        }
         let (mut kept, mut k) = (0, 0u64);
         while kept < PER_FAMILY {
             k += 1;

@@ -499,6 +499,23 @@ fn time_limits_that_are_not_positive_seconds_are_bad_input() {
         let output = xtask(&["phase2", "--benchmark", "ipc", "--limit", "1", "--time-limit", limit]);
         assert_eq!(output.status.code(), Some(2), "phase2 --time-limit {limit}");
     }
+    // Too long to be a duration (it panicked in `Duration::from_secs_f64`).
+    let output = xtask(&["chat", "--model", "openai:http://127.0.0.1:9/v1", "--prompt", "x", "--timeout", "1e20"]);
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert_eq!(output.status.code(), Some(2), "{stderr}");
+    assert!(stderr.contains("1e20") && !stderr.contains("panicked"), "{stderr}");
+}
+
+/// `cargo xtask rearrange` from scenes none of which has a family's appliance: bad input
+/// naming the folder and the class (it panicked drawing from no scenes).
+#[test]
+fn rearrange_from_scenes_without_the_appliance_is_bad_input() {
+    let scenes = scratch_dir("rearrange-scenes-");
+    let out = scratch_dir("rearrange-out-");
+    let output = xtask(&["rearrange", "--scenes", scenes.path().to_str().unwrap(), "--out", out.path().to_str().unwrap()]);
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert_eq!(output.status.code(), Some(2), "{stderr}");
+    assert!(stderr.contains(&scenes.path().display().to_string()) && !stderr.contains("panicked"), "{stderr}");
 }
 
 /// Phase II's A* over states up to interchangeable objects. EAI 783_1 puts five alike plates in

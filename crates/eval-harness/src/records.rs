@@ -181,16 +181,16 @@ impl RecordFile {
         if fresh {
             file.set_len(0).map_err(io(&path))?;
         }
-        let mut text = String::new();
-        file.read_to_string(&mut text).map_err(io(&path))?;
+        let mut bytes = Vec::new();
+        file.read_to_end(&mut bytes).map_err(io(&path))?;
         // A last line without its newline is a record cut short by a crash: cut it off.
-        let whole = text.rfind('\n').map_or(0, |i| i + 1);
-        if whole < text.len() {
-            file.set_len(whole as u64).map_err(io(&path))?;
+        let (text, torn) = whole_lines(&path, bytes)?;
+        if torn > 0 {
+            file.set_len(text.len() as u64).map_err(io(&path))?;
             file.seek(SeekFrom::End(0)).map_err(io(&path))?;
             eprintln!("{}: cut off a record cut short (a killed run); its task runs again", path.display());
         }
-        let records = parse_records(&path, &text[..whole], Some(&hash))?;
+        let records = parse_records(&path, &text, Some(&hash))?;
         let done = records.iter().filter_map(|r| r.get("task").and_then(Value::as_str).map(str::to_string)).collect();
         Ok(RecordFile { path, hash, records, done, file })
     }
@@ -235,6 +235,22 @@ impl RecordFile {
 
 /// The records of a JSONL file: every non-empty line an object with a `task`, and, with
 /// `hash`, that configuration.
+/// The whole lines of a records file's `bytes` as text, and the length in bytes of a last line
+/// cut short (0 when the file ends with a newline). The cut is made on the bytes: a record cut
+/// short by a killed run can end inside a character, which must not make the whole lines
+/// before it unreadable. A whole line that is not UTF-8 is an error naming it.
+pub(crate) fn whole_lines(path: &Path, mut bytes: Vec<u8>) -> Result<(String, usize), RecordError> {
+    let whole = bytes.iter().rposition(|&b| b == b'\n').map_or(0, |i| i + 1);
+    let torn = bytes.len() - whole;
+    bytes.truncate(whole);
+    let text = String::from_utf8(bytes).map_err(|e| {
+        let at = e.utf8_error().valid_up_to();
+        let line = e.as_bytes()[..at].iter().filter(|&&b| b == b'\n').count() + 1;
+        RecordError::Bad { path: path.to_path_buf(), line, message: "not UTF-8 text".into() }
+    })?;
+    Ok((text, torn))
+}
+
 pub(crate) fn parse_records(path: &Path, text: &str, hash: Option<&str>) -> Result<Vec<Map<String, Value>>, RecordError> {
     let mut records = Vec::new();
     let mut seen = BTreeSet::new();
@@ -278,8 +294,8 @@ pub fn merge(shards: &[PathBuf]) -> Result<Merged, RecordError> {
     let mut all: Vec<Map<String, Value>> = Vec::new();
     let mut config: Option<String> = None;
     for path in shards {
-        let text = std::fs::read_to_string(path).map_err(io(path))?;
-        if !text.is_empty() && !text.ends_with('\n') {
+        let (text, torn) = whole_lines(path, std::fs::read(path).map_err(io(path))?)?;
+        if torn > 0 {
             return Err(RecordError::Merge(format!("{}: its last record is cut short; resume that shard first", path.display())));
         }
         for record in parse_records(path, &text, None)? {

@@ -87,6 +87,18 @@ fn a_record_cut_short_is_cut_off_and_its_task_runs_again() {
     let lines: Vec<Value> =
         std::fs::read_to_string(&path).expect("reads").lines().map(|l| serde_json::from_str(l).expect("whole records")).collect();
     assert_eq!(lines.len(), 2);
+    drop(file);
+
+    // Cut inside a character (a model's reply is written as raw UTF-8): the same.
+    let mut bytes = std::fs::read(&path).expect("reads");
+    bytes.extend_from_slice("{\"task\":\"c\",\"reply\":\"caf\u{e9}".as_bytes());
+    bytes.pop();
+    assert!(std::str::from_utf8(&bytes).is_err(), "the cut falls inside the character");
+    std::fs::write(&path, &bytes).expect("writes");
+    let file = RecordFile::open(&dir, "run", &config, None, false).expect("recovers");
+    assert_eq!(tasks(&file), ["a", "b"]);
+    drop(file);
+    assert_eq!(std::fs::read_to_string(&path).expect("UTF-8 again").lines().count(), 2);
 }
 
 #[test]
@@ -103,6 +115,12 @@ fn damage_other_than_a_cut_is_an_error_naming_the_line() {
     assert!(error.to_string().contains(":1:"), "{error}");
     std::fs::write(&path, format!("{{\"task\":\"a\",\"config\":\"{hash}\"}}\n{{\"task\":\"a\",\"config\":\"{hash}\"}}\n")).expect("writes");
     assert!(RecordFile::open(&dir, "run", &config, None, false).expect_err("twice").to_string().contains("twice"));
+    // A whole line that is not UTF-8 is named, not the file as a whole.
+    let mut bytes = format!("{{\"task\":\"a\",\"config\":\"{hash}\"}}\n").into_bytes();
+    bytes.extend_from_slice(b"{\"task\":\"b\xff\"}\n");
+    std::fs::write(&path, &bytes).expect("writes");
+    let error = RecordFile::open(&dir, "run", &config, None, false).expect_err("not UTF-8");
+    assert!(matches!(error, RecordError::Bad { line: 2, .. }), "{error}");
     // An edited configuration file is refused rather than silently resumed.
     std::fs::write(&path, "").expect("writes");
     std::fs::write(dir.join(format!("run-{hash}.config.json")), "{\"agent\": \"direct\"}\n").expect("writes");

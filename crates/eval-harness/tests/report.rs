@@ -303,6 +303,15 @@ fn a_record_cut_short_is_left_out_with_a_warning() {
     assert_eq!(set.records.len(), 5);
     assert_eq!(set.warnings, [format!("{}:6: a record cut short (a run in progress, or killed) is left out", path.display())]);
     assert!(build(&[set], &ReportOptions::default()).unwrap().markdown.contains("warning:"));
+
+    // Cut inside a character: the same.
+    let mut bytes = text.into_bytes();
+    bytes.extend_from_slice("{\"task\":\"x\",\"reply\":\"\u{e9}".as_bytes());
+    bytes.pop();
+    std::fs::write(&path, &bytes).unwrap();
+    let set = load(&path).expect("the whole records");
+    assert_eq!(set.records.len(), 6);
+    assert_eq!(set.warnings, [format!("{}:7: a record cut short (a run in progress, or killed) is left out", path.display())]);
 }
 
 /// An expert record with no plan to replay is not an episode: it is left out of the tables

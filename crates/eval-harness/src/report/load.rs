@@ -134,14 +134,14 @@ pub fn load(path: &Path) -> Result<RecordSet, ReportError> {
     }
     // The hash every record of this configuration carries (`records::config_hash`).
     let expected = crate::records::config_hash(&Value::Object(config.clone()));
-    let text = std::fs::read_to_string(path).map_err(|source| RecordError::Io { path: path.to_path_buf(), source })?;
-    let whole = text.rfind('\n').map_or(0, |i| i + 1);
+    let bytes = std::fs::read(path).map_err(|source| RecordError::Io { path: path.to_path_buf(), source })?;
+    let (text, torn) = crate::records::whole_lines(path, bytes)?;
     let mut warnings = Vec::new();
-    if whole < text.len() {
-        let line = text[..whole].lines().count() + 1;
+    if torn > 0 {
+        let line = text.lines().count() + 1;
         warnings.push(format!("{}:{line}: a record cut short (a run in progress, or killed) is left out", path.display()));
     }
-    let text = &text[..whole];
+    let text = text.as_str();
     let lines: Vec<usize> = text.lines().enumerate().filter(|(_, l)| !l.trim().is_empty()).map(|(n, _)| n + 1).collect();
     let fields = parse_records(path, text, None)?;
     let mut records = Vec::with_capacity(fields.len());
