@@ -27,22 +27,26 @@
 //!   when F_str decides its class (never openable, or openable and then taken as closed);
 //! - β ([`Handover::binding`]): PDDL name → perceived name; plan steps are spelled by the
 //!   game's grammar (`transition_model::Spelling::alfworld_with_names`) with those names
-//!   (`take mug 2 from countertop 1`); a `go to` the game does not
-//!   list among its admissible commands (the agent already stands at that place's location) is
-//!   skipped.
+//!   (`take mug 2 from countertop 1`).
+//! - Places that share a location (a drawer under a desk): the game answers a `go to` one of
+//!   them from the other with "Nothing happens." ([`colocated`] learns it from R_t, Phase I's
+//!   steps and the plan's); Phase I's `goto` then examines the place ([`Adapter::recover`]),
+//!   ŝ0 gives the places one location, and a plan's move from a location to itself is not
+//!   sent. Nothing else tells the agent which places share one: it never sees the game's
+//!   admissible commands.
 
 use std::collections::{BTreeMap, BTreeSet};
 use std::fmt::Write as _;
 
 use grounding::ActionId;
-use household_sim::{Environment, GoalAnnotation, JudgeAtom, Observation};
+use household_sim::{GoalAnnotation, JudgeAtom, NOTHING_HAPPENS, Observation};
 use transition_model::Spelling;
 
 use crate::episode::{Grounded, Handover, ground};
 use crate::evidence::{Belief, Fact, perceive_alfworld};
 use crate::goal::ClassGoal;
 use crate::ontology::Ontology;
-use crate::phase1::{Adapter, Record, Skill, Skills};
+use crate::phase1::{Adapter, Record, Skill, Skills, StepRecord};
 
 /// The perceived class of a name: `mug 2` → `mug`.
 pub fn class_of(name: &str) -> &str {
@@ -113,7 +117,53 @@ fn worth_inspecting(goal: &ClassGoal, ontology: &Ontology, belief: &Belief, plac
 }
 
 /// Writes ŝ0 (F_τ ∪ F_str, and G as the game's goal formula) as a problem of ALFWorld's domain.
-pub fn write_problem(belief: &Belief, ontology: &Ontology, goal_formula: &str, at: Option<&str>) -> Handover {
+/// The places R_t shows to share a location, each mapped to its group's first name (sorted);
+/// places in no group are absent. A `go to p` the game answered "Nothing happens." while the
+/// agent stood at q puts p and q in one group: ALFWorld executes a `go to` every listed place
+/// but those at the agent's own location.
+pub fn colocated(steps: &[StepRecord]) -> BTreeMap<String, String> {
+    let mut groups: Vec<BTreeSet<String>> = Vec::new();
+    let mut at: Option<&str> = None;
+    for step in steps {
+        let target = step.command.strip_prefix("go to ");
+        if step.executed {
+            if let Some(place) = target.or_else(|| step.command.strip_prefix("examine ")) {
+                at = Some(place);
+            }
+            continue;
+        }
+        let (Some(p), Some(q)) = (target, at) else { continue };
+        if p == q || step.observation.trim() != NOTHING_HAPPENS {
+            continue;
+        }
+        let mut joined: BTreeSet<String> = [p.to_string(), q.to_string()].into();
+        groups.retain(|g| {
+            let touches = g.contains(p) || g.contains(q);
+            if touches {
+                joined.extend(g.iter().cloned());
+            }
+            !touches
+        });
+        groups.push(joined);
+    }
+    let mut out = BTreeMap::new();
+    for group in groups {
+        let first = group.first().cloned().unwrap_or_default();
+        out.extend(group.into_iter().map(|p| (p, first.clone())));
+    }
+    out
+}
+
+/// ŝ0 over perceived names; `at`: the place the agent stands at (else `loc_start`); `shared`:
+/// places known to share a location ([`colocated`]), which get one.
+pub fn write_problem(
+    belief: &Belief,
+    ontology: &Ontology,
+    goal_formula: &str,
+    at: Option<&str>,
+    shared: &BTreeMap<String, String>,
+) -> Handover {
+    let location = |place: &str| format!("loc_{}", pddl_name(shared.get(place).map_or(place, String::as_str)));
     let mut binding = BTreeMap::new();
     let facts = belief.facts();
     let mut objects: BTreeSet<String> = BTreeSet::new();
@@ -149,10 +199,15 @@ pub fn write_problem(belief: &Belief, ontology: &Ontology, goal_formula: &str, a
     let openable_class = |class: &str| ontology.affordances.get(class).is_some_and(|a| a.contains("openable"));
     let visited = |p: &str| belief.holds("visited", &[p]) == Some(true);
     let places: Vec<&String> = belief.places.iter().filter(|p| usable(ontology, belief, p)).collect();
+    let mut locations = BTreeSet::new();
     for p in &places {
         let name = pddl_name(p);
         binding.insert(name.clone(), p.to_string());
-        let _ = writeln!(text, "    {name} - receptacle\n    loc_{name} - location");
+        let _ = writeln!(text, "    {name} - receptacle");
+        let loc = location(p);
+        if locations.insert(loc.clone()) {
+            let _ = writeln!(text, "    {loc} - location");
+        }
     }
     for o in &objects {
         let name = pddl_name(o);
@@ -166,13 +221,13 @@ pub fn write_problem(belief: &Belief, ontology: &Ontology, goal_formula: &str, a
         let _ = writeln!(text, "    {t}type - otype");
     }
     let _ = writeln!(text, "  )\n  (:init");
-    let start = at.map_or_else(|| "loc_start".to_string(), |p| format!("loc_{}", pddl_name(p)));
+    let start = at.map_or_else(|| "loc_start".to_string(), location);
     let _ = writeln!(text, "    (atLocation agent1 {start})");
     let affordances = |class: &str| ontology.affordances.get(class).cloned().unwrap_or_default();
     for p in &places {
         let name = pddl_name(p);
         let class = class_of(p);
-        let _ = writeln!(text, "    (receptacleAtLocation {name} loc_{name})\n    (receptacleType {name} {class}type)");
+        let _ = writeln!(text, "    (receptacleAtLocation {name} {})\n    (receptacleType {name} {class}type)", location(p));
         if belief.holds("opened", &[p]).is_some() || (!visited(p) && openable_class(class)) {
             let _ = writeln!(text, "    (openable {name})");
         }
@@ -184,7 +239,7 @@ pub fn write_problem(belief: &Belief, ontology: &Ontology, goal_formula: &str, a
         match f.predicate.as_str() {
             "inReceptacle" => {
                 let (o, r) = (pddl_name(&f.args[0]), pddl_name(&f.args[1]));
-                let _ = writeln!(text, "    (inReceptacle {o} {r})\n    (objectAtLocation {o} loc_{r})");
+                let _ = writeln!(text, "    (inReceptacle {o} {r})\n    (objectAtLocation {o} {})", location(&f.args[1]));
             }
             "holds" => {
                 let _ = writeln!(text, "    (holds agent1 {})\n    (holdsAny agent1)", pddl_name(&f.args[0]));
@@ -230,9 +285,9 @@ const LOOKING: &[&str] = &["look", "inventory", "examinereceptacle", "examineobj
 ///   stands at a place it has not examined; `done`. No skill but `done` can thus target the same
 ///   place twice, and no choice of a model's makes Phase I circle.
 /// - The sweep: `open` the place it stands at if closed, else the first place worth inspecting.
-/// - Commands: `goto X` is `go to X`, or `examine X` where the agent already stands at X's
-///   location (the game does not list `go to X` there); `look` is `examine X` of the place it
-///   stands at (another view: ALFWorld's text states a place's contents in full, so the
+/// - Commands: `goto X` is `go to X`, then `examine X` if the game answered "Nothing happens."
+///   (the agent stands at X's location already: [`colocated`]); `look` is `examine X` of the
+///   place it stands at (another view: ALFWorld's text states a place's contents in full, so the
 ///   temporary pickup that tests a hypothesis elsewhere is never needed here).
 pub struct AlfworldAdapter {
     pub ontology: Ontology,
@@ -256,7 +311,7 @@ impl AlfworldAdapter {
 
     /// The place the agent stands at: the target of the last executed `go to`, or `examine` (the
     /// agent sends `examine` only for places).
-    fn at(steps: &[crate::phase1::StepRecord]) -> Option<String> {
+    fn at(steps: &[StepRecord]) -> Option<String> {
         steps
             .iter()
             .rev()
@@ -270,13 +325,6 @@ fn tried(record: &Record, command: &str) -> bool {
     record.steps.iter().any(|s| s.command == command)
 }
 
-/// Whether the game would answer `go to place` with "Nothing happens." (the agent stands at its
-/// location already): the admissible list has other `go to`s but not this one.
-fn here(env: &dyn Environment, place: &str) -> bool {
-    let go = format!("go to {place}");
-    env.admissible_commands().is_some_and(|a| a.iter().any(|c| c.starts_with("go to ")) && !a.contains(&go))
-}
-
 impl Adapter for AlfworldAdapter {
     fn observe(&mut self, observation: &Observation, step: usize, belief: &mut Belief) {
         let (places, percepts) = perceive_alfworld(&observation.text, step);
@@ -284,7 +332,7 @@ impl Adapter for AlfworldAdapter {
         belief.admit(&percepts);
     }
 
-    fn skills(&self, goal: &ClassGoal, belief: &Belief, record: &Record, _env: &dyn Environment) -> Skills {
+    fn skills(&self, goal: &ClassGoal, belief: &Belief, record: &Record) -> Skills {
         let mut list = Vec::new();
         let mut sweep = None;
         let at = Self::at(&record.steps);
@@ -323,15 +371,23 @@ impl Adapter for AlfworldAdapter {
         Skills { list, sweep }
     }
 
-    fn commands(&self, skill: &Skill, _goal: &ClassGoal, _belief: &Belief, record: &Record, env: &dyn Environment) -> Vec<String> {
+    fn commands(&self, skill: &Skill, _goal: &ClassGoal, _belief: &Belief, record: &Record) -> Vec<String> {
         match skill {
-            Skill::Goto(p) if here(env, p) => vec![format!("examine {p}")],
             Skill::Goto(p) => vec![format!("go to {p}")],
             Skill::Open(p) => vec![format!("open {p}")],
             Skill::Close(p) => vec![format!("close {p}")],
             Skill::Look => Self::at(&record.steps).map(|p| vec![format!("examine {p}")]).unwrap_or_default(),
             Skill::Done => Vec::new(),
         }
+    }
+
+    /// A `go to X` the game answered "Nothing happens.": the agent stands at X's location
+    /// already, and examining X shows it.
+    fn recover(&self, skill: &Skill, record: &Record) -> Option<String> {
+        let Skill::Goto(p) = skill else { return None };
+        let last = record.steps.last()?;
+        (!last.executed && last.command.strip_prefix("go to ") == Some(p.as_str()) && last.observation.trim() == NOTHING_HAPPENS)
+            .then(|| format!("examine {p}"))
     }
 
     /// Arriving at a place seen closed, not yet opened: open it.
@@ -372,16 +428,22 @@ impl crate::episode::Handing for AlfworldAdapter {
         steps: &[crate::phase1::StepRecord],
     ) -> Result<Grounded, String> {
         let at = Self::at(steps);
-        let handover = write_problem(&exploration.belief, &self.ontology, &self.formula, at.as_deref());
+        let handover = write_problem(&exploration.belief, &self.ontology, &self.formula, at.as_deref(), &colocated(steps));
         let model = ground(&self.domain, &handover.problem)?;
         let names = model.task().objects.iter().map(|o| handover.binding.get(&o.name).cloned()).collect();
         let spelling = Spelling::alfworld_with_names(model.task(), &self.grammar, names).map_err(|e| format!("grammar: {e}"))?;
         Ok(Grounded::new(handover, model, spelling))
     }
 
-    fn command(&self, grounded: &Grounded, action: ActionId, env: &dyn Environment) -> Result<Option<String>, String> {
+    fn command(&self, grounded: &Grounded, action: ActionId) -> Result<Option<String>, String> {
         let task = grounded.model.task();
-        if LOOKING.contains(&task.schemas[task.action(action).schema.index()].name.as_str()) {
+        let (schema, args) = (&task.schemas[task.action(action).schema.index()].name, &task.action(action).args);
+        if LOOKING.contains(&schema.as_str()) {
+            return Ok(None);
+        }
+        // A move from a location to itself (places ŝ0 puts at one location): the game would
+        // answer "Nothing happens.", and the agent is there already.
+        if schema == "gotolocation" && args.len() > 2 && args[1] == args[2] {
             return Ok(None);
         }
         let command = grounded
@@ -389,13 +451,6 @@ impl crate::episode::Handing for AlfworldAdapter {
             .spell(action)
             .map(str::to_string)
             .ok_or_else(|| format!("cannot bind {} to perceived names", task.action_name(action)))?;
-        // Places can share a location (a drawer under a desk): a `go to` the place the agent
-        // already stands at is skipped without spending a step.
-        if let Some(place) = command.strip_prefix("go to ")
-            && here(env, place)
-        {
-            return Ok(None);
-        }
         Ok(Some(command))
     }
 

@@ -92,7 +92,7 @@ pub trait Handing: Adapter {
     fn handover(&mut self, goal: &ClassGoal, exploration: &Exploration, steps: &[StepRecord]) -> Result<Grounded, String>;
     /// The environment command of a plan action, through β; `None`: nothing to send (a step
     /// that only looks, or a move to where the agent already stands).
-    fn command(&self, grounded: &Grounded, action: ActionId, env: &dyn Environment) -> Result<Option<String>, String>;
+    fn command(&self, grounded: &Grounded, action: ActionId) -> Result<Option<String>, String>;
     /// A fact of F_t in the judge's vocabulary, where it has one.
     fn judge_view(&self, fact: &Fact) -> Option<JudgeAtom>;
     /// The class of a perceived instance name (`mug 2` → `mug`, `plate (1001)` → `plate`).
@@ -329,7 +329,7 @@ pub fn run_episode<E: Environment + Judge>(
         episode.plan.clear();
         not_executed = false;
         for &action in &phase2.actions {
-            let command = match adapter.command(&grounded, action, env) {
+            let command = match adapter.command(&grounded, action) {
                 Ok(Some(c)) => c,
                 Ok(None) => continue,
                 Err(e) => {

@@ -36,8 +36,11 @@
 /// offers no closed appliance that is on as a place to open (EAI's executor refuses it); 11: the
 /// episode ends the moment the environment's goal check holds, in Phase I or mid-plan (the rest
 /// of the plan is not sent: ALFWorld's engine ends the game once won, and the replay of
-/// version 10's planner records in TextWorld found a plan sent on past the win).
-pub const HARNESS_VERSION: u32 = 11;
+/// version 10's planner records in TextWorld found a plan sent on past the win); 12: ALFWorld's
+/// adapter no longer reads the game's admissible commands to tell that two places share a
+/// location: it learns it from the game's "Nothing happens." to a `go to`, and ŝ0 gives such
+/// places one location ([`alfworld::colocated`]).
+pub const HARNESS_VERSION: u32 = 12;
 
 pub mod alfworld;
 pub mod chat_planner;

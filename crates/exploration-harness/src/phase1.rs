@@ -286,10 +286,18 @@ impl Record {
 pub trait Adapter {
     /// Reads an observation (step 0: the reset's) into F_t: U's percepts.
     fn observe(&mut self, observation: &Observation, step: usize, belief: &mut Belief);
-    /// K_t = H(G, F_t, R_t).
-    fn skills(&self, goal: &ClassGoal, belief: &Belief, record: &Record, env: &dyn Environment) -> Skills;
+    /// K_t = H(G, F_t, R_t). An adapter sees the environment only through observations and
+    /// outcomes (`observe`, R_t): the methods here are not given it.
+    fn skills(&self, goal: &ClassGoal, belief: &Belief, record: &Record) -> Skills;
     /// The environment commands of a skill of K_t.
-    fn commands(&self, skill: &Skill, goal: &ClassGoal, belief: &Belief, record: &Record, env: &dyn Environment) -> Vec<String>;
+    fn commands(&self, skill: &Skill, goal: &ClassGoal, belief: &Belief, record: &Record) -> Vec<String>;
+    /// A command that still reaches the end of a skill whose last command (R_t's last step) was
+    /// not executed, decided from that outcome (default: none); once per skill. If it executes,
+    /// the skill has executed. ALFWorld: a `go to` the place whose location the agent already
+    /// stands at does nothing ("Nothing happens."), and examining the place shows it.
+    fn recover(&self, _skill: &Skill, _record: &Record) -> Option<String> {
+        None
+    }
     /// A command the outcome of a skill's commands calls for, decided from F_t after them
     /// (default: none). Both adapters: a `goto` that arrives at a closed place that opens is
     /// followed by opening it, since a closed place shows nothing of what it holds; otherwise a
@@ -373,7 +381,7 @@ pub fn resume(
         if record.steps.len() >= budget {
             break "budget".to_string();
         }
-        let mut skills = adapter.skills(goal, &belief, &record, env);
+        let mut skills = adapter.skills(goal, &belief, &record);
         if let Some(k) = width {
             skills.frontier(k);
         }
@@ -458,9 +466,11 @@ pub fn resume(
         let mut steps = Vec::new();
         let mut executed_all = true;
         let mut reason = String::new();
-        let mut pending = adapter.commands(&reply.skill, goal, &belief, &record, env);
+        let mut pending = adapter.commands(&reply.skill, goal, &belief, &record);
         pending.reverse();
         let mut followed = false;
+        // The recovery command, once sent (`Adapter::recover`).
+        let (mut recovered, mut recovering) = (false, false);
         loop {
             let command = match pending.pop() {
                 Some(c) => c,
@@ -489,6 +499,17 @@ pub fn resume(
             observation = result.observation;
             if env.goal_reached() {
                 break;
+            }
+            if recovering && executed {
+                executed_all = true;
+            }
+            recovering = false;
+            if !executed
+                && !recovered
+                && let Some(command) = adapter.recover(&reply.skill, &record)
+            {
+                (recovered, recovering) = (true, true);
+                pending.push(command);
             }
         }
         let after = belief.facts();

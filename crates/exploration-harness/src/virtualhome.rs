@@ -62,7 +62,7 @@ use std::collections::{BTreeMap, BTreeSet};
 
 use grounding::ActionId;
 use household_sim::vh_pddl::{self, SOUND_DOMAIN, VhProblem};
-use household_sim::{Environment, JudgeAtom, Observation, VhNodeState as NodeState, VirtualhomeTask};
+use household_sim::{JudgeAtom, Observation, VhNodeState as NodeState, VirtualhomeTask};
 use serde_json::{Value, json};
 use transition_model::Spelling;
 
@@ -443,7 +443,7 @@ impl Adapter for VirtualhomeAdapter {
         self.entered.extend(Self::room_now(belief));
     }
 
-    fn skills(&self, goal: &ClassGoal, belief: &Belief, record: &Record, _env: &dyn Environment) -> Skills {
+    fn skills(&self, goal: &ClassGoal, belief: &Belief, record: &Record) -> Skills {
         let mut list = Vec::new();
         let mut sweep = None;
         let closed = self.closed_containers(belief, record);
@@ -497,7 +497,7 @@ impl Adapter for VirtualhomeAdapter {
         Skills { list, sweep }
     }
 
-    fn commands(&self, skill: &Skill, _goal: &ClassGoal, belief: &Belief, _record: &Record, _env: &dyn Environment) -> Vec<String> {
+    fn commands(&self, skill: &Skill, _goal: &ClassGoal, belief: &Belief, _record: &Record) -> Vec<String> {
         let line = |verb: &str, x: &str| match split_name(x) {
             Some((class, id)) => format!("[{verb}] <{class}> ({id})"),
             None => format!("{} {x}", verb.to_lowercase()),
@@ -669,7 +669,7 @@ impl Handing for VirtualhomeAdapter {
         Ok(Grounded::new(handover, model, spelling))
     }
 
-    fn command(&self, grounded: &Grounded, action: ActionId, _env: &dyn Environment) -> Result<Option<String>, String> {
+    fn command(&self, grounded: &Grounded, action: ActionId) -> Result<Option<String>, String> {
         let (problem, task) = self.last.as_ref().ok_or("no hand-over yet")?;
         problem.script_line(&task.init, &grounded.model.task().action_name(action)).map(Some)
     }

@@ -256,3 +256,61 @@ fn ready_waits_for_a_visit_only_to_goal_places_whose_openness_f_str_leaves_open(
     seen.admit(&[exploration_harness::Percept { fact: exploration_harness::Fact::new("visited", &[cabinets[0].as_str()], true), step: 2 }]);
     assert!(exploration_harness::alfworld::ready(&goal, &seen, &ontology));
 }
+
+/// valid_seen's CD game puts drawer 3 at desk 1's location. The agent is never told so (it never
+/// sees the game's admissible commands): it learns it when the game answers its `go to drawer 3`
+/// from the desk with "Nothing happens.", examines the drawer instead, and its hand-over gives
+/// both places one location, so the plan moves the CDs without a `go to` between them.
+#[test]
+fn places_that_share_a_location_are_learned_from_the_game_s_answer() {
+    let ontology = ontology();
+    let (domain, grammar) = domain_and_grammar();
+    let game = fixtures().join("alfworld/valid_seen/pick_two_obj_and_place-CD-None-Drawer-304/trial_T20190907_230232_832893/game.tw-pddl");
+    let episode = play(&game, &ontology, &domain, &grammar);
+    assert!(episode.success, "{:?}", episode.failure);
+    let sent: Vec<(&str, bool)> = episode.steps.iter().map(|s| (s.command.as_str(), s.executed)).collect();
+    let at = sent.iter().position(|s| *s == ("go to drawer 3", false)).expect("a `go to drawer 3` the game does not execute");
+    assert_eq!(sent[at - 1], ("go to desk 1", true), "{sent:?}");
+    assert_eq!(sent[at + 1], ("examine drawer 3", true), "{sent:?}");
+    assert_eq!(episode.steps[at].observation.trim(), household_sim::NOTHING_HAPPENS);
+    let decision = episode.decisions.iter().find(|d| d.skill == "goto drawer 3").expect("the goto");
+    assert_eq!(decision.outcome, "success", "the goto reached the drawer's location");
+    let problem = &episode.handover.as_ref().expect("a hand-over").problem;
+    let location = |place: &str| {
+        let line = problem.lines().find(|l| l.trim().starts_with(&format!("(receptacleAtLocation {place} "))).expect(place);
+        line.trim().trim_end_matches(')').rsplit(' ').next().unwrap().to_string()
+    };
+    assert_eq!(location("desk_1"), location("drawer_3"), "{problem}");
+    assert!(episode.steps.iter().filter(|s| s.phase == "plan").all(|s| !s.command.starts_with("go to")), "{sent:?}");
+}
+
+/// `colocated` joins places by the game's "Nothing happens." to a `go to` from a place the agent
+/// stood at, transitively; other failures join nothing.
+#[test]
+fn colocated_joins_places_by_the_game_s_answers() {
+    use exploration_harness::alfworld::colocated;
+    use exploration_harness::phase1::StepRecord;
+    let step = |command: &str, executed: bool, observation: &str| StepRecord {
+        phase: "explore",
+        command: command.into(),
+        executed,
+        observation: observation.into(),
+    };
+    let nothing = household_sim::NOTHING_HAPPENS;
+    let steps = [
+        step("go to drawer 2", false, nothing), // standing nowhere yet: joins nothing
+        step("go to desk 1", true, "You arrive at desk 1."),
+        step("go to drawer 3", false, nothing),
+        step("examine drawer 3", true, "On the drawer 3, you see nothing."),
+        step("go to drawer 4", false, nothing),
+        step("go to shelf 1", true, "You arrive at shelf 1."),
+        step("open shelf 1", false, nothing), // not a move
+        step("go to shelf 2", false, "Something else."),
+    ];
+    let shared = colocated(&steps);
+    let group = |p: &str| shared.get(p).map(String::as_str);
+    for place in ["desk 1", "drawer 3", "drawer 4"] {
+        assert_eq!(group(place), Some("desk 1"), "{place}: {shared:?}");
+    }
+    assert_eq!(shared.len(), 3, "{shared:?}");
+}
