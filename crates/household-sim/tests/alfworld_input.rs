@@ -59,6 +59,17 @@ fn broken_pddl_is_reported_with_the_field() {
     game["pddl_problem"] = serde_json::Value::String("(define (problem p) (:domain alfred) (:init (atlocation".into());
     let text = load(&game).expect_err("broken problem").to_string();
     assert!(text.starts_with("test.tw-pddl: the `pddl_problem` field is not valid PDDL"), "{text}");
+
+    // PDDL that parses but does not check (an atom with a wrong arity): the field, line and
+    // column of each error.
+    let mut game = game_json();
+    let problem = game["pddl_problem"].as_str().expect("problem");
+    let at = problem.find("(:init").expect(":init") + "(:init".len();
+    let line = problem[..at].lines().count();
+    game["pddl_problem"] = serde_json::Value::String(format!("{}\n(opened){}", &problem[..at], &problem[at..]));
+    let text = load(&game).expect_err("a wrong arity").to_string();
+    assert!(text.starts_with("test.tw-pddl: the `pddl_problem` field is not valid PDDL"), "{text}");
+    assert!(text.contains(&format!("test.tw-pddl (pddl_problem):{}:1: error[", line + 1)), "{text}");
 }
 
 fn snapshot(env: &AlfworldEnv) -> (Vec<String>, bool, Vec<String>) {

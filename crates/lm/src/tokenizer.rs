@@ -358,6 +358,21 @@ impl Tokenizer {
             }
         }
         let size = model_vocab.values().chain(added.keys()).map(|&id| id as usize + 1).max().unwrap_or(0);
+        // Holes are allowed, but not a vocabulary mostly of holes: one absurd id (4e9) would
+        // otherwise allocate tables for billions of tokens before anything else is checked.
+        let tokens = model_vocab.len() + added.len();
+        if size > 2 * tokens + 1024 {
+            let (text, id) = model_vocab
+                .iter()
+                .map(|(t, &id)| (t.clone(), id))
+                .chain(added.iter().map(|(&id, t)| (t.content.clone(), id)))
+                .max_by_key(|&(_, id)| id)
+                .unwrap_or_default();
+            return Err(LmError::BadTokenizerFile {
+                path: path.to_path_buf(),
+                message: format!("token {text:?} has the id {id}, far beyond the file's {tokens} tokens"),
+            });
+        }
         // Ids no token has (holes in some files) stay empty `Unused` tokens: never text, never allowed.
         let mut bytes = vec![Vec::new(); size];
         let mut kinds = vec![TokenKind::Unused; size];

@@ -372,6 +372,12 @@ fn ids_that_the_tokenizers_crate_would_renumber_are_an_error_and_holes_are_unuse
     assert_eq!((vocabulary.eos(), vocabulary.stop_tokens()), (2, &[2][..]));
     assert_eq!(tokenizer.encode("ab ab").expect("encodes"), [4, 6]);
     assert_eq!(tokenizer.decode(&[4, 6]).expect("in range"), b"ab ab");
+
+    // One absurd id is an error naming the token, not tables for four billion tokens.
+    let absurd = hole.replace(r#""Ġab": 6"#, r#""Ġab": 4000000000"#);
+    let error = Tokenizer::from_tokenizer_json_str(&absurd, Some(r#"{"eos_token": "c"}"#)).expect_err("absurd id");
+    assert!(matches!(&error, LmError::BadTokenizerFile { .. }), "{error}");
+    assert!(error.to_string().contains("4000000000") && error.to_string().contains(r#""Ġab""#), "{error}");
 }
 
 #[test]

@@ -28,6 +28,7 @@ mod diagnostic;
 mod parse;
 mod print;
 mod sexpr;
+pub use sexpr::MAX_DEPTH;
 
 pub use ast::{
     Action, Atom, Condition, Domain, Effect, FunctionDecl, FunctionTerm, InitElement, Metric, Name, Number, NumericExpr, Optimization,

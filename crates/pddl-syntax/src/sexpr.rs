@@ -57,6 +57,12 @@ fn is_delimiter(byte: u8) -> bool {
     matches!(byte, b'(' | b')' | b';' | b',') || byte.is_ascii_whitespace()
 }
 
+/// Lists nested deeper than this are reported and left out. Reading is iterative, but what
+/// reads the tree (lowering, checking, grounding, dropping it) recurses once per level, and a
+/// hostile or broken file of 100,000 `(` would overflow the stack there. PDDL in the wild nests
+/// a few dozen levels at most.
+pub const MAX_DEPTH: usize = 256;
+
 /// Reads every top-level s-expression in `source`.
 pub(crate) fn read(source: &str, diagnostics: &mut Vec<Diagnostic>) -> Vec<SExpr> {
     let bytes = source.as_bytes();
@@ -69,6 +75,35 @@ pub(crate) fn read(source: &str, diagnostics: &mut Vec<Diagnostic>) -> Vec<SExpr
         match byte {
             b';' => {
                 while i < bytes.len() && bytes[i] != b'\n' {
+                    i += 1;
+                }
+            }
+            b'(' if stack.len() >= MAX_DEPTH => {
+                // Skip the list to its `)` (or the end), reporting it once.
+                diagnostics.push(Diagnostic::error(
+                    DiagnosticKind::InvalidToken,
+                    Span::new(i, i + 1),
+                    format!("lists nested more than {MAX_DEPTH} deep: this one is left out"),
+                ));
+                let mut depth = 0usize;
+                while i < bytes.len() {
+                    match bytes[i] {
+                        b';' => {
+                            while i < bytes.len() && bytes[i] != b'\n' {
+                                i += 1;
+                            }
+                            continue;
+                        }
+                        b'(' => depth += 1,
+                        b')' => {
+                            depth -= 1;
+                            if depth == 0 {
+                                i += 1;
+                                break;
+                            }
+                        }
+                        _ => {}
+                    }
                     i += 1;
                 }
             }

@@ -64,3 +64,27 @@ fn the_household_world_is_clean() {
     let report = check(&domain.expect("domain"), problem.as_ref());
     assert!(report.domain.is_empty() && report.problem.is_empty(), "{report:?}");
 }
+
+/// Nesting as deep as a hostile or broken file can make it (100,000 `(not`) is an error at the
+/// first list too deep, not a stack overflow in whatever reads the tree; nesting PDDL uses
+/// parses as before.
+#[test]
+fn nesting_too_deep_is_an_error_not_a_crash() {
+    let deep = |n: usize| {
+        format!(
+            "(define (domain d) (:requirements :negative-preconditions) (:predicates (p))\n(:action a :parameters () :precondition {}(p){} :effect (p)))",
+            "(not ".repeat(n),
+            ")".repeat(n)
+        )
+    };
+    let (domain, diagnostics) = parse_domain_recovering(&deep(100_000));
+    let too_deep: Vec<&Diagnostic> = diagnostics.iter().filter(|d| d.message.contains("nested more than")).collect();
+    assert_eq!(too_deep.len(), 1, "{diagnostics:?}");
+    let source = deep(100_000);
+    let line = &source[..too_deep[0].span.start as usize];
+    assert_eq!(line.matches('(').count() - line.matches(')').count(), pddl_syntax::MAX_DEPTH, "reported at the first `(` too deep");
+    if let Some(domain) = domain {
+        let _ = check(&domain, None);
+    }
+    assert!(parse_domain(&deep(40)).is_ok(), "40 levels of `not` is PDDL");
+}

@@ -209,7 +209,25 @@ impl AlfworldEnv {
         let domain_text = &fast_downward_commas(domain_text);
         let domain = pddl_syntax::parse_domain(domain_text).map_err(|e| pddl("pddl_domain", domain_text, e))?;
         let problem = pddl_syntax::parse_problem(problem_text).map_err(|e| pddl("pddl_problem", problem_text, e))?;
-        let task = grounding::ground(&domain, &problem).map_err(|e| EnvError::Grounding { path: source.into(), message: e.to_string() })?;
+        let task = grounding::ground(&domain, &problem).map_err(|e| match e {
+            // Names that do not check: each error at its line and column, in its field.
+            grounding::GroundingError::Invalid { domain, problem } => {
+                let errors = |field: &'static str, text: &str, all: Vec<pddl_syntax::Diagnostic>| {
+                    all.into_iter()
+                        .filter(|d| d.is_error())
+                        .map(move |d| (field, d.render(&format!("{source} ({field})"), text)))
+                        .collect::<Vec<_>>()
+                };
+                let mut lines = errors("pddl_domain", domain_text, domain);
+                lines.extend(errors("pddl_problem", problem_text, problem));
+                EnvError::Pddl {
+                    path: source.into(),
+                    field: lines.first().map_or("pddl_problem", |(field, _)| field).to_string(),
+                    diagnostics: lines.into_iter().map(|(_, line)| line).collect::<Vec<_>>().join("\n"),
+                }
+            }
+            other => EnvError::Grounding { path: source.into(), message: other.to_string() },
+        })?;
         let grammar_error = |offset: usize, message: String| {
             let at = twl::position(grammar_text, offset);
             EnvError::Grammar { path: source.into(), line: at.line, column: at.column, message }

@@ -259,7 +259,9 @@ impl LlamaModel {
         let (d, q, kv, ff, hd) = (config.embedding, config.q_dim(), config.kv_dim(), config.feed_forward, config.head_dim);
         let qwen2 = config.architecture == Architecture::Qwen2;
         let qwen3 = config.architecture == Architecture::Qwen3;
-        let mut layers = Vec::with_capacity(config.layers);
+        // Not sized by `block_count` up front: a corrupt count (4e9) would abort the allocation;
+        // the first missing `blk.{i}` tensor is the error instead.
+        let mut layers = Vec::new();
         for i in 0..config.layers {
             let name = |part: &str| format!("blk.{i}.{part}");
             let layer = Layer {
