@@ -92,7 +92,7 @@ pub struct DecodeArgs {
     #[arg(long, default_value_t = 0.0, value_parser = input::number_in(0.0, false, 1.0))]
     pub prior_mix: f64,
     /// MCTS: renormalise each node's prior over its open children in PUCB (`true`), or keep
-    /// closed children's share of it as the paper's Eq. 7 is written (`false`).
+    /// closed children's share of it as the paper's Eq. 9 is written (`false`).
     #[arg(long, default_value_t = false, action = clap::ArgAction::Set)]
     pub renormalize_prior: bool,
     /// Value: weights of h_FF, LM-cut and the remaining plan cost in h (paper Appendix A.4;

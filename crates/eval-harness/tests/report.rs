@@ -105,7 +105,7 @@ fn the_episode_page_shows_the_top_of_the_search_tree() {
     let report = fixture_report();
     let tree = section(tree_page(&report), "Phase II search (top of the tree)");
     assert!(tree.contains("12 simulation(s) backed up at the root"), "{tree}");
-    assert!(tree.contains("value: the best value (Eq. 8) backed up through it"), "max backup: {tree}");
+    assert!(tree.contains("value: the best value (Eq. 10) backed up through it"), "max backup: {tree}");
     // Most visited first, the action text escaped; the plan's first action marked, once per level.
     let rows = [
         "<tr><td class=\"num\">1</td><td><code>[WALK] &lt;kitchen&gt; (1)</code></td><td class=\"num\">6</td><td class=\"num\">-1.100</td><td class=\"num\">0.500</td><td></td></tr>",

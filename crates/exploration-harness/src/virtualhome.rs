@@ -72,7 +72,8 @@ use crate::goal::ClassGoal;
 use crate::ontology::Ontology;
 use crate::phase1::{Adapter, Exploration, Record, Skill, Skills, StepRecord};
 
-/// The character's name in F_t (its id is never shown).
+/// The character's name in F_t (F_t never names it by its node id, which only the executor's
+/// failure messages show: `character (1) is not close to ...`).
 pub const ME: &str = "character";
 
 /// `IN_ROOM(x, r)`: x was seen while the agent stood in room r (visible nodes are those

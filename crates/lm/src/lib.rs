@@ -1,4 +1,4 @@
-//! Language models for the planner (paper §3.2, Eq. 6-7): the next-token distribution at every
+//! Language models for the planner (paper §3.2, Eq. 8-9): the next-token distribution at every
 //! node of a token-level search tree whose branches share long prefixes.
 //!
 //! [`LanguageModel`] is the interface: a [`Vocabulary`] (token id → bytes, end-of-sequence and

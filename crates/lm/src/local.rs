@@ -205,7 +205,7 @@ impl LocalModel {
 
     /// The logits of `allowed` only, after `tokens`: each row of the output head dotted with the
     /// final hidden state in `f32` ([`LlamaModel::output_row`]; rows dequantized once and kept).
-    /// A constrained prior needs no other logit (Eq. 6's normaliser is over the allowed tokens),
+    /// A constrained prior needs no other logit (Eq. 8's normaliser is over the allowed tokens),
     /// so the full head, a large share of a step for a small model, is skipped.
     pub fn logits_among(&mut self, tokens: &[TokenId], allowed: &[TokenId]) -> Result<Vec<f32>, LmError> {
         let size = self.tokenizer.vocabulary().len().min(self.model.vocabulary_size());

@@ -17,7 +17,7 @@ pub enum Logprobs {
     Sparse { top: Vec<(TokenId, f32)>, vocabulary_size: usize },
 }
 
-/// A prior over the tokens a constraint allows, renormalised over them (paper Eq. 6):
+/// A prior over the tokens a constraint allows, renormalised over them (paper Eq. 8):
 /// `log p_C(t) = log p(t) − log Σ_{u ∈ C} p(u)` for `t ∈ C`.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Prior {
@@ -143,7 +143,7 @@ impl Logprobs {
         }
     }
 
-    /// Renormalises over `allowed` (duplicates ignored): the constrained prior of paper Eq. 6.
+    /// Renormalises over `allowed` (duplicates ignored): the constrained prior of paper Eq. 8.
     ///
     /// Exact for a dense distribution. For a sparse one, an allowed token outside the top-k has
     /// no probability from the model; it is given the leftover mass spread evenly over every
@@ -216,7 +216,7 @@ pub trait LanguageModel {
     /// The distribution of the token after `tokens` (at least one token).
     fn next_logprobs(&mut self, tokens: &[TokenId]) -> Result<Logprobs, LmError>;
 
-    /// The distribution after `tokens` renormalised over `allowed` (paper Eq. 6). Backends that
+    /// The distribution after `tokens` renormalised over `allowed` (paper Eq. 8). Backends that
     /// can mask on their side (vLLM's `allowed_token_ids`) override this.
     fn next_logprobs_among(&mut self, tokens: &[TokenId], allowed: &[TokenId]) -> Result<Prior, LmError> {
         self.next_logprobs(tokens)?.among(allowed)

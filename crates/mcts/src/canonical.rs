@@ -1,4 +1,4 @@
-//! The constraint over canonical tokenizations (paper Eq. 5 read literally: `tok(a)` is the
+//! The constraint over canonical tokenizations (paper Eq. 7 read literally: `tok(a)` is the
 //! tokenizer's encoding of the action's text, and a prefix is a prefix of that token
 //! sequence).
 //!

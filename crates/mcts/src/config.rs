@@ -20,7 +20,7 @@ pub enum Strategy {
     Greedy,
     /// A token sampled from the distribution.
     Sample(SamplingConfig),
-    /// Token-level MCTS (paper Eq. 7-8).
+    /// Token-level MCTS (paper Eq. 9-10).
     Mcts(MctsConfig),
 }
 
@@ -126,7 +126,7 @@ impl Default for Budget {
 #[serde(rename_all = "kebab-case")]
 #[strum(serialize_all = "kebab-case")]
 pub enum Tokenization {
-    /// The tokenizer's own encoding of each action's line (paper Eq. 5): one token path per
+    /// The tokenizer's own encoding of each action's line (paper Eq. 7): one token path per
     /// action. See [`crate::canonical`].
     #[default]
     Canonical,
@@ -219,7 +219,7 @@ pub struct Outcome {
     /// The text greedy decoding or sampling wrote (lossy UTF-8; special tokens spelled out).
     /// MCTS writes many texts: `None`.
     pub text: Option<String>,
-    /// Eq. 8 of the plan (`None` for an invalid plan or a dead end).
+    /// Eq. 10 of the plan (`None` for an invalid plan or a dead end).
     pub value: Option<f64>,
     pub stats: Stats,
     /// The top of the search tree: `None` for greedy decoding and sampling, which build no
@@ -276,10 +276,10 @@ pub struct TreeRow {
     pub tokens: usize,
     /// Simulations through the row's node.
     pub visits: u64,
-    /// `Q` of the row's node as the search backs it up (Eq. 8 values; see `backup`).
+    /// `Q` of the row's node as the search backs it up (Eq. 10 values; see `backup`).
     pub value: f64,
     /// The prior of the row's tokens: the product of each token's prior given the ones before
-    /// (the masked model distribution of Eq. 6, as the search mixes it), so at most 1 over a
+    /// (the masked model distribution of Eq. 8, as the search mixes it), so at most 1 over a
     /// level.
     pub prior: f64,
     /// The row's actions begin the returned plan.
@@ -350,7 +350,7 @@ pub struct MctsConfig {
     /// Over which values `Q` is min-max normalised into `[0, 1]`.
     pub normalization: Normalization,
     /// `ε`: a node's children take the prior `(1 − ε)·p + ε/k` (`k` children) instead of the
-    /// model's `p`. 0 (the default) is the paper's prior (Eq. 6). A small model can give the
+    /// model's `p`. 0 (the default) is the paper's prior (Eq. 8). A small model can give the
     /// right token a prior so small that PUCB tries it only after thousands of visits to its
     /// siblings; mixing in the uniform over the kept children bounds that wait, as AlphaZero's
     /// root noise does. The children kept (the `width` most likely) are the same either way.
@@ -359,7 +359,7 @@ pub struct MctsConfig {
     /// PUCB, so that `p(v | n)` is the model's belief in `v` given that `v` is still open.
     /// Without it, a closed child keeps its share: once a token the model is sure of closes
     /// (SmolLM2 gives ALFWorld plans' end token 0.95 at the root), its siblings share what is
-    /// left and PUCB hardly explores them. Not in the paper, whose Eq. 7 does not say what
+    /// left and PUCB hardly explores them. Not in the paper, whose Eq. 9 does not say what
     /// happens to a closed child's prior.
     pub renormalize_prior: bool,
 }

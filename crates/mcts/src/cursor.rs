@@ -38,7 +38,7 @@ pub enum Cursor {
     /// Every token must extend some tokenization of an applicable action's text.
     Constrained(PlanConstraint),
     /// Every token must extend the canonical tokenization of an applicable action's text
-    /// (paper Eq. 5 with `tok(a)` the tokenizer's encoding).
+    /// (paper Eq. 7 with `tok(a)` the tokenizer's encoding).
     Canonical(CanonicalCursor),
     /// Any token; the text is parsed into actions at each line break.
     Free(FreeText),

@@ -1,6 +1,6 @@
 //! Phase II of the paper: a language model writes the plan token by token under the
 //! state-dependent mask of [`token_constraint`], and token-level MCTS (PUCB with the
-//! constrained prior, Eq. 6-7; planning-heuristic values, Eq. 8) chooses among executable
+//! constrained prior, Eq. 8-9; planning-heuristic values, Eq. 10) chooses among executable
 //! continuations. The ablations (unconstrained / constrained × greedy / sampling / MCTS)
 //! share one [`Decoder`]: the same [`cursor::Cursor`] steps every token, the same
 //! distribution request feeds every strategy.

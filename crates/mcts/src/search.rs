@@ -1,4 +1,4 @@
-//! Token-level MCTS (paper §3.2, Eq. 7-8; Appendix A.4).
+//! Token-level MCTS (paper §3.2, Eq. 9-10; Appendix A.4).
 //!
 //! A node is a token prefix of the plan, standing for `n = (s, u)`: the symbolic state `s`
 //! the completed actions reach and the partial action `u`. Nodes do not store `(s, u)`: a
@@ -7,11 +7,11 @@
 //!
 //! **Simulation.** *Selection* descends from the root by
 //! `argmax_v Q̄(n, v) + U(n, v)` over the node's open children, with
-//! `U(n, v) = c(n) · p(v | n) · √N(n) / (1 + N(n, v))` (Eq. 7) and
+//! `U(n, v) = c(n) · p(v | n) · √N(n) / (1 + N(n, v))` (Eq. 9) and
 //! `c(n) = c_explore + ln((N(n) + c_base + 1) / c_base)`: the exploration constant
 //! (default 2.5) is the constant part of `c_N`, the base constant (default 10) sets how fast
 //! it grows with the parent's visits, as AlphaZero's `c_init` and `c_base`. `p` is the
-//! prior: the model's distribution renormalised over the tokens the mask allows (Eq. 6), or
+//! prior: the model's distribution renormalised over the tokens the mask allows (Eq. 8), or
 //! the full distribution in unconstrained mode (with `renormalize_prior`, over the node's
 //! open children only: a closed child's share goes to its open siblings). `Q` is the best value backed up through the
 //! child (`Backup::Max`, a Bellman backup: the model is deterministic, so a prefix is worth
@@ -33,7 +33,7 @@
 //! allowed tokens as children, with their priors as given (not renormalised over the 16).
 //! The *rollout* then writes greedily — the most likely child, expanding each node on the
 //! way — until the partial action completes (at most `tokens_per_expansion`, 128, tokens):
-//! every simulation ends at an action boundary (or at the end of the plan), where Eq. 8
+//! every simulation ends at an action boundary (or at the end of the plan), where Eq. 10
 //! gives the value, which is *backed up* along the whole path. Distributions are asked for
 //! once per node (the node keeps its children and priors: the cache by prefix); a token the
 //! mask forces needs no model call at all; and the model's own caches make a request cost
@@ -42,8 +42,10 @@
 //!
 //! **Values.** At a boundary reaching state `s` after `|π|` actions: `R_G` at the goal, else
 //! `−h(s, G) − λ|π|` ([`crate::value`]). A dead end (`h = ∞`), an unconstrained line that
-//! names no applicable action, get `−(h(s₀) + λ·max_actions + 1)`: below any value a live
-//! prefix within the length limit can have. These, a plan that ended (EOS / `DONE`), a prefix
+//! names no applicable action, get `−(h(s₀) + λ·max_actions + 1)`: below every live prefix
+//! within the length limit whose `h` has not grown more than `1 + λ·(max_actions − |π|)` past
+//! `h(s₀)` (a prefix that takes a wrong object can grow it further and score lower; the value
+//! is a floor for the usual case, not a bound). These, a plan that ended (EOS / `DONE`), a prefix
 //! at `max_actions`, and a *transposition* — a prefix whose state another prefix reached
 //! first with no more actions (`prune_transpositions`; with it off, `prune_cycles` closes
 //! only a prefix that returns to a state of its own path) — are leaves: closed, never
@@ -163,7 +165,7 @@ impl Tree {
         }
     }
 
-    /// PUCB (Eq. 7) over the open children; the first of equals.
+    /// PUCB (Eq. 9) over the open children; the first of equals.
     fn select(&self, node: usize, config: &MctsConfig) -> Option<usize> {
         let n = &self.nodes[node];
         let visits = f64::from(n.visits);

@@ -1,4 +1,4 @@
-//! The value of a plan prefix (paper Eq. 8): `R_G` when the state it reaches satisfies the
+//! The value of a plan prefix (paper Eq. 10): `R_G` when the state it reaches satisfies the
 //! goal, else `−h(s, G) − λ·|π|`, with `h` a fixed weighted mix of h_FF, LM-cut and the
 //! remaining plan cost (Appendix A.4), each in the task's action-cost units.
 //!
@@ -43,9 +43,11 @@ pub struct ValueConfig {
     pub remaining: f64,
     /// Expansion budget of each remaining-plan-cost search.
     pub remaining_expansions: u64,
-    /// `R_G`, the value of a prefix that reaches the goal.
+    /// `R_G`, the value of a prefix that reaches the goal (1 by default: the paper asks only
+    /// `R_G > 0` and gives no value).
     pub goal_reward: f64,
-    /// `λ`, the penalty per action of the prefix.
+    /// `λ`, the penalty per action of the prefix (0.1 by default: the paper asks only `λ > 0`
+    /// and gives no value; 0 is allowed, as an ablation without the penalty).
     pub length_penalty: f64,
 }
 
@@ -128,7 +130,7 @@ impl<'m> Evaluator<'m> {
         h
     }
 
-    /// Eq. 8 for a prefix of `length` actions reaching `state`; `None` for a dead end.
+    /// Eq. 10 for a prefix of `length` actions reaching `state`; `None` for a dead end.
     pub fn value(&mut self, state: &State, length: usize) -> Option<f64> {
         if self.model.is_goal(state) {
             return Some(self.config.goal_reward);

@@ -265,7 +265,7 @@ enum Phase {
     Finished,
 }
 
-/// The partial action `u` inside one state's language: Eq. 5 of the paper at the byte level.
+/// The partial action `u` inside one state's language: Eq. 7 of the paper at the byte level.
 ///
 /// **Boundaries.** A token is allowed at `u` iff its bytes `b` make `u·b` a prefix of
 /// `text·separator` for an action text of this state, or of the end marker at a boundary.

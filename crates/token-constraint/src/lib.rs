@@ -1,4 +1,4 @@
-//! State-dependent next-token masks: Eq. 5-6 of the paper at the byte level.
+//! State-dependent next-token masks: Eq. 7-8 of the paper at the byte level.
 //!
 //! At every decoding step the model may emit a token `v` only if the partial action `u`
 //! followed by `v`'s bytes is still a prefix of the spelling of an action applicable in the

@@ -503,13 +503,13 @@ fn search_tree_html(episode: &Map<String, Value>) -> String {
             .into();
     };
     let backup = match tree.get("backup").and_then(Value::as_str) {
-        Some("mean") => "the mean of the values (Eq. 8) backed up through it",
-        _ => "the best value (Eq. 8) backed up through it",
+        Some("mean") => "the mean of the values (Eq. 10) backed up through it",
+        _ => "the best value (Eq. 10) backed up through it",
     };
     let mut out = format!(
         "<p class=\"caption\">{} simulation(s) backed up at the root. The tree's nodes are tokens; a row is a branch from one action \
          boundary to the next, usually the node where an action's line completes. Visits: simulations through it; value: {backup}; \
-         prior: the product of its tokens' priors (the masked model distribution, Eq. 6). Visited branches only, most visited first.</p>\n",
+         prior: the product of its tokens' priors (the masked model distribution, Eq. 8). Visited branches only, most visited first.</p>\n",
         tree.get("visits").and_then(Value::as_u64).unwrap_or(0)
     );
     match tree.get("first").and_then(Value::as_object) {
