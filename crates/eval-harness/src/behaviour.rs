@@ -42,7 +42,7 @@ pub struct FailureResponse {
 /// episode that ended in `success`.
 pub fn failure_response(requests: &[(&str, bool)], success: bool) -> FailureResponse {
     let first_failure = requests.iter().position(|(_, ok)| !ok);
-    let repeats = requests.windows(2).any(|w| !w[0].1 && w[0].0 == w[1].0);
+    let repeats = requests.windows(2).any(|w| !w[0].1 && !w[0].0.is_empty() && w[0].0 == w[1].0);
     FailureResponse {
         encounters_failure: first_failure.is_some(),
         recovers: first_failure.is_some() && success,
@@ -52,10 +52,13 @@ pub fn failure_response(requests: &[(&str, bool)], success: bool) -> FailureResp
 }
 
 /// At least five identical consecutive requests, or six consecutive requests alternating
-/// between two different actions.
+/// between two different actions. An empty command (a reply that named no action, recorded as
+/// a failed turn) is no request: it takes part in neither.
 pub fn persistent_loop(commands: &[&str]) -> bool {
-    let same_five = commands.windows(5).any(|w| w.iter().all(|c| *c == w[0]));
-    let oscillation = commands.windows(6).any(|w| w[0] != w[1] && w.iter().enumerate().all(|(i, c)| *c == w[i % 2]));
+    let same_five = commands.windows(5).any(|w| !w[0].is_empty() && w.iter().all(|c| *c == w[0]));
+    let oscillation = commands
+        .windows(6)
+        .any(|w| !w[0].is_empty() && !w[1].is_empty() && w[0] != w[1] && w.iter().enumerate().all(|(i, c)| *c == w[i % 2]));
     same_five || oscillation
 }
 

@@ -14,6 +14,12 @@ fn failure_responses() {
     assert!(r.encounters_failure && !r.recovers && r.repeats_failed_request);
     // A success that never failed is no recovery.
     assert!(!failure_response(&clean, true).recovers);
+    // Replies that named no action (recorded as failed turns with no command) are no
+    // requests: five of them repeat nothing and make no loop.
+    let unreadable = [("", false); 5];
+    let r = failure_response(&unreadable, false);
+    assert!(r.encounters_failure && !r.repeats_failed_request && !r.persistent_loop, "{r:?}");
+    assert!(!persistent_loop(&["", "look", "", "look", "", "look"]));
 }
 
 #[test]

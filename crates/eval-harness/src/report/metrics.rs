@@ -71,8 +71,9 @@ pub(crate) fn requests(record: &Record) -> Option<Vec<(&str, bool)>> {
 }
 
 /// Failed requests followed by another request, and how many of those the same request
-/// followed (Table 12's "repeats request" is the second over the first).
+/// followed (Table 12's "repeats request" is the second over the first). An empty command (a
+/// reply that named no action) is no request: nothing repeats it.
 pub(crate) fn failed_transitions(requests: &[(&str, bool)]) -> (usize, usize) {
     let failed: Vec<&[(&str, bool)]> = requests.windows(2).filter(|w| !w[0].1).collect();
-    (failed.len(), failed.iter().filter(|w| w[0].0 == w[1].0).count())
+    (failed.len(), failed.iter().filter(|w| !w[0].0.is_empty() && w[0].0 == w[1].0).count())
 }

@@ -98,6 +98,11 @@ impl Condition {
     pub fn is_thinking(&self) -> bool {
         self.mode.as_deref().is_some_and(|m| m.starts_with("thinking"))
     }
+
+    /// Whether this is the paper's method: the agent `ours` with constrained MCTS.
+    pub fn is_method(&self) -> bool {
+        self.agent == "ours" && matches!(self.mode.as_deref(), None | Some("constrained-mcts"))
+    }
 }
 
 /// One run of a condition on a benchmark: its records, one per task, in task order.
@@ -150,6 +155,15 @@ fn judged(record: &Record) -> bool {
 impl<'a> Study<'a> {
     pub fn runs(&self, condition: usize, benchmark: usize) -> &[Run<'a>] {
         self.cells.get(&(condition, benchmark)).map_or(&[], Vec::as_slice)
+    }
+
+    /// The designated run of a condition on a benchmark: the first in seed order (seed 0 of
+    /// the paper's 0, 42, 1738), which the paper's main tables report for a stochastic
+    /// condition (Appendix B: "the main paper reports the seed-0 run"); Table 7 gives the mean
+    /// and spread over all runs.
+    pub fn designated(&self, condition: usize, benchmark: usize) -> &[Run<'a>] {
+        let runs = self.runs(condition, benchmark);
+        &runs[..runs.len().min(1)]
     }
 }
 

@@ -77,7 +77,7 @@ fn condition_cells(condition: &Condition, with_setting: bool) -> Vec<Cell> {
 
 /// Every table, in the paper's order.
 pub(crate) fn tables(study: &Study<'_>, options: &ReportOptions) -> Result<Vec<Table>, ReportError> {
-    let mut tables = vec![success_table(study)?, ablation_table(study)?, accuracy_table(study, options)?];
+    let mut tables = vec![success_table(study)?, ablation_table(study)?, phase2_table(study, options)?, accuracy_table(study, options)?];
     tables.extend(mcnemar_tables(study, options)?);
     tables.push(terminal_table(study)?);
     tables.push(failure_response_table(study)?);
@@ -100,8 +100,9 @@ fn success_table(study: &Study<'_>) -> Result<Table, ReportError> {
     let mut table = Table::new(
         "success",
         "Task success (%) (Table 1)",
-        "Task success (%) per condition and benchmark: the mean over runs of each run's success rate; n = tasks per run (× runs). \
-         Model: the model of both phases, or Phase I's / Phase II's where they differ (sweep: the systematic explorer, which uses \
+        "Task success (%) per condition and benchmark: the success rate of the designated run (of a condition run with several \
+         seeds, the first in seed order: seed 0, which the paper's main tables report; Table 7 gives the mean over runs); \
+         n = tasks. Model: the model of both phases, or Phase I's / Phase II's where they differ (sweep: the systematic explorer, which uses \
          none). Best per column in bold.",
         "No records.",
     );
@@ -118,7 +119,7 @@ fn success_table(study: &Study<'_>) -> Result<Table, ReportError> {
     for (c, condition) in study.conditions.iter().enumerate() {
         let mut row = condition_cells(condition, with_setting);
         for b in 0..study.benchmarks.len() {
-            row.push(success_cell(study.runs(c, b))?);
+            row.push(success_cell(study.designated(c, b))?);
         }
         table.rows.push(row);
     }
@@ -129,9 +130,9 @@ fn success_table(study: &Study<'_>) -> Result<Table, ReportError> {
 fn ablation_table(study: &Study<'_>) -> Result<Table, ReportError> {
     let mut table = Table::new(
         "ablation",
-        "Component ablation (Tables 2 and 8)",
-        "Task success (%) of the agent `ours` under each Phase II condition: search (MCTS) and token-level constraints on or off. \
-         Best per column in bold.",
+        "Component ablation (Table 2)",
+        "Task success (%) of the agent `ours` under each Phase II condition: search (MCTS) and token-level constraints on or off; \
+         the designated run (seed 0) of a condition run with several seeds. Best per column in bold.",
         "No records of the agent `ours`: the ablation compares its Phase II conditions (`--mode`).",
     );
     let ours: Vec<(usize, &Condition)> = study.conditions.iter().enumerate().filter(|(_, c)| c.agent == "ours").collect();
@@ -167,11 +168,84 @@ fn ablation_table(study: &Study<'_>) -> Result<Table, ReportError> {
             row.push(Cell::from(condition.setting.as_str()));
         }
         for b in 0..study.benchmarks.len() {
-            row.push(success_cell(study.runs(c, b))?);
+            row.push(success_cell(study.designated(c, b))?);
         }
         table.rows.push(row);
     }
     table.bold_best(first..table.columns.len());
+    Ok(table)
+}
+
+/// Table 8: every Phase II condition of `ours` a row, every model a column under each
+/// benchmark, accuracy ± sample sd over runs; bold, per column, the best and every condition
+/// not significantly different from it (as Table 7 decides it, among that column's conditions).
+fn phase2_table(study: &Study<'_>, options: &ReportOptions) -> Result<Table, ReportError> {
+    let mut table = Table::new(
+        "phase2-conditions",
+        "Phase II conditions by model (Table 8)",
+        format!(
+            "Task success (%) of the agent `ours` for every model and Phase II condition, as mean ± sample standard deviation \
+             over runs (± 0.0: one run). Bold: the best in each column and every result not significantly different from it \
+             (exact paired McNemar against the best, the largest p over run pairs, Holm correction within the column, α = {}).",
+            options.alpha
+        ),
+        "No records of the agent `ours`: the table compares its Phase II conditions (`--mode`, `--chat-planner`).",
+    );
+    let ours: Vec<usize> = (0..study.conditions.len()).filter(|&c| study.conditions[c].agent == "ours").collect();
+    let mut models: Vec<&str> = Vec::new();
+    let mut rows: Vec<(&str, &str)> = Vec::new();
+    for &c in &ours {
+        let condition = &study.conditions[c];
+        if !models.contains(&condition.model.as_str()) {
+            models.push(&condition.model);
+        }
+        if !rows.contains(&(condition.approach.as_str(), condition.setting.as_str())) {
+            rows.push((&condition.approach, &condition.setting));
+        }
+    }
+    let with_setting = rows.iter().any(|(_, setting)| !setting.is_empty());
+    table.column("Condition", false);
+    if with_setting {
+        table.column("Setting", false);
+    }
+    let first = table.columns.len();
+    for benchmark in &study.benchmarks {
+        for model in &models {
+            table.grouped_column(benchmark.as_str(), *model, true);
+        }
+    }
+    for (approach, setting) in &rows {
+        let mut row = vec![Cell::from(*approach)];
+        if with_setting {
+            row.push(Cell::from(*setting));
+        }
+        row.extend((0..study.benchmarks.len() * models.len()).map(|_| Cell::from("—")));
+        table.rows.push(row);
+    }
+    for b in 0..study.benchmarks.len() {
+        for (m, model) in models.iter().enumerate() {
+            let column = first + b * models.len() + m;
+            let mut means = Vec::new();
+            for &c in &ours {
+                let condition = &study.conditions[c];
+                let runs = study.runs(c, b);
+                if condition.model != *model || runs.is_empty() {
+                    continue;
+                }
+                let rates: Vec<f64> = runs.iter().map(success_rate).collect::<Result<_, _>>()?;
+                let summary = stats::summarize_runs(&rates).map_err(stats_error("Table 8's accuracy over runs"))?;
+                let r = rows.iter().position(|&(a, s)| a == condition.approach && s == condition.setting).unwrap_or_default();
+                table.rows[r][column] =
+                    Cell::from(format!("{} ± {}", percent(summary.mean), percent(summary.sample_std_dev.unwrap_or(0.0))));
+                means.push((c, summary.mean));
+            }
+            for c in not_worse_than_the_best(study, b, &means, options)? {
+                let condition = &study.conditions[c];
+                let r = rows.iter().position(|&(a, s)| a == condition.approach && s == condition.setting).unwrap_or_default();
+                table.rows[r][column].bold = true;
+            }
+        }
+    }
     Ok(table)
 }
 
@@ -287,16 +361,37 @@ struct Test {
     holm: f64,
 }
 
-/// The component-ablation family: `ours` against `ours` differing only in Phase II's mode,
-/// one side the paper's constrained MCTS, the other not thinking (the paper tests thinking
-/// among the main comparisons, as a baseline).
-fn is_ablation(a: &Condition, b: &Condition) -> bool {
-    a.agent == "ours"
-        && b.agent == "ours"
-        && a.without_mode() == b.without_mode()
-        && !a.is_thinking()
-        && !b.is_thinking()
-        && (a.mode.as_deref() == Some("constrained-mcts") || b.mode.as_deref() == Some("constrained-mcts"))
+/// The paper's two families of comparisons (Appendix B), and the rest.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Family {
+    /// The method against the direct policies, unconstrained thinking and the embodied and API
+    /// policies, and against itself at another model scale (Table 9).
+    Main,
+    /// The method against constrained greedy and unconstrained MCTS from the same Phase I
+    /// (Table 10).
+    Ablation,
+    /// Pairs the paper does not test (among baselines; the method against other Phase II
+    /// conditions, the A* planner or the expert), Holm-corrected among themselves.
+    Other,
+}
+
+fn family(a: &Condition, b: &Condition) -> Family {
+    let (method, other) = match (a.is_method(), b.is_method()) {
+        (true, false) => (a, b),
+        (false, true) => (b, a),
+        (true, true) if a.model != b.model => return Family::Main,
+        _ => return Family::Other,
+    };
+    let ablated = other.agent == "ours"
+        && matches!(other.mode.as_deref(), Some("constrained-greedy" | "unconstrained-mcts"))
+        && method.without_mode() == other.without_mode();
+    if ablated {
+        Family::Ablation
+    } else if other.agent == "direct" || other.is_thinking() {
+        Family::Main
+    } else {
+        Family::Other
+    }
 }
 
 fn mcnemar_test(first: &[Run<'_>], second: &[Run<'_>]) -> Result<Option<(usize, stats::McNemar)>, ReportError> {
@@ -319,7 +414,7 @@ fn mcnemar_test(first: &[Run<'_>], second: &[Run<'_>]) -> Result<Option<(usize, 
 }
 
 fn mcnemar_tables(study: &Study<'_>, options: &ReportOptions) -> Result<Vec<Table>, ReportError> {
-    let mut families: [Vec<Test>; 2] = [Vec::new(), Vec::new()];
+    let mut families: [Vec<Test>; 3] = [Vec::new(), Vec::new(), Vec::new()];
     let n = study.conditions.len();
     for benchmark in 0..study.benchmarks.len() {
         for i in 0..n {
@@ -329,7 +424,11 @@ fn mcnemar_tables(study: &Study<'_>, options: &ReportOptions) -> Result<Vec<Tabl
                     continue;
                 }
                 if let Some((tasks, test)) = mcnemar_test(first, second)? {
-                    let family = usize::from(is_ablation(&study.conditions[i], &study.conditions[j]));
+                    let family = match family(&study.conditions[i], &study.conditions[j]) {
+                        Family::Main => 0,
+                        Family::Ablation => 1,
+                        Family::Other => 2,
+                    };
                     families[family].push(Test {
                         pair: (i, j),
                         benchmark,
@@ -353,7 +452,7 @@ fn mcnemar_tables(study: &Study<'_>, options: &ReportOptions) -> Result<Vec<Tabl
             test.holm = holm;
         }
     }
-    let [main, ablation] = families;
+    let [main, ablation, other] = families;
     let described = |what: &str, tests: &[Test]| {
         format!(
             "Exact paired McNemar tests ({what}; m = {} tests), Holm correction within the family, significant at α = {}. \
@@ -368,8 +467,13 @@ fn mcnemar_tables(study: &Study<'_>, options: &ReportOptions) -> Result<Vec<Tabl
             study,
             "mcnemar-main",
             "Paired significance: main comparisons (Table 9)",
-            described("every pair of conditions outside the ablation family", &main),
-            "No pair of conditions shares a task on any benchmark.",
+            described(
+                "the paper's main family: the method, `ours` with constrained MCTS, against the direct policies and the thinking \
+                 conditions, and against itself with another model",
+                &main,
+            ),
+            "No main comparison: records of the method (`ours`, constrained MCTS) and of a direct policy, a thinking condition \
+             or the method with another model, on shared tasks.",
             &main,
             options,
         ),
@@ -377,9 +481,22 @@ fn mcnemar_tables(study: &Study<'_>, options: &ReportOptions) -> Result<Vec<Tabl
             study,
             "mcnemar-ablation",
             "Paired significance: component ablations (Table 10)",
-            described("`ours` with constrained MCTS against the same agent under another Phase II mode", &ablation),
-            "No ablation pair: records of `ours` under constrained MCTS and another `--mode`, otherwise equal, on shared tasks.",
+            described(
+                "the paper's ablation family: the method against constrained greedy and unconstrained MCTS, otherwise equal",
+                &ablation,
+            ),
+            "No ablation pair: records of `ours` under constrained MCTS and under constrained greedy or unconstrained MCTS, \
+             otherwise equal, on shared tasks.",
             &ablation,
+            options,
+        ),
+        mcnemar_table(
+            study,
+            "mcnemar-other",
+            "Paired significance: comparisons beyond the paper's families",
+            described("every other pair of conditions, a family of its own so that the paper's two keep their size", &other),
+            "No other pair of conditions shares a task on any benchmark.",
+            &other,
             options,
         ),
     ])
@@ -421,12 +538,17 @@ fn mcnemar_table(
     table
 }
 
-/// Rows per benchmark, then condition, for the cells whose records `holds` something.
-fn environment_rows<'s, 'a>(study: &'s Study<'a>, holds: impl Fn(&Record) -> bool) -> Vec<(usize, usize, &'s [Run<'a>])> {
+/// Rows per benchmark, then condition, for the cells whose records `holds` something: every
+/// run of each, or the designated run only ([`Study::designated`]).
+fn environment_rows<'s, 'a>(
+    study: &'s Study<'a>,
+    designated: bool,
+    holds: impl Fn(&Record) -> bool,
+) -> Vec<(usize, usize, &'s [Run<'a>])> {
     let mut rows = Vec::new();
     for b in 0..study.benchmarks.len() {
         for c in 0..study.conditions.len() {
-            let runs = study.runs(c, b);
+            let runs = if designated { study.designated(c, b) } else { study.runs(c, b) };
             if runs.iter().any(|run| run.records.iter().any(|(_, r)| holds(r))) {
                 rows.push((b, c, runs));
             }
@@ -460,12 +582,13 @@ fn terminal_table(study: &Study<'_>) -> Result<Table, ReportError> {
     let mut table = Table::new(
         "terminal",
         "Terminal mechanism (Table 11)",
-        "How each episode ended, as a percentage of all tasks (mean over runs): success; grounding (a refused request ended the \
+        "How each episode ended, as a percentage of all tasks (the designated run: seed 0 of a condition run with several \
+         seeds, as the paper's Table 11): success; grounding (a refused request ended the \
          episode or left the plan unfinished); the interaction limit; the model's own Done (for `ours`, also a plan that ran to \
          its end short of the goal); Phase II's search budget (`ours` only: no plan).",
         "No records carry a terminal mechanism (`terminal`): the expert's records do not.",
     );
-    let rows = environment_rows(study, |r| metrics::terminal(r).is_some());
+    let rows = environment_rows(study, true, |r| metrics::terminal(r).is_some());
     let with_setting = has_setting(rows.iter().map(|(_, c, _)| &study.conditions[*c]));
     environment_columns(&mut table, with_setting);
     let kinds = [
@@ -502,10 +625,11 @@ fn failure_response_table(study: &Study<'_>) -> Result<Table, ReportError> {
         "Encounters failure: tasks with a request the environment did not execute (% of all tasks). Recovers task: success among \
          those tasks. Repeats request: failed requests followed at once by the same request (% of failed requests followed by \
          another). Persistent loop: tasks with five identical consecutive requests or a six-step two-action oscillation (% of all \
-         tasks). Means over runs; – where nothing was counted.",
+         tasks). The designated run (seed 0 of a condition run with several seeds, as the paper's Table 12); – where nothing \
+         was counted. A reply that named no action is a failed turn but no request: it repeats nothing and makes no loop.",
         "No records carry a failure response (`failure_response`): the expert's records do not.",
     );
-    let rows = environment_rows(study, |r| metrics::failure_flag(r, "encounters_failure").is_some());
+    let rows = environment_rows(study, true, |r| metrics::failure_flag(r, "encounters_failure").is_some());
     let with_setting = has_setting(rows.iter().map(|(_, c, _)| &study.conditions[*c]));
     environment_columns(&mut table, with_setting);
     for name in ["Encounters failure", "Recovers task", "Repeats request", "Persistent loop"] {
@@ -611,7 +735,7 @@ fn attribution_table(study: &Study<'_>) -> Result<Table, ReportError> {
          intended), goal not reached (executable, but the goal is false at the end). Successful tasks contribute to none.",
         "No records carry a failure attribution (`attribution`): the expert's records do not.",
     );
-    let rows = environment_rows(study, |r| metrics::attribution(r).is_some());
+    let rows = environment_rows(study, false, |r| metrics::attribution(r).is_some());
     let with_setting = has_setting(rows.iter().map(|(_, c, _)| &study.conditions[*c]));
     environment_columns(&mut table, with_setting);
     table.column("Success", true);
