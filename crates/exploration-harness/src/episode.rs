@@ -388,9 +388,11 @@ pub fn run_episode<E: Environment + Judge>(
             episode.failure = Some("goal not reached".into());
         }
         let accurate = episode.precision.is_none_or(|p| p >= 1.0) && episode.recall.is_none_or(|r| r >= 1.0);
-        episode.attribution = Some(if !accurate || explored_out {
+        // No hand-over: Phase I's facts, right as they are, do not make a problem the domain
+        // grounds (an object the goal needs was never found), an insufficient state (§5.3).
+        episode.attribution = Some(if !accurate || explored_out || no_handover {
             Attribution::Representation
-        } else if episode.no_plan || no_handover {
+        } else if episode.no_plan {
             Attribution::Search
         } else if not_executed {
             Attribution::Grounding

@@ -39,7 +39,8 @@
 /// version 10's planner records in TextWorld found a plan sent on past the win); 12: ALFWorld's
 /// adapter no longer reads the game's admissible commands to tell that two places share a
 /// location: it learns it from the game's "Nothing happens." to a `go to`, and ŝ0 gives such
-/// places one location ([`alfworld::colocated`]).
+/// places one location ([`alfworld::colocated`]); a failed hand-over is attributed to
+/// `representation` (Phase I's state was insufficient), not `search`.
 pub const HARNESS_VERSION: u32 = 12;
 
 pub mod alfworld;

@@ -314,3 +314,74 @@ fn colocated_joins_places_by_the_game_s_answers() {
     }
     assert_eq!(shared.len(), 3, "{shared:?}");
 }
+
+/// ALFWorld's adapter, but no hand-over grounds.
+struct NoHandover(AlfworldAdapter);
+
+impl exploration_harness::Adapter for NoHandover {
+    fn observe(&mut self, o: &household_sim::Observation, step: usize, belief: &mut exploration_harness::Belief) {
+        self.0.observe(o, step, belief)
+    }
+    fn skills(
+        &self,
+        g: &exploration_harness::ClassGoal,
+        b: &exploration_harness::Belief,
+        r: &exploration_harness::phase1::Record,
+    ) -> exploration_harness::Skills {
+        self.0.skills(g, b, r)
+    }
+    fn commands(
+        &self,
+        s: &exploration_harness::Skill,
+        g: &exploration_harness::ClassGoal,
+        b: &exploration_harness::Belief,
+        r: &exploration_harness::phase1::Record,
+    ) -> Vec<String> {
+        self.0.commands(s, g, b, r)
+    }
+    fn ready(&self, g: &exploration_harness::ClassGoal, b: &exploration_harness::Belief, r: &exploration_harness::phase1::Record) -> bool {
+        self.0.ready(g, b, r)
+    }
+    fn objects_to_find(&self, g: &exploration_harness::ClassGoal) -> Vec<String> {
+        self.0.objects_to_find(g)
+    }
+}
+
+impl exploration_harness::Handing for NoHandover {
+    fn handover(
+        &mut self,
+        _: &exploration_harness::ClassGoal,
+        _: &exploration_harness::phase1::Exploration,
+        _: &[exploration_harness::phase1::StepRecord],
+    ) -> Result<Grounded, String> {
+        Err("the goal names a class with no perceived instance".into())
+    }
+    fn command(&self, g: &Grounded, a: grounding::ActionId) -> Result<Option<String>, String> {
+        self.0.command(g, a)
+    }
+    fn judge_view(&self, f: &exploration_harness::Fact) -> Option<household_sim::JudgeAtom> {
+        self.0.judge_view(f)
+    }
+    fn class_of<'a>(&self, name: &'a str) -> &'a str {
+        exploration_harness::Handing::class_of(&self.0, name)
+    }
+    fn locates(&self, atom: &household_sim::JudgeAtom) -> bool {
+        self.0.locates(atom)
+    }
+}
+
+/// A hand-over that does not ground (Phase I's facts, right as they are, make no problem) is
+/// Phase I's failure, `representation` (§5.3: an insufficient state), not Phase II's.
+#[test]
+fn a_failed_hand_over_is_attributed_to_representation() {
+    let (domain, grammar) = domain_and_grammar();
+    let game = &first_trials(1)[0];
+    let mut env = AlfworldEnv::from_game_file(game).unwrap();
+    let goal = parse_goal(env.goal()).unwrap();
+    let mut adapter = NoHandover(AlfworldAdapter::new(ontology(), domain, grammar, env.goal()));
+    let mut planner = |_: &Grounded| -> Result<PhaseTwo, String> { panic!("no hand-over, no planning") };
+    let episode = run_episode(&mut env, &mut adapter, &mut Systematic, &goal, EpisodeConfig::open_loop(55), &mut planner);
+    assert!(!episode.success);
+    assert_eq!(episode.failure.as_deref(), Some("the goal names a class with no perceived instance"));
+    assert_eq!(episode.attribution, Some(exploration_harness::Attribution::Representation));
+}

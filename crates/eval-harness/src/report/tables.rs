@@ -540,11 +540,7 @@ fn mcnemar_table(
 
 /// Rows per benchmark, then condition, for the cells whose records `holds` something: every
 /// run of each, or the designated run only ([`Study::designated`]).
-fn environment_rows<'s, 'a>(
-    study: &'s Study<'a>,
-    designated: bool,
-    holds: impl Fn(&Record) -> bool,
-) -> Vec<(usize, usize, &'s [Run<'a>])> {
+fn environment_rows<'s, 'a>(study: &'s Study<'a>, designated: bool, holds: impl Fn(&Record) -> bool) -> Vec<(usize, usize, &'s [Run<'a>])> {
     let mut rows = Vec::new();
     for b in 0..study.benchmarks.len() {
         for c in 0..study.conditions.len() {
