@@ -84,7 +84,20 @@ pub fn ground(files: &TaskFiles) -> anyhow::Result<Task> {
         );
         bail!(InputError(lines.join("\n")));
     }
-    grounding::ground(&domain, &problem).map_err(|e| InputError(format!("{}: {e}", files.problem_path.display())).into())
+    // The file each error is about: the domain's actions (what they increase, how their
+    // disjunctions split), or the problem's `:init` (the cost values), else both.
+    grounding::ground(&domain, &problem).map_err(|e| {
+        let file = match &e {
+            grounding::GroundingError::Unsupported(_) | grounding::GroundingError::TooManyAlternatives { .. } => {
+                files.domain_path.display().to_string()
+            }
+            grounding::GroundingError::MissingCost { .. } | grounding::GroundingError::InvalidCost { .. } => {
+                files.problem_path.display().to_string()
+            }
+            _ => format!("{} with {}", files.domain_path.display(), files.problem_path.display()),
+        };
+        InputError(format!("{file}: {e}")).into()
+    })
 }
 
 /// The game's grammar, for ALFWorld spelling.

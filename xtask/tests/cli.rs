@@ -635,3 +635,22 @@ fn eval_reports_bad_input_before_it_fetches_the_model() {
     assert_eq!(std::fs::read_dir(models.path()).expect("model folder").count(), 0, "nothing fetched");
     assert!(!records.exists(), "no records for a run that never started");
 }
+
+/// A grounding error that is about the domain (an action that increases a function other than
+/// `total-cost`) names the domain file and the action, not the problem file.
+#[test]
+fn grounding_errors_name_the_file_they_are_about() {
+    let dir = scratch_dir("ground-unsupported-");
+    let domain = scratch(
+        &dir,
+        "fuel-domain.pddl",
+        "(define (domain d) (:requirements :strips :numeric-fluents) (:predicates (p) (q)) (:functions (fuel) - number)\n\
+         (:action burn :parameters () :precondition (p) :effect (and (q) (increase (fuel) 1))))\n",
+    );
+    let problem = scratch(&dir, "fuel-problem.pddl", "(define (problem e) (:domain d) (:init (p) (= (fuel) 0)) (:goal (q)))\n");
+    let output = xtask(&["ground", "--domain", domain.to_str().unwrap(), "--problem", problem.to_str().unwrap()]);
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert_eq!(output.status.code(), Some(2), "{stderr}");
+    assert!(stderr.contains(&format!("{}: ", domain.display())) && stderr.contains("`burn`"), "{stderr}");
+    assert!(!stderr.contains("fuel-problem.pddl"), "{stderr}");
+}
