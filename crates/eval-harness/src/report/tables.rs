@@ -208,42 +208,41 @@ fn phase2_table(study: &Study<'_>, options: &ReportOptions) -> Result<Table, Rep
     if with_setting {
         table.column("Setting", false);
     }
+    // A column per model under each benchmark, where some condition of that model ran there.
+    let ran = |b: usize, model: &str| ours.iter().any(|&c| study.conditions[c].model == model && !study.runs(c, b).is_empty());
+    let columns: Vec<(usize, &str)> =
+        (0..study.benchmarks.len()).flat_map(|b| models.iter().filter(move |m| ran(b, m)).map(move |m| (b, *m))).collect();
     let first = table.columns.len();
-    for benchmark in &study.benchmarks {
-        for model in &models {
-            table.grouped_column(benchmark.as_str(), *model, true);
-        }
+    for &(b, model) in &columns {
+        table.grouped_column(study.benchmarks[b].as_str(), model, true);
     }
     for (approach, setting) in &rows {
         let mut row = vec![Cell::from(*approach)];
         if with_setting {
             row.push(Cell::from(*setting));
         }
-        row.extend((0..study.benchmarks.len() * models.len()).map(|_| Cell::from("—")));
+        row.extend(columns.iter().map(|_| Cell::from("—")));
         table.rows.push(row);
     }
-    for b in 0..study.benchmarks.len() {
-        for (m, model) in models.iter().enumerate() {
-            let column = first + b * models.len() + m;
-            let mut means = Vec::new();
-            for &c in &ours {
-                let condition = &study.conditions[c];
-                let runs = study.runs(c, b);
-                if condition.model != *model || runs.is_empty() {
-                    continue;
-                }
-                let rates: Vec<f64> = runs.iter().map(success_rate).collect::<Result<_, _>>()?;
-                let summary = stats::summarize_runs(&rates).map_err(stats_error("Table 8's accuracy over runs"))?;
-                let r = rows.iter().position(|&(a, s)| a == condition.approach && s == condition.setting).unwrap_or_default();
-                table.rows[r][column] =
-                    Cell::from(format!("{} ± {}", percent(summary.mean), percent(summary.sample_std_dev.unwrap_or(0.0))));
-                means.push((c, summary.mean));
+    for (k, &(b, model)) in columns.iter().enumerate() {
+        let column = first + k;
+        let mut means = Vec::new();
+        for &c in &ours {
+            let condition = &study.conditions[c];
+            let runs = study.runs(c, b);
+            if condition.model != model || runs.is_empty() {
+                continue;
             }
-            for c in not_worse_than_the_best(study, b, &means, options)? {
-                let condition = &study.conditions[c];
-                let r = rows.iter().position(|&(a, s)| a == condition.approach && s == condition.setting).unwrap_or_default();
-                table.rows[r][column].bold = true;
-            }
+            let rates: Vec<f64> = runs.iter().map(success_rate).collect::<Result<_, _>>()?;
+            let summary = stats::summarize_runs(&rates).map_err(stats_error("Table 8's accuracy over runs"))?;
+            let r = rows.iter().position(|&(a, s)| a == condition.approach && s == condition.setting).unwrap_or_default();
+            table.rows[r][column] = Cell::from(format!("{} ± {}", percent(summary.mean), percent(summary.sample_std_dev.unwrap_or(0.0))));
+            means.push((c, summary.mean));
+        }
+        for c in not_worse_than_the_best(study, b, &means, options)? {
+            let condition = &study.conditions[c];
+            let r = rows.iter().position(|&(a, s)| a == condition.approach && s == condition.setting).unwrap_or_default();
+            table.rows[r][column].bold = true;
         }
     }
     Ok(table)
