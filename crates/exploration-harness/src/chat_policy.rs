@@ -69,6 +69,9 @@ pub fn system_prompt(benchmark: &str) -> String {
 pub fn user_prompt(input: &PolicyInput<'_>) -> String {
     let list = |items: &[String], empty: &str| if items.is_empty() { empty.to_string() } else { items.join("\n") };
     let skills: Vec<String> = input.skills.list.iter().map(|s| format!("- {s}")).collect();
+    // A fact in the benchmark's own vocabulary, as its perceiver reads it back.
+    let example =
+        if input.benchmark.starts_with("virtualhome") { "INSIDE(plate (1001), cabinet (5))" } else { "inReceptacle(mug 2, countertop 1)" };
     format!(
         "Task:\n{task}\nFind each listed object and determine where it is.\n\n\
          Objects to find and locate:\n{objects}\n\n\
@@ -77,7 +80,7 @@ pub fn user_prompt(input: &PolicyInput<'_>) -> String {
          Valid skills right now:\n{skills}\n\n\
          Feedback:\n{feedback}\n\n\
          Observation:\n{observation}\n\n\
-         Return visible predicates in \"facts\" (each as predicate(argument, argument), e.g. inReceptacle(mug 2, countertop 1)), \
+         Return visible predicates in \"facts\" (each as predicate(argument, argument), e.g. {example}), \
          exactly one valid skill in \"action\", and \"done\": true only after every listed object has a grounded placement.",
         task = input.task,
         objects = input.objects.join(", "),

@@ -246,3 +246,32 @@ fn a_narrowing_frontier_closes_in_on_the_place_a_model_keeps_passing_over() {
     assert_eq!(narrowing[..4], [3, 2, 1, 3], "passed over twice, then taken");
     assert_eq!(took_first[..4], [false, false, true, false]);
 }
+
+/// The reply instruction's example fact is in the benchmark's own vocabulary, the one its
+/// perceiver reads back (VirtualHome's prompts showed ALFWorld's `inReceptacle`).
+#[test]
+fn the_example_fact_is_in_the_benchmark_s_vocabulary() {
+    use exploration_harness::Skill;
+    use exploration_harness::chat_policy::user_prompt;
+    use exploration_harness::phase1::{PolicyInput, Skills};
+    let skills = Skills { list: vec![Skill::Done], sweep: None };
+    let observation = household_sim::Observation::text("You are in the kitchen.");
+    let prompt = |benchmark: &str| {
+        user_prompt(&PolicyInput {
+            benchmark,
+            task: "put the plate in the cabinet",
+            objects: &["plate".to_string()],
+            belief: Vec::new(),
+            history: Vec::new(),
+            skills: &skills,
+            feedback: "This is the first step.",
+            observation: &observation,
+        })
+    };
+    let virtualhome = prompt("virtualhome-rearrange");
+    assert!(virtualhome.contains("e.g. INSIDE(plate (1001), cabinet (5))") && !virtualhome.contains("inReceptacle"), "{virtualhome}");
+    assert!(prompt("alfworld").contains("e.g. inReceptacle(mug 2, countertop 1)"));
+    // The example reads back as a fact in VirtualHome's vocabulary.
+    let fact = exploration_harness::Fact::parse("INSIDE(plate (1001), cabinet (5))").expect("a fact");
+    assert_eq!((fact.predicate.as_str(), fact.args.len()), ("INSIDE", 2));
+}
