@@ -40,8 +40,9 @@
 /// adapter no longer reads the game's admissible commands to tell that two places share a
 /// location: it learns it from the game's "Nothing happens." to a `go to`, and ŝ0 gives such
 /// places one location ([`alfworld::colocated`]); a failed hand-over is attributed to
-/// `representation` (Phase I's state was insufficient), not `search`.
-pub const HARNESS_VERSION: u32 = 12;
+/// `representation` (Phase I's state was insufficient), not `search`; 13: Phase I's prompt gives
+/// VirtualHome an example fact in its own vocabulary (it showed ALFWorld's `inReceptacle`).
+pub const HARNESS_VERSION: u32 = 13;
 
 pub mod alfworld;
 pub mod chat_planner;
