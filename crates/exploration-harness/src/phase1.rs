@@ -465,6 +465,8 @@ pub fn resume(
         }
         let mut steps = Vec::new();
         let mut executed_all = true;
+        // Commands of this skill not executed and not recovered.
+        let mut unrecovered = 0usize;
         let mut reason = String::new();
         let mut pending = adapter.commands(&reply.skill, goal, &belief, &record);
         pending.reverse();
@@ -492,6 +494,7 @@ pub fn resume(
             let executed = result.event.executed();
             if let Event::NotExecuted { reason: r } = &result.event {
                 executed_all = false;
+                unrecovered += 1;
                 reason = r.clone();
             }
             steps.push(record.steps.len());
@@ -500,8 +503,10 @@ pub fn resume(
             if env.goal_reached() {
                 break;
             }
+            // A recovery that executes makes up for the failure it answered, not for others.
             if recovering && executed {
-                executed_all = true;
+                unrecovered -= 1;
+                executed_all = unrecovered == 0;
             }
             recovering = false;
             if !executed
