@@ -189,7 +189,7 @@ fn node_of_class<'a>(scene: &'a Value, class: &str) -> Option<&'a Value> {
     scene["init_graph"]["nodes"].as_array()?.iter().find(|n| n["class_name"] == class)
 }
 
-/// A candidate task (its JSON and a summary "objects<TAB>placements"), or `None` when the
+/// A candidate task (its JSON and a summary `objects<TAB>placements`), or `None` when the
 /// scene has no place to start from.
 fn candidate(
     rng: &mut PythonRandom,

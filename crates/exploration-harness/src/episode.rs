@@ -13,9 +13,9 @@
 //!   located instance in F_τ (recall < 1); or exploration left fewer steps of the budget than
 //!   the first plan needs: none at all, fewer than a plan Phase II returned though told the
 //!   steps left (A*'s optimal plan), or Phase II found no plan and A* with LM-cut proves that
-//!   every plan of ŝ0 is longer than the steps left ([`no_plan_fits`]); or Phase I spent the
-//!   whole budget and no hand-over could be made (a goal symbol with no instance to bind, e.g.
-//!   after re-exploration set the only one seen aside);
+//!   every plan of ŝ0 is longer than the steps left (`no_plan_fits`); or no hand-over could
+//!   be made from F_τ (a goal symbol with no instance to bind: Phase I spent the budget, or
+//!   ended early, or re-exploration set the only one seen aside);
 //! - `search`: the state is right but Phase II returned no plan within its budget;
 //! - `grounding`: the state is right, yet a plan step was not executed by the environment
 //!   (binding or domain semantics);
@@ -244,7 +244,7 @@ pub fn run_episode<E: Environment + Judge>(
         engine_script: Vec::new(),
     };
     let mut exploration = exploration;
-    // The hand-over itself failed (no ŝ0): like a missing plan for the attribution.
+    // The hand-over itself failed (no ŝ0): Phase I's state is insufficient (`representation`).
     let mut no_handover = false;
     // Phase I left no step for a plan.
     let mut explored_out = false;

@@ -180,7 +180,7 @@ pub fn byte_level_decode(piece: &str, char_to_byte: &rustc_hash::FxHashMap<char,
     piece.chars().map(|c| char_to_byte.get(&c).copied()).collect()
 }
 
-/// The inverse of [`byte_to_char_table`].
+/// The inverse of `byte_to_char_table` (GPT-2's byte-to-character table).
 pub fn char_to_byte_map() -> rustc_hash::FxHashMap<char, u8> {
     byte_to_char_table().iter().enumerate().map(|(b, &c)| (c, b as u8)).collect()
 }
