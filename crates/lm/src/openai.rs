@@ -237,8 +237,11 @@ impl OpenAiModel {
         if entries.is_empty() {
             return Err(malformed(format!("no token of the {listed} top logprobs is in the vocabulary")));
         }
-        entries.sort_by(|a, b| b.1.total_cmp(&a.1).then(a.0.cmp(&b.0)));
+        // One entry per id, its likeliest (two listed names can map to one id, such as a token
+        // whose lost bytes the server shows as "�"), then the likeliest first.
+        entries.sort_by(|a, b| a.0.cmp(&b.0).then(b.1.total_cmp(&a.1)));
         entries.dedup_by_key(|e| e.0);
+        entries.sort_by(|a, b| b.1.total_cmp(&a.1).then(a.0.cmp(&b.0)));
         let prompt_tokens = value.get("usage").and_then(|u| u.get("prompt_tokens")).and_then(Value::as_u64);
         Ok((Logprobs::Sparse { top: entries, vocabulary_size: self.tokenizer.vocabulary().len() }, prompt_tokens))
     }

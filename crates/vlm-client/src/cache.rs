@@ -16,12 +16,17 @@
 //! returns the reply it saw.
 //!
 //! The file is JSON lines, one reply a line, appended whole and flushed; a line torn by a
-//! killed process (the last one, without its newline) is dropped when the file is opened.
+//! killed process (the last one, without its newline) is dropped when the file is opened, or
+//! before the next append. Processes may share a file (shards of one run): opening and each
+//! append hold the operating system's exclusive lock on it (`flock`), so one never reads or
+//! cuts another's line half written; a reply another process stored after this one opened the
+//! file is not seen by this one, which asks its model and appends the same reply again (the
+//! later line wins on the next open, with the same content).
 //! Written by hand: a memo table over a JSON-lines file, which no crate offers in this shape.
 
 use std::collections::BTreeMap;
 use std::fs::{File, OpenOptions};
-use std::io::{Read, Seek, SeekFrom, Write};
+use std::io::{Read, Write};
 use std::path::{Path, PathBuf};
 use std::time::Duration;
 
@@ -146,14 +151,14 @@ impl CachedChat {
         }
         let mut file = OpenOptions::new().read(true).append(true).create(true).open(path).map_err(io)?;
         let mut bytes = Vec::new();
-        file.read_to_end(&mut bytes).map_err(io)?;
+        file.lock().map_err(io)?;
+        let read = file.read_to_end(&mut bytes);
         // A last line without its newline was cut off by a killed writer: drop it, so the next
         // append starts a line of its own.
         let whole = bytes.iter().rposition(|&b| b == b'\n').map_or(0, |i| i + 1);
-        if whole < bytes.len() {
-            file.set_len(whole as u64).map_err(io)?;
-            file.seek(SeekFrom::End(0)).map_err(io)?;
-        }
+        let cut = if read.is_ok() && whole < bytes.len() { file.set_len(whole as u64).map(|_| ()) } else { Ok(()) };
+        let unlocked = file.unlock();
+        read.and(cut).and(unlocked).map_err(io)?;
         let mut replies = BTreeMap::new();
         for (i, line) in bytes[..whole].split(|&b| b == b'\n').enumerate() {
             if line.iter().all(u8::is_ascii_whitespace) {
@@ -227,9 +232,14 @@ impl ChatModel for CachedChat {
         };
         let mut line = stored.to_json(&key).to_string();
         line.push('\n');
-        // One write of the whole line, then flushed: a kill leaves it whole or torn at the end,
-        // and a torn end is dropped on the next open.
-        self.file.write_all(line.as_bytes()).and_then(|()| self.file.flush()).map_err(|e| ChatError {
+        // One write of the whole line, then flushed, under the file's lock: a kill leaves it whole
+        // or torn at the end, and a torn end (this process's or another's) is dropped on the next
+        // open or before the next append.
+        let written = self.file.lock().and_then(|()| {
+            let result = cut_torn_tail(&self.file).and_then(|()| self.file.write_all(line.as_bytes())).and_then(|()| self.file.flush());
+            self.file.unlock().and(result)
+        });
+        written.map_err(|e| ChatError {
             kind: ChatErrorKind::Model(format!("the reply cache {}: {e}", self.path.display())),
             url: self.inner.endpoint(),
             attempts: reply.attempts,
@@ -251,4 +261,24 @@ impl ChatModel for CachedChat {
         usage.add(&self.cached_usage);
         usage
     }
+}
+
+/// Cuts a last line without its newline (a writer killed mid-line) off the file, so the next
+/// append starts a line of its own; reads backwards from the end until a newline.
+fn cut_torn_tail(file: &File) -> std::io::Result<()> {
+    use std::os::unix::fs::FileExt;
+    let len = file.metadata()?.len();
+    let mut end = len;
+    let mut block = [0u8; 4096];
+    while end > 0 {
+        let start = end.saturating_sub(block.len() as u64);
+        let part = &mut block[..(end - start) as usize];
+        file.read_exact_at(part, start)?;
+        if let Some(i) = part.iter().rposition(|&b| b == b'\n') {
+            let whole = start + i as u64 + 1;
+            return if whole < len { file.set_len(whole) } else { Ok(()) };
+        }
+        end = start;
+    }
+    if len > 0 { file.set_len(0) } else { Ok(()) }
 }

@@ -91,17 +91,21 @@ impl ChatModel for ChatClient {
     fn chat(&mut self, request: &ChatRequest) -> Result<ChatReply, ChatError> {
         let images = request.image_count() as u64;
         let mut extra_attempts = 0;
+        // A 400/422 may refuse the JSON mode, or something else (a prompt past the context, a bad
+        // image): a weaker mode is tried, and kept only once a request in it succeeds, so an
+        // error of another kind never weakens the requests after it.
+        let mut mode = self.json_mode;
         loop {
-            let body = request.body(&self.config.model, self.json_mode).to_string();
+            let body = request.body(&self.config.model, mode).to_string();
             let result = transport::post_json(&self.agent, &self.endpoint, body.as_bytes(), self.api_key.as_deref(), &self.config.retry);
             let delivered = match result {
                 Ok(delivered) => delivered,
                 Err(error) => {
                     self.usage.requests += u64::from(error.attempts);
                     let refused_format = matches!(error.kind, ChatErrorKind::Status { status: 400 | 422, .. });
-                    match self.json_mode.weaker() {
+                    match mode.weaker() {
                         Some(weaker) if refused_format && request.json_schema.is_some() => {
-                            self.json_mode = weaker;
+                            mode = weaker;
                             extra_attempts += error.attempts;
                             continue;
                         }
@@ -109,6 +113,9 @@ impl ChatModel for ChatClient {
                     }
                 }
             };
+            if request.json_schema.is_some() {
+                self.json_mode = mode;
+            }
             let attempts = delivered.attempts + extra_attempts;
             self.usage.requests += u64::from(delivered.attempts);
             let mut reply = parse_reply(&delivered.body).map_err(|kind| ChatError {
@@ -121,7 +128,7 @@ impl ChatModel for ChatClient {
             reply.usage.images = images;
             reply.attempts = attempts;
             reply.waited = delivered.waited;
-            reply.json_mode = request.json_schema.as_ref().map(|_| self.json_mode);
+            reply.json_mode = request.json_schema.as_ref().map(|_| mode);
             let mut counted = reply.usage;
             counted.requests = 0;
             self.usage.add(&counted);

@@ -186,7 +186,8 @@ fn parse_http_date(value: &str) -> Option<u64> {
     let year: u64 = parts.next()?.parse().ok()?;
     let mut clock = parts.next()?.split(':').map(|p| p.parse::<u64>().ok());
     let (hour, minute, second) = (clock.next()??, clock.next()??, clock.next()??);
-    if parts.next()? != "GMT" || !(1..=31).contains(&day) || year < 1970 || hour > 23 || minute > 59 || second > 60 {
+    // IMF-fixdate's year has four digits: a larger one would overflow the day count below.
+    if parts.next()? != "GMT" || !(1..=31).contains(&day) || !(1970..=9999).contains(&year) || hour > 23 || minute > 59 || second > 60 {
         return None;
     }
     // Days from 1970-01-01 to the date (Howard Hinnant's days_from_civil).
@@ -208,6 +209,9 @@ mod tests {
         assert_eq!(parse_retry_after(" 7 "), Some(Duration::from_secs(7)));
         assert_eq!(parse_http_date("Sun, 06 Nov 1994 08:49:37 GMT"), Some(784_111_777));
         assert_eq!(parse_http_date("Thu, 01 Jan 1970 00:00:00 GMT"), Some(0));
+        // A year past IMF-fixdate's four digits is no date (it overflowed the day count).
+        assert_eq!(parse_http_date("Sun, 06 Nov 999999999999 08:49:37 GMT"), None);
+        assert!(parse_http_date("Fri, 31 Dec 9999 23:59:59 GMT").is_some());
         assert_eq!(parse_retry_after("Thu, 01 Jan 1970 00:00:00 GMT"), Some(Duration::ZERO), "a past date: retry now");
         for bad in ["soon", "-1", "Sun, 06 Nov 1994 08:49:37 CET", "Sun, 32 Nov 1994 08:49:37 GMT", ""] {
             assert_eq!(parse_retry_after(bad), None, "{bad}");

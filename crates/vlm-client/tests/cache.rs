@@ -107,3 +107,30 @@ fn a_torn_last_line_is_dropped_and_a_damaged_line_is_named() {
     assert!(matches!(&error, CacheError::BadLine { line: 2, .. }), "{error}");
     assert!(error.to_string().starts_with(&format!("{}:2: ", path.display())), "{error}");
 }
+
+/// Two runs sharing one reply file (shards): a writer killed mid-line after both opened it
+/// leaves a torn tail; the next append cuts it first, so the file stays whole lines and every
+/// reply either run stored is read back on the next open.
+#[test]
+fn runs_sharing_a_file_keep_it_whole_lines() {
+    let (_tmp_path, path) = scratch("shared");
+    let (mut first, _) = cached(&path, "m");
+    let (mut second, _) = cached(&path, "m");
+    first.chat(&ask("one")).expect("reply");
+    // A third writer killed in the middle of its line.
+    let mut file = std::fs::OpenOptions::new().append(true).open(&path).expect("open");
+    std::io::Write::write_all(&mut file, b"{\"key\":\"abc\",\"te").expect("tear");
+    drop(file);
+    second.chat(&ask("two")).expect("reply");
+    first.chat(&ask("three")).expect("reply");
+    drop((first, second));
+    let text = std::fs::read_to_string(&path).expect("file");
+    assert_eq!(text.lines().count(), 3, "{text}");
+    assert!(text.lines().all(|l| serde_json::from_str::<serde_json::Value>(l).is_ok()), "{text}");
+    let (mut reopened, calls) = cached(&path, "m");
+    assert_eq!(reopened.len(), 3);
+    for question in ["one", "two", "three"] {
+        assert!(reopened.chat(&ask(question)).expect("reply").cached, "{question}");
+    }
+    assert_eq!(calls.get(), 0);
+}

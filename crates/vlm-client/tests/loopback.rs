@@ -226,6 +226,27 @@ fn a_server_refusing_response_format_is_asked_more_plainly() {
     assert_eq!(formats, [json!("json_schema"), json!("json_object"), Value::Null, Value::Null]);
 }
 
+/// A 400 that is not about the JSON mode (a prompt past the context) fails in every mode, and
+/// the next request is asked with the full schema again: only a weaker mode that worked is kept.
+#[test]
+fn an_error_of_another_kind_does_not_weaken_later_requests() {
+    let too_long = "{\"error\": {\"message\": \"the request exceeds the available context size\"}}";
+    let (address, seen) = serve(vec![
+        status(400, Vec::new(), too_long),
+        status(400, Vec::new(), too_long),
+        status(400, Vec::new(), too_long),
+        ok(completion("{\"skill\": \"Done\"}")),
+    ]);
+    let mut client = client(address);
+    let error = chat_json(&mut client, &skill_request()).expect_err("too long in every mode");
+    assert!(matches!(error.kind, ChatErrorKind::Status { status: 400, .. }), "{error}");
+    assert_eq!(client.json_mode(), JsonMode::Schema);
+    let reply = chat_json(&mut client, &skill_request()).expect("json");
+    assert_eq!((reply.reply.json_mode, reply.reply.attempts), (Some(JsonMode::Schema), 1));
+    let formats: Vec<Value> = seen.all().into_iter().map(|(_, body)| body["response_format"]["type"].clone()).collect();
+    assert_eq!(formats, [json!("json_schema"), json!("json_object"), Value::Null, json!("json_schema")]);
+}
+
 #[test]
 fn a_hanging_server_is_a_timeout_after_every_attempt() {
     let (address, seen) = serve(vec![Reply::Hang, Reply::Hang, Reply::Hang]);
