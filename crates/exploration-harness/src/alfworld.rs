@@ -116,7 +116,12 @@ fn worth_inspecting(goal: &ClassGoal, ontology: &Ontology, belief: &Belief, plac
     })
 }
 
-/// Writes ŝ0 (F_τ ∪ F_str, and G as the game's goal formula) as a problem of ALFWorld's domain.
+/// The place an executed step leaves the agent at: the target of a `go to`, or of an `examine`
+/// (the agent sends `examine` only for places).
+fn place_reached(step: &StepRecord) -> Option<&str> {
+    step.command.strip_prefix("go to ").or_else(|| step.command.strip_prefix("examine ")).filter(|_| step.executed)
+}
+
 /// The places R_t shows to share a location, each mapped to its group's first name (sorted);
 /// places in no group are absent. A `go to p` the game answered "Nothing happens." while the
 /// agent stood at q puts p and q in one group: ALFWorld executes a `go to` every listed place
@@ -125,14 +130,11 @@ pub fn colocated(steps: &[StepRecord]) -> BTreeMap<String, String> {
     let mut groups: Vec<BTreeSet<String>> = Vec::new();
     let mut at: Option<&str> = None;
     for step in steps {
-        let target = step.command.strip_prefix("go to ");
         if step.executed {
-            if let Some(place) = target.or_else(|| step.command.strip_prefix("examine ")) {
-                at = Some(place);
-            }
+            at = place_reached(step).or(at);
             continue;
         }
-        let (Some(p), Some(q)) = (target, at) else { continue };
+        let (Some(p), Some(q)) = (step.command.strip_prefix("go to "), at) else { continue };
         if p == q || step.observation.trim() != NOTHING_HAPPENS {
             continue;
         }
@@ -154,7 +156,8 @@ pub fn colocated(steps: &[StepRecord]) -> BTreeMap<String, String> {
     out
 }
 
-/// ŝ0 over perceived names; `at`: the place the agent stands at (else `loc_start`); `shared`:
+/// Writes ŝ0 (F_τ ∪ F_str, and G as the game's goal formula) as a problem of ALFWorld's domain,
+/// over perceived names; `at`: the place the agent stands at (else `loc_start`); `shared`:
 /// places known to share a location ([`colocated`]), which get one.
 pub fn write_problem(
     belief: &Belief,
@@ -309,14 +312,9 @@ impl AlfworldAdapter {
         AlfworldAdapter { ontology, domain, grammar, formula: annotation.formula.clone() }
     }
 
-    /// The place the agent stands at: the target of the last executed `go to`, or `examine` (the
-    /// agent sends `examine` only for places).
+    /// The place the agent stands at: where the last step that moved it left it.
     fn at(steps: &[StepRecord]) -> Option<String> {
-        steps
-            .iter()
-            .rev()
-            .filter(|s| s.executed)
-            .find_map(|s| s.command.strip_prefix("go to ").or_else(|| s.command.strip_prefix("examine ")).map(str::to_string))
+        steps.iter().rev().find_map(place_reached).map(str::to_string)
     }
 }
 

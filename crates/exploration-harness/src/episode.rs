@@ -264,8 +264,6 @@ pub fn run_episode<E: Environment + Judge>(
             Err(e) => {
                 episode.failure = Some(e);
                 no_handover = true;
-                // Phase I spent the budget without grounding the goal's objects.
-                explored_out = exploration.stop == "budget";
                 break;
             }
         };

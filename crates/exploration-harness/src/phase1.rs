@@ -464,8 +464,7 @@ pub fn resume(
             width = Some(f.next_width(now, &skills, &reply.skill));
         }
         let mut steps = Vec::new();
-        let mut executed_all = true;
-        // Commands of this skill not executed and not recovered.
+        // Commands of this skill not executed and not recovered: the skill executed when none.
         let mut unrecovered = 0usize;
         let mut reason = String::new();
         let mut pending = adapter.commands(&reply.skill, goal, &belief, &record);
@@ -476,7 +475,7 @@ pub fn resume(
         loop {
             let command = match pending.pop() {
                 Some(c) => c,
-                None if executed_all && !followed => {
+                None if unrecovered == 0 && !followed => {
                     followed = true;
                     match adapter.follow_up(&reply.skill, &belief, &record) {
                         Some(c) => c,
@@ -493,7 +492,6 @@ pub fn resume(
             adapter.observe(&result.observation, step, &mut belief);
             let executed = result.event.executed();
             if let Event::NotExecuted { reason: r } = &result.event {
-                executed_all = false;
                 unrecovered += 1;
                 reason = r.clone();
             }
@@ -506,7 +504,6 @@ pub fn resume(
             // A recovery that executes makes up for the failure it answered, not for others.
             if recovering && executed {
                 unrecovered -= 1;
-                executed_all = unrecovered == 0;
             }
             recovering = false;
             if !executed
@@ -520,6 +517,7 @@ pub fn resume(
         let after = belief.facts();
         let admitted: Vec<String> = after.iter().filter(|f| !before.contains(f)).map(Fact::to_string).collect();
         let refused: Vec<String> = reply.proposed.iter().filter(|f| !after.contains(f)).map(Fact::to_string).collect();
+        let executed_all = unrecovered == 0;
         feedback = match (executed_all, required) {
             (true, false) => "The previous action executed successfully.".to_string(),
             (true, true) => format!("Not every listed object is grounded yet, so the harness inspected instead: {}.", reply.skill),

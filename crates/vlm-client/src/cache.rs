@@ -151,16 +151,13 @@ impl CachedChat {
         }
         let mut file = OpenOptions::new().read(true).append(true).create(true).open(path).map_err(io)?;
         let mut bytes = Vec::new();
-        file.lock().map_err(io)?;
-        let read = file.read_to_end(&mut bytes);
         // A last line without its newline was cut off by a killed writer: drop it, so the next
         // append starts a line of its own.
-        let whole = bytes.iter().rposition(|&b| b == b'\n').map_or(0, |i| i + 1);
-        let cut = if read.is_ok() && whole < bytes.len() { file.set_len(whole as u64).map(|_| ()) } else { Ok(()) };
-        let unlocked = file.unlock();
-        read.and(cut).and(unlocked).map_err(io)?;
+        file.lock().map_err(io)?;
+        let read = cut_torn_tail(&file).and_then(|()| file.read_to_end(&mut bytes));
+        file.unlock().and(read).map_err(io)?;
         let mut replies = BTreeMap::new();
-        for (i, line) in bytes[..whole].split(|&b| b == b'\n').enumerate() {
+        for (i, line) in bytes.split(|&b| b == b'\n').enumerate() {
             if line.iter().all(u8::is_ascii_whitespace) {
                 continue;
             }

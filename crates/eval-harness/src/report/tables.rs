@@ -224,28 +224,34 @@ fn phase2_table(study: &Study<'_>, options: &ReportOptions) -> Result<Table, Rep
         row.extend(columns.iter().map(|_| Cell::from("—")));
         table.rows.push(row);
     }
+    let row_of = |c: usize| {
+        let condition = &study.conditions[c];
+        rows.iter().position(|&(a, s)| a == condition.approach && s == condition.setting).unwrap_or_default()
+    };
     for (k, &(b, model)) in columns.iter().enumerate() {
         let column = first + k;
         let mut means = Vec::new();
         for &c in &ours {
-            let condition = &study.conditions[c];
             let runs = study.runs(c, b);
-            if condition.model != model || runs.is_empty() {
+            if study.conditions[c].model != model || runs.is_empty() {
                 continue;
             }
-            let rates: Vec<f64> = runs.iter().map(success_rate).collect::<Result<_, _>>()?;
-            let summary = stats::summarize_runs(&rates).map_err(stats_error("Table 8's accuracy over runs"))?;
-            let r = rows.iter().position(|&(a, s)| a == condition.approach && s == condition.setting).unwrap_or_default();
-            table.rows[r][column] = Cell::from(format!("{} ± {}", percent(summary.mean), percent(summary.sample_std_dev.unwrap_or(0.0))));
-            means.push((c, summary.mean));
+            let (mean, text) = accuracy_over_runs(runs, "Table 8's accuracy over runs")?;
+            table.rows[row_of(c)][column] = Cell::from(text);
+            means.push((c, mean));
         }
         for c in not_worse_than_the_best(study, b, &means, options)? {
-            let condition = &study.conditions[c];
-            let r = rows.iter().position(|&(a, s)| a == condition.approach && s == condition.setting).unwrap_or_default();
-            table.rows[r][column].bold = true;
+            table.rows[row_of(c)][column].bold = true;
         }
     }
     Ok(table)
+}
+
+/// The mean success rate over `runs` and its cell text, `mean ± sample sd` (± 0.0: one run).
+fn accuracy_over_runs(runs: &[Run<'_>], context: &str) -> Result<(f64, String), ReportError> {
+    let rates: Vec<f64> = runs.iter().map(success_rate).collect::<Result<_, _>>()?;
+    let summary = stats::summarize_runs(&rates).map_err(stats_error(context))?;
+    Ok((summary.mean, format!("{} ± {}", percent(summary.mean), percent(summary.sample_std_dev.unwrap_or(0.0)))))
 }
 
 fn accuracy_table(study: &Study<'_>, options: &ReportOptions) -> Result<Table, ReportError> {
@@ -289,8 +295,7 @@ fn accuracy_table(study: &Study<'_>, options: &ReportOptions) -> Result<Table, R
                 row.extend([Cell::from("—"), Cell::from("—")]);
                 continue;
             }
-            let rates: Vec<f64> = runs.iter().map(success_rate).collect::<Result<_, _>>()?;
-            let summary = stats::summarize_runs(&rates).map_err(stats_error("accuracy over runs"))?;
+            let (mean, accuracy) = accuracy_over_runs(runs, "accuracy over runs")?;
             let mut by_task: BTreeMap<&str, Vec<f64>> = BTreeMap::new();
             for run in runs {
                 for (task, ok) in run.outcomes() {
@@ -303,9 +308,9 @@ fn accuracy_table(study: &Study<'_>, options: &ReportOptions) -> Result<Table, R
                 condition.label(),
                 study.benchmarks[b]
             )))?;
-            row.push(Cell::from(format!("{} ± {}", percent(summary.mean), percent(summary.sample_std_dev.unwrap_or(0.0)))));
+            row.push(Cell::from(accuracy));
             row.push(Cell::from(format!("[{}, {}]", percent(interval.lower), percent(interval.upper))));
-            means.push((c, summary.mean));
+            means.push((c, mean));
         }
         table.rows.push(row);
     }
