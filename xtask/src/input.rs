@@ -71,32 +71,11 @@ pub fn ground(files: &TaskFiles) -> anyhow::Result<Task> {
         .map_err(|e| InputError(e.render(&where_(&files.domain_path, "pddl_domain"), &files.domain)))?;
     let problem = pddl_syntax::parse_problem(&files.problem)
         .map_err(|e| InputError(e.render(&where_(&files.problem_path, "pddl_problem"), &files.problem)))?;
-    let report = pddl_syntax::check(&domain, Some(&problem));
-    if report.has_errors() {
-        let mut lines: Vec<String> = report
-            .domain
-            .iter()
-            .filter(|d| d.is_error())
-            .map(|d| d.render(&where_(&files.domain_path, "pddl_domain"), &files.domain))
-            .collect();
-        lines.extend(
-            report.problem.iter().filter(|d| d.is_error()).map(|d| d.render(&where_(&files.problem_path, "pddl_problem"), &files.problem)),
-        );
-        bail!(InputError(lines.join("\n")));
-    }
-    // The file each error is about: the domain's actions (what they increase, how their
-    // disjunctions split), or the problem's `:init` (the cost values), else both.
+    // Each error (names that do not check included) at its line and column in the file it is about.
     grounding::ground(&domain, &problem).map_err(|e| {
-        let file = match &e {
-            grounding::GroundingError::Unsupported(_) | grounding::GroundingError::TooManyAlternatives { .. } => {
-                files.domain_path.display().to_string()
-            }
-            grounding::GroundingError::MissingCost { .. } | grounding::GroundingError::InvalidCost { .. } => {
-                files.problem_path.display().to_string()
-            }
-            _ => format!("{} with {}", files.domain_path.display(), files.problem_path.display()),
-        };
-        InputError(format!("{file}: {e}")).into()
+        let domain_at = where_(&files.domain_path, "pddl_domain");
+        let problem_at = where_(&files.problem_path, "pddl_problem");
+        InputError(e.render((&domain_at, &files.domain), (&problem_at, &files.problem))).into()
     })
 }
 

@@ -637,7 +637,8 @@ fn eval_reports_bad_input_before_it_fetches_the_model() {
 }
 
 /// A grounding error that is about the domain (an action that increases a function other than
-/// `total-cost`) names the domain file and the action, not the problem file.
+/// `total-cost`) names the domain file, the line and column there and the action, not the
+/// problem file.
 #[test]
 fn grounding_errors_name_the_file_they_are_about() {
     let dir = scratch_dir("ground-unsupported-");
@@ -651,6 +652,7 @@ fn grounding_errors_name_the_file_they_are_about() {
     let output = xtask(&["ground", "--domain", domain.to_str().unwrap(), "--problem", problem.to_str().unwrap()]);
     let stderr = String::from_utf8_lossy(&output.stderr);
     assert_eq!(output.status.code(), Some(2), "{stderr}");
-    assert!(stderr.contains(&format!("{}: ", domain.display())) && stderr.contains("`burn`"), "{stderr}");
+    // At the `increase`: line 2, column 65 of the domain.
+    assert!(stderr.contains(&format!("{}:2:65: ", domain.display())) && stderr.contains("`burn`"), "{stderr}");
     assert!(!stderr.contains("fuel-problem.pddl"), "{stderr}");
 }

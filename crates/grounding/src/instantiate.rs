@@ -4,12 +4,12 @@
 use rustc_hash::{FxHashMap, FxHashSet};
 use smallvec::SmallVec;
 
-use crate::GroundingError;
 use crate::ids::{FactId, ObjectId, PredicateId, SchemaId};
 use crate::join::{Binding, Join, Tuple};
 use crate::lifted::{Arg, CostTerm, Formula, Lifted, LiftedSchema};
 use crate::reach::{Reachable, instantiate_args};
 use crate::task::{Action, Atom, Condition, ConditionalEffect, Cost, Literal};
+use crate::{GroundingError, PddlFile};
 
 /// A ground formula over fluent facts, simplified as it is built.
 #[derive(Debug, Clone, PartialEq, Eq, Hash, PartialOrd, Ord)]
@@ -225,7 +225,11 @@ impl<'a> Instantiator<'a> {
                 binding[i] = Some(object);
             }
             let pre = self.ground(schema, &schema.pre, &mut binding);
-            let variants = split(&pre).ok_or_else(|| GroundingError::TooManyAlternatives { what: self.describe(schema, args) })?;
+            let variants = split(&pre).ok_or_else(|| GroundingError::TooManyAlternatives {
+                what: self.describe(schema, args),
+                file: PddlFile::Domain,
+                span: schema.span,
+            })?;
             if variants.is_empty() {
                 continue;
             }
@@ -251,7 +255,18 @@ impl<'a> Instantiator<'a> {
         let schema = &self.lifted.goal;
         let mut binding: Binding = vec![None; schema.var_domains.len()];
         let goal = self.ground(schema, &schema.pre, &mut binding);
-        split(&goal).ok_or_else(|| GroundingError::TooManyAlternatives { what: "the goal".to_string() })
+        split(&goal).ok_or_else(|| GroundingError::TooManyAlternatives {
+            what: "the goal".to_string(),
+            file: PddlFile::Problem,
+            span: schema.span,
+        })
+    }
+
+    /// `(f o1 ... on)`, by the names the problem gives.
+    fn describe_term(&self, function: usize, args: &[ObjectId]) -> String {
+        let name = self.lifted.function_names.get(function).map_or("?", String::as_str);
+        let names: Vec<&str> = args.iter().map(|o| self.lifted.objects[o.index()].name.as_str()).collect();
+        if names.is_empty() { format!("({name})") } else { format!("({name} {})", names.join(" ")) }
     }
 
     fn describe(&self, schema: &LiftedSchema, args: &[ObjectId]) -> String {
@@ -263,22 +278,37 @@ impl<'a> Instantiator<'a> {
         if !self.lifted.uses_costs {
             return Ok(1);
         }
+        let invalid = |v: f64| v < 0.0 || v.fract() != 0.0;
         let mut total = 0.0;
+        // The first term that makes the cost invalid, where it is written.
+        let mut culprit: Option<(PddlFile, pddl_syntax::Span)> = None;
         for term in &schema.costs {
-            total += match term {
-                CostTerm::Number(value) => *value,
-                CostTerm::Function(function, term_args) => {
-                    let objects: Vec<ObjectId> = instantiate_args(term_args, binding).into_iter().collect();
-                    *self
-                        .lifted
-                        .function_values
-                        .get(&(*function, objects))
-                        .ok_or_else(|| GroundingError::MissingCost { action: self.describe(schema, args) })?
+            let (value, at) = match term {
+                CostTerm::Number(value, span) => (*value, (PddlFile::Domain, *span)),
+                CostTerm::Function(function, term_args, span) => {
+                    let key = (*function, instantiate_args(term_args, binding).into_iter().collect::<Vec<ObjectId>>());
+                    let Some(&(value, given)) = self.lifted.function_values.get(&key) else {
+                        return Err(GroundingError::MissingCost {
+                            action: self.describe(schema, args),
+                            term: self.describe_term(key.0, &key.1),
+                            span: *span,
+                        });
+                    };
+                    (value, (PddlFile::Problem, given))
                 }
             };
+            if culprit.is_none() && invalid(value) {
+                culprit = Some(at);
+            }
+            total += value;
         }
-        if total < 0.0 || total.fract() != 0.0 || total > Cost::MAX as f64 {
-            return Err(GroundingError::InvalidCost { action: self.describe(schema, args), value: total });
+        if invalid(total) || total > Cost::MAX as f64 {
+            // A sum that is bad while every term is fine (too large) points at the first term.
+            let (file, span) = culprit.unwrap_or_else(|| match schema.costs.first() {
+                Some(CostTerm::Number(_, span) | CostTerm::Function(_, _, span)) => (PddlFile::Domain, *span),
+                None => (PddlFile::Domain, schema.span),
+            });
+            return Err(GroundingError::InvalidCost { action: self.describe(schema, args), value: total, file, span });
         }
         Ok(total as Cost)
     }
@@ -299,8 +329,11 @@ impl<'a> Instantiator<'a> {
             let mut instances: Vec<(FactId, Ground)> = Vec::new();
             self.effect_instances(schema, effect, 0, binding, &mut instances);
             for (fact, condition) in instances {
-                let variants =
-                    split(&condition).ok_or_else(|| GroundingError::TooManyAlternatives { what: self.describe(schema, args) })?;
+                let variants = split(&condition).ok_or_else(|| GroundingError::TooManyAlternatives {
+                    what: self.describe(schema, args),
+                    file: PddlFile::Domain,
+                    span: schema.span,
+                })?;
                 for variant in variants {
                     if variant.is_empty() {
                         if effect.delete {

@@ -42,23 +42,69 @@ mod task;
 pub use ids::{ActionId, FactId, ObjectId, PredicateId, SchemaId};
 pub use task::{Action, Atom, Condition, ConditionalEffect, Cost, Goal, Literal, Object, Predicate, Schema, Task};
 
-use pddl_syntax::{Diagnostic, check};
+use pddl_syntax::{Diagnostic, Span, check};
+
+/// Which of the two files an error is about.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum PddlFile {
+    Domain,
+    Problem,
+}
 
 #[derive(Debug, thiserror::Error)]
 pub enum GroundingError {
     /// The domain or problem does not check (unknown names, wrong arity, ...).
     #[error("the PDDL does not check: {}", first_message(.domain, .problem))]
     Invalid { domain: Vec<Diagnostic>, problem: Vec<Diagnostic> },
+    /// A name that does not resolve; [`check`] rejects these first, so this is a guard.
     #[error("{0} is not declared")]
     Unresolved(String),
-    #[error("unsupported: {0}")]
-    Unsupported(String),
+    /// A construct of the domain outside the fragment, at `span` in the domain.
+    #[error("unsupported: {message}")]
+    Unsupported { message: String, span: Span },
+    /// At `span` in `file`: an action's precondition (domain) or the goal (problem).
     #[error("{what} splits into more than 4096 alternatives; simplify its disjunctions")]
-    TooManyAlternatives { what: String },
-    #[error("{action}: its cost uses a function value that `:init` does not give")]
-    MissingCost { action: String },
+    TooManyAlternatives { what: String, file: PddlFile, span: Span },
+    /// `term` is the cost term as instantiated; `span` is where the domain writes it.
+    #[error("{action}: its cost {term} has no value in the problem's `:init`")]
+    MissingCost { action: String, term: String, span: Span },
+    /// At `span` in `file`: the first term that makes the cost invalid (a value in the
+    /// problem's `:init`, or a number in the domain).
     #[error("{action}: cost {value} is not a non-negative integer")]
-    InvalidCost { action: String, value: f64 },
+    InvalidCost { action: String, value: f64, file: PddlFile, span: Span },
+}
+
+impl GroundingError {
+    /// The file and span an error points at; `None` for [`GroundingError::Invalid`] (whose
+    /// diagnostics carry their own spans) and [`GroundingError::Unresolved`].
+    pub fn location(&self) -> Option<(PddlFile, Span)> {
+        match self {
+            GroundingError::Invalid { .. } | GroundingError::Unresolved(_) => None,
+            GroundingError::Unsupported { span, .. } | GroundingError::MissingCost { span, .. } => Some((PddlFile::Domain, *span)),
+            GroundingError::TooManyAlternatives { file, span, .. } | GroundingError::InvalidCost { file, span, .. } => Some((*file, *span)),
+        }
+    }
+
+    /// The error as `path:line:column: message` lines, each in the file it is about;
+    /// `domain` and `problem` are `(path, source text)`.
+    pub fn render(&self, domain: (&str, &str), problem: (&str, &str)) -> String {
+        if let GroundingError::Invalid { domain: d, problem: p } = self {
+            let lines = |(path, text): (&str, &str), all: &[Diagnostic]| {
+                all.iter().filter(|d| d.is_error()).map(|d| d.render(path, text)).collect::<Vec<_>>()
+            };
+            let mut out = lines(domain, d);
+            out.extend(lines(problem, p));
+            return out.join("\n");
+        }
+        match self.location() {
+            Some((file, span)) => {
+                let (path, text) = if file == PddlFile::Domain { domain } else { problem };
+                let (line, column) = pddl_syntax::line_column(text, span.start as usize);
+                format!("{path}:{line}:{column}: {self}")
+            }
+            None => format!("{} with {}: {self}", domain.0, problem.0),
+        }
+    }
 }
 
 fn first_message(domain: &[Diagnostic], problem: &[Diagnostic]) -> String {

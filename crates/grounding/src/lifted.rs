@@ -65,8 +65,10 @@ pub(crate) struct LiftedEffect {
 
 #[derive(Debug, Clone)]
 pub(crate) enum CostTerm {
-    Number(f64),
-    Function(usize, Vec<Arg>),
+    /// A number, with where the domain writes it.
+    Number(f64, ast::Span),
+    /// `(f args)`, with where the domain writes it.
+    Function(usize, Vec<Arg>, ast::Span),
 }
 
 #[derive(Debug, Clone)]
@@ -79,6 +81,8 @@ pub(crate) struct LiftedSchema {
     pub relaxed_pre: Vec<RelaxedConj>,
     pub effects: Vec<LiftedEffect>,
     pub costs: Vec<CostTerm>,
+    /// Where it is written: the action in the domain, or the goal in the problem.
+    pub span: ast::Span,
 }
 
 impl LiftedSchema {
@@ -109,12 +113,15 @@ pub(crate) struct Lifted {
     pub predicates: Vec<Predicate>,
     pub predicate_ids: FxHashMap<String, PredicateId>,
     pub functions: FxHashMap<String, usize>,
+    /// The functions' names, by index.
+    pub function_names: Vec<String>,
     pub domains: TypeDomains,
     pub schemas: Vec<LiftedSchema>,
     pub goal: LiftedSchema,
     pub init: Vec<(PredicateId, Vec<ObjectId>)>,
-    /// Values of `(= (f o1 ... on) v)` in `:init`: (function, args) → value.
-    pub function_values: FxHashMap<(usize, Vec<ObjectId>), f64>,
+    /// Values of `(= (f o1 ... on) v)` in `:init`: (function, args) → value and where the
+    /// problem gives it.
+    pub function_values: FxHashMap<(usize, Vec<ObjectId>), (f64, ast::Span)>,
     pub uses_costs: bool,
 }
 
@@ -135,6 +142,7 @@ pub(crate) fn lift(domain: &ast::Domain, problem: &ast::Problem) -> Result<Lifte
             predicates: Vec::new(),
             predicate_ids: FxHashMap::default(),
             functions: FxHashMap::default(),
+            function_names: Vec::new(),
             domains: TypeDomains::default(),
             schemas: Vec::new(),
             goal: empty_schema("goal"),
@@ -166,6 +174,7 @@ pub(crate) fn lift(domain: &ast::Domain, problem: &ast::Problem) -> Result<Lifte
     }
     for (i, function) in domain.functions.iter().enumerate() {
         builder.lifted.functions.insert(function.name.text.clone(), i);
+        builder.lifted.function_names.push(function.name.text.clone());
     }
     for element in &problem.init {
         match element {
@@ -174,10 +183,10 @@ pub(crate) fn lift(domain: &ast::Domain, problem: &ast::Problem) -> Result<Lifte
                 let args = atom.args.iter().map(|t| builder.object(t.name())).collect::<Result<Vec<_>, _>>()?;
                 builder.lifted.init.push((predicate, args));
             }
-            ast::InitElement::Assign(term, value, _) => {
+            ast::InitElement::Assign(term, value, span) => {
                 let function = builder.function(&term.function)?;
                 let args = term.args.iter().map(|t| builder.object(t.name())).collect::<Result<Vec<_>, _>>()?;
-                builder.lifted.function_values.insert((function, args), value.value);
+                builder.lifted.function_values.insert((function, args), (value.value, *span));
             }
         }
     }
@@ -188,6 +197,7 @@ pub(crate) fn lift(domain: &ast::Domain, problem: &ast::Problem) -> Result<Lifte
     builder.lifted.schemas = schemas;
     let mut goal = empty_schema("goal");
     if let Some(condition) = &problem.goal {
+        goal.span = condition.span();
         let mut scope = Vec::new();
         goal.pre = builder.formula(condition, false, &mut goal.var_domains, &mut scope)?;
         goal.relaxed_pre = relaxed_dnf(&goal.pre);
@@ -205,6 +215,7 @@ fn empty_schema(name: &str) -> LiftedSchema {
         relaxed_pre: vec![RelaxedConj::default()],
         effects: Vec::new(),
         costs: Vec::new(),
+        span: ast::Span::default(),
     }
 }
 
@@ -349,6 +360,7 @@ impl Builder<'_> {
             relaxed_pre,
             effects,
             costs,
+            span: action.span,
         })
     }
 
@@ -395,25 +407,28 @@ impl Builder<'_> {
                 };
                 self.effect(action, body, forall, &combined, var_domains, scope, out, costs)?;
             }
-            ast::Effect::Increase(function, value, _) => {
+            ast::Effect::Increase(function, value, span) => {
                 if function.function.as_str() != "total-cost" {
-                    return Err(GroundingError::Unsupported(format!(
-                        "action `{}` increases `{}`; only `total-cost` can be increased",
-                        action.name, function.function
-                    )));
+                    return Err(GroundingError::Unsupported {
+                        message: format!("action `{}` increases `{}`; only `total-cost` can be increased", action.name, function.function),
+                        span: *span,
+                    });
                 }
                 if !forall.is_empty() || !matches!(condition, Formula::True) {
-                    return Err(GroundingError::Unsupported(format!(
-                        "action `{}` increases `total-cost` under `forall` or `when`; costs must be unconditional",
-                        action.name
-                    )));
+                    return Err(GroundingError::Unsupported {
+                        message: format!(
+                            "action `{}` increases `total-cost` under `forall` or `when`; costs must be unconditional",
+                            action.name
+                        ),
+                        span: *span,
+                    });
                 }
                 costs.push(match value {
-                    ast::NumericExpr::Number(number) => CostTerm::Number(number.value),
+                    ast::NumericExpr::Number(number) => CostTerm::Number(number.value, number.span),
                     ast::NumericExpr::Function(term) => {
                         let function = self.function(&term.function)?;
                         let args = term.args.iter().map(|t| self.arg(t, scope)).collect::<Result<Vec<_>, _>>()?;
-                        CostTerm::Function(function, args)
+                        CostTerm::Function(function, args, term.span)
                     }
                 });
             }

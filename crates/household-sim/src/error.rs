@@ -17,7 +17,8 @@ pub enum EnvError {
     MissingKey { path: String, key: String },
     #[error("{path}: the `{field}` field is not valid PDDL:\n{diagnostics}")]
     Pddl { path: String, field: String, diagnostics: String },
-    #[error("{path}: cannot ground the game's PDDL: {message}")]
+    /// `message` names the game file, its field and the line and column there.
+    #[error("cannot ground the game's PDDL: {message}")]
     Grounding { path: String, message: String },
     #[error("{path}: the `grammar` field, line {line}, column {column}: {message}")]
     Grammar { path: String, line: usize, column: usize, message: String },

@@ -226,7 +226,11 @@ impl AlfworldEnv {
                     diagnostics: lines.into_iter().map(|(_, line)| line).collect::<Vec<_>>().join("\n"),
                 }
             }
-            other => EnvError::Grounding { path: source.into(), message: other.to_string() },
+            other => EnvError::Grounding {
+                path: source.into(),
+                message: other
+                    .render((&format!("{source} (pddl_domain)"), domain_text), (&format!("{source} (pddl_problem)"), problem_text)),
+            },
         })?;
         let grammar_error = |offset: usize, message: String| {
             let at = twl::position(grammar_text, offset);

@@ -1,0 +1,103 @@
+//! Errors past the name check say where they are: the file they are about and the line and
+//! column there.
+
+use grounding::{GroundingError, PddlFile};
+
+fn ground(domain: &str, problem: &str) -> GroundingError {
+    let d = pddl_syntax::parse_domain(domain).expect("the domain parses");
+    let p = pddl_syntax::parse_problem(problem).expect("the problem parses");
+    grounding::ground(&d, &p).expect_err("grounding fails")
+}
+
+fn render(error: &GroundingError, domain: &str, problem: &str) -> String {
+    error.render(("d.pddl", domain), ("p.pddl", problem))
+}
+
+const ROADS: &str = "(define (domain roads) (:requirements :strips :typing :action-costs)\n\
+    (:types place)\n\
+    (:predicates (at ?p - place))\n\
+    (:functions (distance ?a ?b - place) - number (total-cost) - number)\n\
+    (:action drive :parameters (?a ?b - place)\n\
+      :precondition (at ?a)\n\
+      :effect (and (not (at ?a)) (at ?b) (increase (total-cost) (distance ?a ?b)))))\n";
+
+#[test]
+fn a_cost_that_init_does_not_give_points_at_the_domain_s_cost_term() {
+    let problem = "(define (problem p) (:domain roads) (:objects x y - place)\n\
+        (:init (at x) (= (distance x y) 3) (= (distance x x) 0) (= (distance y y) 0))\n\
+        (:goal (at y)) (:metric minimize (total-cost)))\n";
+    let error = ground(ROADS, problem);
+    assert!(matches!(&error, GroundingError::MissingCost { term, .. } if term == "(distance y x)"), "{error:?}");
+    // `(distance ?a ?b)` on the domain's seventh line, column 59 (a continued string drops
+    // the next line's indentation).
+    assert_eq!(
+        render(&error, ROADS, problem),
+        "d.pddl:7:59: action (drive y x): its cost (distance y x) has no value in the problem's `:init`"
+    );
+}
+
+#[test]
+fn a_negative_cost_points_at_the_init_entry_that_gives_it() {
+    let problem = "(define (problem p) (:domain roads) (:objects x y - place)\n\
+        (:init (at x)\n\
+          (= (distance x y) 3) (= (distance y x) -2) (= (distance x x) 0) (= (distance y y) 0))\n\
+        (:goal (at y)) (:metric minimize (total-cost)))\n";
+    let error = ground(ROADS, problem);
+    assert_eq!(error.location().map(|(file, _)| file), Some(PddlFile::Problem), "{error:?}");
+    assert_eq!(render(&error, ROADS, problem), "p.pddl:3:22: action (drive y x): cost -2 is not a non-negative integer");
+}
+
+#[test]
+fn a_fractional_number_cost_points_at_the_number_in_the_domain() {
+    let domain = ROADS.replace("(distance ?a ?b)))))", "2.5))))");
+    let problem = "(define (problem p) (:domain roads) (:objects x y - place)\n\
+        (:init (at x)) (:goal (at y)) (:metric minimize (total-cost)))\n";
+    let error = ground(&domain, problem);
+    let rendered = render(&error, &domain, problem);
+    assert!(rendered.starts_with("d.pddl:7:59: action (drive "), "{rendered}");
+    assert!(rendered.ends_with("cost 2.5 is not a non-negative integer"), "{rendered}");
+}
+
+#[test]
+fn increasing_another_function_points_at_the_increase() {
+    let domain = "(define (domain d) (:requirements :strips :numeric-fluents) (:predicates (p) (q))\n\
+        (:functions (fuel) - number)\n\
+        (:action burn :parameters () :precondition (p)\n\
+          :effect (and (q) (increase (fuel) 1))))\n";
+    let problem = "(define (problem e) (:domain d) (:init (p) (= (fuel) 0)) (:goal (q)))\n";
+    let error = ground(domain, problem);
+    assert_eq!(
+        render(&error, domain, problem),
+        "d.pddl:4:18: unsupported: action `burn` increases `fuel`; only `total-cost` can be increased"
+    );
+}
+
+#[test]
+fn a_goal_of_too_many_alternatives_points_at_the_goal() {
+    // Thirteen disjunctions of two conjunctions (a disjunction of literals alone is kept as
+    // one clause), over atoms an action can make true: 8192 alternatives.
+    let predicates: String = (0..13).map(|i| format!("(a{i}) (b{i}) (c{i}) (d{i}) ")).collect();
+    let domain = format!(
+        "(define (domain d) (:requirements :strips :disjunctive-preconditions) (:predicates {predicates})\n\
+         (:action all :parameters () :precondition (and) :effect (and {predicates})))\n"
+    );
+    let goal: String = (0..13).map(|i| format!("(or (and (a{i}) (b{i})) (and (c{i}) (d{i}))) ")).collect();
+    let problem = format!("(define (problem e) (:domain d)\n  (:init)\n  (:goal (and {goal})))\n");
+    let error = ground(&domain, &problem);
+    assert_eq!(error.location().map(|(file, _)| file), Some(PddlFile::Problem), "{error:?}");
+    let rendered = render(&error, &domain, &problem);
+    assert!(rendered.starts_with("p.pddl:3:10: the goal splits into more than 4096 alternatives"), "{rendered}");
+}
+
+#[test]
+fn names_that_do_not_check_render_each_in_its_file() {
+    let domain =
+        "(define (domain d) (:requirements :strips) (:predicates (p))\n  (:action a :parameters () :precondition (r) :effect (p)))\n";
+    let problem = "(define (problem e) (:domain d)\n  (:init (s)) (:goal (p)))\n";
+    let error = ground(domain, problem);
+    let rendered = render(&error, domain, problem);
+    let lines: Vec<&str> = rendered.lines().collect();
+    assert_eq!(lines.len(), 2, "{rendered}");
+    assert!(lines[0].starts_with("d.pddl:2:44: error[unknown-predicate]: predicate `r`"), "{rendered}");
+    assert!(lines[1].starts_with("p.pddl:2:11: error[unknown-predicate]: predicate `s`"), "{rendered}");
+}
