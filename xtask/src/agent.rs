@@ -16,14 +16,14 @@ use exploration_harness::chat_planner::{ChatPlannerConfig, plan_by_chat};
 use exploration_harness::chat_policy::ChatPolicy;
 use exploration_harness::virtualhome::VirtualhomeAdapter;
 use exploration_harness::{
-    ClassGoal, Episode, EpisodeConfig, Frontier, Grounded, Handing, Ontology, PhaseTwo, PlanFit, Policy, Systematic, parse_goal, plan_fit,
-    run_episode,
+    ClassGoal, Episode, EpisodeConfig, Frontier, Grounded, Handing, Ontology, PhaseTwo, PlanFit, Policy, RunError, Systematic, parse_goal,
+    plan_fit, run_episode,
 };
 use heuristics::search::SearchStatus;
 use household_sim::{AlfworldEnv, Environment, Judge, VirtualhomeEnv};
 use lm::{LanguageModel, LocalChat, LocalModel};
 use mcts::prompt::planning_prompt;
-use mcts::{Decoder, StopReason};
+use mcts::{DecodeError, Decoder, StopReason};
 use serde_json::json;
 use vlm_client::{CachedChat, ChatClient, ChatModel, ClientConfig};
 
@@ -240,7 +240,10 @@ impl PhaseTwoRunner {
         Ok(PhaseTwoRunner { planner: planner.to_string(), chat: None, lm: model, vocab, decode: decode.clone(), time_limit, symmetries })
     }
 
-    pub fn plan(&mut self, grounded: &Grounded) -> Result<PhaseTwo, String> {
+    /// Phase II on `grounded`: a search that ends without a plan (a budget, a bound, a proof
+    /// that none exists, a prompt past the model's context) is an outcome, `no_plan`; `Err` is
+    /// for what stops the run (a model that cannot be reached, a bad setting, an internal error).
+    pub fn plan(&mut self, grounded: &Grounded) -> Result<PhaseTwo, RunError> {
         let model = &grounded.model;
         if let Some((chat, config)) = self.chat.as_mut() {
             return plan_by_chat(chat.as_mut(), grounded, config);
@@ -261,18 +264,21 @@ impl PhaseTwoRunner {
             }
             let actions = match heuristics::search::optimal_plan_with(model, &config) {
                 Ok(actions) => actions,
-                Err(status @ (SearchStatus::OverBound | SearchStatus::OutOfBudget)) => {
-                    let why = format!("{status:?}: no plan within {} steps", grounded.steps_left);
+                Err(status @ (SearchStatus::OverBound | SearchStatus::OutOfBudget | SearchStatus::Unsolvable)) => {
+                    let why = match status {
+                        SearchStatus::Unsolvable => "Unsolvable: the hand-over has no plan".to_string(),
+                        _ => format!("{status:?}: no plan within {} steps", grounded.steps_left),
+                    };
                     detail["stop"] = json!(format!("{status:?}"));
                     return Ok(PhaseTwo { no_plan: Some(why), detail, ..PhaseTwo::default() });
                 }
-                Err(status) => return Err(format!("{status:?}")),
+                Err(status) => return Err(RunError(format!("A* returned {status:?} without a plan"))),
             };
             return Ok(PhaseTwo { actions, detail, ..PhaseTwo::default() });
         }
-        let (Some(lm), Some(vocab)) = (self.lm.as_mut(), self.vocab.as_ref()) else { return Err("no language model".into()) };
+        let (Some(lm), Some(vocab)) = (self.lm.as_mut(), self.vocab.as_ref()) else { return Err(RunError("no language model".into())) };
         let initial = model.initial_state();
-        let mut config = self.decode.config(self.time_limit).map_err(|e| e.to_string())?;
+        let mut config = self.decode.config(self.time_limit).map_err(|e| RunError(e.to_string()))?;
         // N_plan: no plan longer than the episode's steps left (each action sends at most one
         // command), so the search goes on past a goal plan that could not finish.
         config.budget.max_actions = config.budget.max_actions.min(grounded.steps_left);
@@ -314,11 +320,22 @@ impl PhaseTwoRunner {
             config.budget.wall_clock = config.budget.wall_clock.map(|w| w.saturating_sub(started.elapsed()));
         }
         let prompt = planning_prompt(model, &grounded.spelling, &initial, &self.decode.prompt_options());
-        let text = prompt.render(lm.as_ref()).map_err(|e| format!("rendering the prompt: {e}"))?;
-        let tokens = lm.tokenizer().encode_prompt(&text).map_err(|e| format!("tokenizing the prompt: {e}"))?;
+        let text = prompt.render(lm.as_ref()).map_err(|e| RunError(format!("rendering the prompt: {e}")))?;
+        let tokens = lm.tokenizer().encode_prompt(&text).map_err(|e| RunError(format!("tokenizing the prompt: {e}")))?;
         let mut decoder =
             Decoder::with_end_policy(model, &grounded.spelling, Arc::clone(vocab), self.decode.value(), self.decode.end_policy());
-        let outcome = decoder.decode(lm.as_mut(), &tokens, &initial, &config).map_err(|e| format!("decoding: {e}"))?;
+        let outcome = match decoder.decode(lm.as_mut(), &tokens, &initial, &config) {
+            Ok(outcome) => outcome,
+            // ŝ0's prompt does not fit the model's context: this model cannot plan this task.
+            Err(e @ DecodeError::Model(lm::LmError::ContextOverflow { .. })) => {
+                return Ok(PhaseTwo {
+                    no_plan: Some(format!("the prompt does not fit: {e}")),
+                    detail: json!({"planner": "mcts", "mode": self.decode.mode.to_string(), "stop": "ContextOverflow", "prompt_tokens": tokens.len()}),
+                    ..PhaseTwo::default()
+                });
+            }
+            Err(e) => return Err(RunError(format!("decoding: {e}"))),
+        };
         let detail = json!({
             "planner": "mcts", "mode": outcome.mode, "stop": outcome.stop, "valid": outcome.valid, "solved": outcome.solved,
             "invalid": outcome.invalid.as_ref().map(|i| format!("step {}: {:?}", i.step + 1, i.text)),
@@ -411,7 +428,7 @@ pub fn episode<E: Environment + Judge>(
     goal: &ClassGoal,
     config: EpisodeConfig,
     phase2: &mut PhaseTwoRunner,
-) -> Episode {
+) -> Result<Episode, RunError> {
     let mut planner = |g: &Grounded| phase2.plan(g);
     run_episode(env, adapter, policy, goal, config, &mut planner)
 }
@@ -427,7 +444,7 @@ pub fn run(args: AgentArgs) -> anyhow::Result<ExitCode> {
             frontier: args.episode.frontier(),
             reexplore: args.episode.reexplore,
         };
-        (episode(&mut env, &mut adapter, policy.as_mut(), &goal, config, &mut phase2), game.display().to_string())
+        (episode(&mut env, &mut adapter, policy.as_mut(), &goal, config, &mut phase2)?, game.display().to_string())
     } else {
         let (benchmark, task) = (args.which.benchmark.as_deref().unwrap_or_default(), args.which.task.as_deref().unwrap_or_default());
         let (mut env, mut adapter, goal) = virtualhome(benchmark, task, args.which.task_dir.as_deref())?;
@@ -437,7 +454,7 @@ pub fn run(args: AgentArgs) -> anyhow::Result<ExitCode> {
             frontier: args.episode.frontier(),
             reexplore: args.episode.reexplore,
         };
-        (episode(&mut env, &mut adapter, policy.as_mut(), &goal, config, &mut phase2), format!("{benchmark}/{task}"))
+        (episode(&mut env, &mut adapter, policy.as_mut(), &goal, config, &mut phase2)?, format!("{benchmark}/{task}"))
     };
     if let Some(path) = &args.commands_out {
         let text: String = ep.steps.iter().map(|s| format!("{}\n", s.command)).collect();

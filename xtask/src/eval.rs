@@ -31,6 +31,7 @@ use exploration_harness::EpisodeConfig;
 use exploration_harness::direct::{DirectConfig, MAX_REPLY_TOKENS, run_direct};
 use serde::Serialize;
 use serde_json::{Value, json};
+use sha2::{Digest, Sha256};
 use transition_model::{Spelling, TransitionModel};
 
 use crate::agent::{EpisodeArgs, PhaseTwoRunner, alfworld, alfworld_env, chat_model, episode, explorer, virtualhome, virtualhome_env};
@@ -235,7 +236,7 @@ impl Embodied<'_> {
                     frontier: args.episode.frontier(),
                     reexplore: args.episode.reexplore,
                 };
-                (episode(&mut env, &mut adapter, self.policy.as_mut(), &goal, config, &mut self.phase2), budget)
+                (episode(&mut env, &mut adapter, self.policy.as_mut(), &goal, config, &mut self.phase2)?, budget)
             }
             EvalTask::Virtualhome { id } => {
                 let dir = if suite == Suite::VirtualhomeEai { args.task_dir.as_deref() } else { None };
@@ -247,7 +248,7 @@ impl Embodied<'_> {
                     frontier: args.episode.frontier(),
                     reexplore: args.episode.reexplore,
                 };
-                (episode(&mut env, &mut adapter, self.policy.as_mut(), &goal, config, &mut self.phase2), budget)
+                (episode(&mut env, &mut adapter, self.policy.as_mut(), &goal, config, &mut self.phase2)?, budget)
             }
             EvalTask::Files(files) => anyhow::bail!("{}: not an environment task", files.id),
         };
@@ -349,8 +350,40 @@ fn suite_subset(subset: &str, suite: Suite, agent: AgentName) -> Result<Option<S
 }
 
 /// The configuration that names a run's records: everything that changes what it finds.
-fn config(args: &EvalArgs, suite: Suite) -> anyhow::Result<Value> {
+/// `tasks` is the suite's whole task list (before `--limit` and `--shard`, which choose among
+/// them: a shorter or sharded run resumes into the whole one).
+fn config(args: &EvalArgs, suite: Suite, tasks: &[EvalTask]) -> anyhow::Result<Value> {
     let mut config = json!({"agent": args.agent, "benchmark": suite.name(), "subset": suite_subset(&args.subset, suite, args.agent)?});
+    // The list itself, not only the subset's name: an edited subset file (or another task
+    // folder) is another run, whose records never mix with the old list's.
+    let mut ids = Sha256::new();
+    for task in tasks {
+        ids.update(task.id().as_bytes());
+        ids.update(b"\n");
+    }
+    let digest: String = ids.finalize().iter().take(6).map(|b| format!("{b:02x}")).collect();
+    config.as_object_mut().expect("object").insert("tasks".into(), json!({"count": tasks.len(), "ids_sha256": digest}));
+    // Fixtures read from elsewhere (`NSEA_FIXTURES`) are other inputs.
+    if let Some(root) = std::env::var_os("NSEA_FIXTURES") {
+        config.as_object_mut().expect("object").insert("fixtures".into(), json!(root.to_string_lossy()));
+    }
+    // A model or tokenizer named by its path is named by its content too: a file replaced at
+    // the same path is another model (`smollm2` is fetched by a pinned digest already).
+    let mut files = serde_json::Map::new();
+    let specs = [&args.episode.explorer, &args.episode.lm.lm].into_iter().chain(args.episode.chat.chat_planner.as_ref());
+    for spec in specs {
+        if let crate::model_spec::ModelSpec::Gguf(path) = spec {
+            files.insert(path.display().to_string(), json!(crate::pypi::sha256_of(path)?));
+        }
+    }
+    if args.agent == AgentName::Ours
+        && let Some(path) = &args.episode.lm.tokenizer
+    {
+        files.insert(path.display().to_string(), json!(crate::pypi::sha256_of(path)?));
+    }
+    if !files.is_empty() {
+        config.as_object_mut().expect("object").insert("files_sha256".into(), Value::Object(files));
+    }
     // Every agent but the expert replay runs the exploration harness: its behaviour's version.
     if args.agent != AgentName::Expert {
         config.as_object_mut().expect("object").insert("harness".into(), json!(exploration_harness::HARNESS_VERSION));
@@ -553,8 +586,8 @@ fn run_once(args: &EvalArgs, planned: &[Planned]) -> anyhow::Result<(serde_json:
     for Planned { suite, tasks } in planned {
         let suite = *suite;
         let stem = format!("{}-{agent_name}", suite.name());
-        let mut records =
-            RecordFile::open(&args.out, &stem, &config(args, suite)?, args.shard, args.fresh).map_err(|e| InputError(e.to_string()))?;
+        let mut records = RecordFile::open(&args.out, &stem, &config(args, suite, tasks)?, args.shard, args.fresh)
+            .map_err(|e| InputError(e.to_string()))?;
         let total = tasks.len().min(args.limit.unwrap_or(usize::MAX));
         let selected = (0..total).filter(|&i| args.shard.is_none_or(|s| s.selects(i))).count();
         let bar = crate::input::progress_bar(format!("{} {agent_name}", suite.name()), selected);
@@ -622,11 +655,15 @@ pub struct MergeArgs {
     /// The shard files of one run (`<stem>-<hash>.shard-i-of-n.jsonl`).
     #[arg(required = true)]
     shards: Vec<PathBuf>,
+    /// Merge a run short of tasks (a `--limit` run's shards); without it, shards that have not
+    /// recorded every task of the run are refused.
+    #[arg(long)]
+    partial: bool,
 }
 
 /// `cargo xtask merge`: the shards' records, in task order, into the file one run writes.
 pub fn merge(args: MergeArgs) -> anyhow::Result<ExitCode> {
-    let merged = eval_harness::records::merge(&args.shards).map_err(|e| InputError(e.to_string()))?;
+    let merged = eval_harness::records::merge(&args.shards, args.partial).map_err(|e| InputError(e.to_string()))?;
     println!("{} records of configuration {} -> {}", merged.records, merged.config, merged.path.display());
     Ok(ExitCode::SUCCESS)
 }

@@ -56,27 +56,48 @@ fn killed_runs_resume_to_exactly_the_records_of_an_uninterrupted_run() {
     assert_eq!(expected.len(), 140);
 
     let (_tmp_killed, killed) = run_dir("killed");
+    // Whole records in the file so far (a killed run may leave a torn last line after them).
+    let recorded = |out: &Path| -> usize {
+        std::fs::read_dir(out)
+            .into_iter()
+            .flatten()
+            .flatten()
+            .map(|e| e.path())
+            .find(|p| p.extension().is_some_and(|e| e == "jsonl"))
+            .and_then(|file| std::fs::read(file).ok())
+            .map_or(0, |bytes| bytes.iter().filter(|&&b| b == b'\n').count())
+    };
     let mut interrupted = 0;
-    // Kill after growing delays (a fixed sequence); each run gets further, and a run that
-    // finishes before its kill ends the loop.
+    let mut last = 0;
+    // Each run is killed once it has recorded something new, a few milliseconds later (a fixed
+    // sequence, so kills land at varying points of a record's write): by progress, not by the
+    // clock, so every kill lands mid-run on any machine. A run that finishes ends the loop.
     for attempt in 0..40u64 {
         let mut child = eval(&killed).spawn().expect("starts");
-        std::thread::sleep(Duration::from_millis(150 + 37 * attempt));
-        match child.try_wait().expect("waits") {
-            Some(status) => {
-                assert!(status.success());
-                break;
+        let finished = loop {
+            if let Some(status) = child.try_wait().expect("waits") {
+                break Some(status);
             }
-            None => {
-                child.kill().expect("SIGKILL");
-                child.wait().expect("reaped");
-                interrupted += 1;
+            if recorded(&killed) > last {
+                break None;
             }
+            std::thread::sleep(Duration::from_millis(2));
+        };
+        if let Some(status) = finished {
+            assert!(status.success());
+            break;
         }
+        std::thread::sleep(Duration::from_millis(attempt % 7 * 3));
+        child.kill().expect("SIGKILL");
+        child.wait().expect("reaped");
+        interrupted += 1;
+        let now = recorded(&killed);
+        assert!(now > last && now <= expected.len(), "the killed run recorded {now} after {last}");
+        last = now;
     }
     // Whatever the kills left, a last run completes it.
     assert!(eval(&killed).status().expect("runs").success());
-    assert!(interrupted >= 2, "only {interrupted} runs were killed mid-way");
+    assert!(interrupted >= 2, "only {interrupted} runs were killed mid-way ({last} records)");
     let got = records(&killed);
     assert_eq!(got.len(), expected.len(), "records lost or repeated");
     for (i, (a, b)) in got.iter().zip(&expected).enumerate() {
@@ -163,7 +184,12 @@ fn shards_report_apart_and_merge_to_the_records_of_one_run() {
     let shards: Vec<PathBuf> =
         std::fs::read_dir(&dir).expect("records").flatten().map(|e| e.path()).filter(|p| p.to_string_lossy().ends_with(".jsonl")).collect();
     assert_eq!(shards.len(), 2, "{shards:?}");
-    let merged = Command::new(env!("CARGO_BIN_EXE_xtask")).arg("merge").args(&shards).output().expect("runs");
+    // Five of the run's 140 tasks: shards short of the run's tasks merge only when asked to.
+    let short = Command::new(env!("CARGO_BIN_EXE_xtask")).arg("merge").args(&shards).output().expect("runs");
+    let stderr = String::from_utf8_lossy(&short.stderr);
+    assert_eq!(short.status.code(), Some(2), "{stderr}");
+    assert!(stderr.contains("5 of the run's 140 tasks recorded"), "{stderr}");
+    let merged = Command::new(env!("CARGO_BIN_EXE_xtask")).args(["merge", "--partial"]).args(&shards).output().expect("runs");
     assert!(merged.status.success(), "{}", String::from_utf8_lossy(&merged.stderr));
     // "N records of configuration C -> PATH"
     let stdout = String::from_utf8_lossy(&merged.stdout);

@@ -162,7 +162,9 @@ impl RecordFile {
                 return Err(RecordError::ConfigMismatch { path: config_path, expected: hash, found });
             }
             Ok(_) => {}
-            Err(e) if e.kind() == std::io::ErrorKind::NotFound => std::fs::write(&config_path, &config_text).map_err(io(&config_path))?,
+            // Written whole or not at all (a file cut short by a crash would refuse every
+            // later open as a mismatch): a synced temporary file renamed into place.
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound => write_whole(&config_path, config_text.as_bytes())?,
             Err(e) => return Err(io(&config_path)(e)),
         }
         let path = dir.join(format!("{name}{}.jsonl", shard.map(|s| s.suffix()).unwrap_or_default()));
@@ -233,6 +235,23 @@ impl RecordFile {
     }
 }
 
+/// Writes `path` whole or not at all: `bytes` into a temporary file beside it, synced, then
+/// renamed over `path`, and the folder synced so that the rename survives a crash.
+fn write_whole(path: &Path, bytes: &[u8]) -> Result<(), RecordError> {
+    let partial = path.with_extension(format!("{}.partial", path.extension().and_then(|e| e.to_str()).unwrap_or_default()));
+    let mut file = File::create(&partial).map_err(io(&partial))?;
+    file.write_all(bytes).map_err(io(&partial))?;
+    file.sync_all().map_err(io(&partial))?;
+    std::fs::rename(&partial, path).map_err(io(path))?;
+    if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
+        // Not every platform opens a folder as a file; the rename stands either way.
+        if let Ok(dir) = File::open(dir) {
+            let _ = dir.sync_all();
+        }
+    }
+    Ok(())
+}
+
 /// The records of a JSONL file: every non-empty line an object with a `task`, and, with
 /// `hash`, that configuration.
 /// The whole lines of a records file's `bytes` as text, and the length in bytes of a last line
@@ -285,15 +304,34 @@ pub struct Merged {
 
 /// Joins shard files (`<stem>-<hash>.shard-i-of-n.jsonl`) of one configuration into
 /// `<stem>-<hash>.jsonl` beside them, records in `index` order. Refused: files of different
-/// configurations, a task in two files, a shard of the run not given, a target file that
-/// already holds records.
-pub fn merge(shards: &[PathBuf]) -> Result<Merged, RecordError> {
+/// configurations (by their names or their records), a record whose `index` is not its
+/// shard's, a task in two files, a shard of the run not given, a target file that already holds
+/// records, and, unless `partial`, a run short of tasks: where the configuration beside the
+/// files (`<stem>-<hash>.config.json`) gives the run's task count (`tasks.count`), fewer
+/// records than that are shards not run to their end (resume them, or merge a `--limit` run
+/// with `partial`).
+pub fn merge(shards: &[PathBuf], partial: bool) -> Result<Merged, RecordError> {
     let first = shards.first().ok_or_else(|| RecordError::Merge("no shard files given".into()))?;
     let name = first.file_name().and_then(|n| n.to_str()).unwrap_or_default();
     let base = name.split(".shard-").next().unwrap_or(name).trim_end_matches(".jsonl");
     let mut all: Vec<Map<String, Value>> = Vec::new();
     let mut config: Option<String> = None;
+    // Every file is a shard of one run: the name's `<stem>-<hash>` is the first's.
+    let shard_of = |path: &Path| -> Result<(String, Shard), RecordError> {
+        let name = path.file_name().and_then(|n| n.to_str()).unwrap_or_default();
+        name.strip_suffix(".jsonl")
+            .and_then(|n| n.rsplit_once(".shard-"))
+            .and_then(|(base, i_of_n)| Some((base.to_string(), i_of_n.replace("-of-", "/").parse::<Shard>().ok()?)))
+            .ok_or_else(|| RecordError::Merge(format!("{}: not a shard file (`<stem>-<hash>.shard-i-of-n.jsonl`)", path.display())))
+    };
     for path in shards {
+        let (file_base, shard) = shard_of(path)?;
+        if file_base != base {
+            return Err(RecordError::Merge(format!(
+                "{}: a shard of {file_base}, not of {base}: shards of different runs do not merge",
+                path.display()
+            )));
+        }
         let (text, torn) = whole_lines(path, std::fs::read(path).map_err(io(path))?)?;
         if torn > 0 {
             return Err(RecordError::Merge(format!("{}: its last record is cut short; resume that shard first", path.display())));
@@ -310,20 +348,28 @@ pub fn merge(shards: &[PathBuf]) -> Result<Merged, RecordError> {
                 }
                 Some(_) => {}
             }
+            let index = record.get("index").and_then(Value::as_u64);
+            if !index.is_some_and(|i| shard.selects(i as usize)) {
+                return Err(RecordError::Merge(format!(
+                    "{}: task {} has index {}, which is not shard {} of {}'s",
+                    path.display(),
+                    record.get("task").and_then(Value::as_str).unwrap_or_default(),
+                    index.map_or("none".to_string(), |i| i.to_string()),
+                    shard.index,
+                    shard.count
+                )));
+            }
             all.push(record);
         }
     }
     let config = config.ok_or_else(|| RecordError::Merge("the shard files hold no records".into()))?;
+    if !base.ends_with(&format!("-{config}")) {
+        return Err(RecordError::Merge(format!("the records are of configuration {config}, the files' names of {base}")));
+    }
     // Every shard of the run, once: a merged file short of a shard would pass for the whole run.
     let mut numbers = Vec::with_capacity(shards.len());
     for path in shards {
-        let name = path.file_name().and_then(|n| n.to_str()).unwrap_or_default();
-        let shard = name
-            .strip_suffix(".jsonl")
-            .and_then(|n| n.rsplit_once(".shard-"))
-            .and_then(|(_, i_of_n)| i_of_n.replace("-of-", "/").parse::<Shard>().ok())
-            .ok_or_else(|| RecordError::Merge(format!("{}: not a shard file (`<stem>-<hash>.shard-i-of-n.jsonl`)", path.display())))?;
-        numbers.push(shard);
+        numbers.push(shard_of(path)?.1);
     }
     let count = numbers[0].count;
     if let Some(other) = numbers.iter().find(|s| s.count != count) {
@@ -343,14 +389,37 @@ pub fn merge(shards: &[PathBuf]) -> Result<Merged, RecordError> {
             return Err(RecordError::Merge(format!("task {task} is in two shard files")));
         }
     }
+    // The run's task count, where its configuration gives one: fewer records are shards that
+    // did not finish, which a merged file would pass off as the whole run.
+    let config_path = first.with_file_name(format!("{base}.config.json"));
+    let expected = std::fs::read_to_string(&config_path)
+        .ok()
+        .and_then(|text| serde_json::from_str::<Value>(&text).ok())
+        .and_then(|v| v.pointer("/tasks/count").and_then(Value::as_u64));
+    if let Some(expected) = expected
+        && (all.len() as u64) < expected
+        && !partial
+    {
+        let short: Vec<String> = numbers
+            .iter()
+            .filter_map(|shard| {
+                let want = (0..expected as usize).filter(|&i| shard.selects(i)).count();
+                let have = all.iter().filter(|r| r.get("index").and_then(Value::as_u64).is_some_and(|i| shard.selects(i as usize))).count();
+                (have < want).then(|| format!("shard {} of {} has {have} of its {want}", shard.index, shard.count))
+            })
+            .collect();
+        return Err(RecordError::Merge(format!(
+            "{} of the run's {expected} tasks recorded ({}): resume the shards to their end, or merge a shorter (`--limit`) run with --partial",
+            all.len(),
+            short.join(", ")
+        )));
+    }
     all.sort_by_key(|r| r.get("index").and_then(Value::as_u64).unwrap_or(u64::MAX));
     let target = first.with_file_name(format!("{base}.jsonl"));
     if std::fs::metadata(&target).is_ok_and(|m| m.len() > 0) {
         return Err(RecordError::Merge(format!("{}: already holds records; move it away to merge into it", target.display())));
     }
     let text: String = all.iter().map(|r| Value::Object(r.clone()).to_string() + "\n").collect();
-    let partial = target.with_extension("jsonl.partial");
-    std::fs::write(&partial, text).map_err(io(&partial))?;
-    std::fs::rename(&partial, &target).map_err(io(&target))?;
+    write_whole(&target, text.as_bytes())?;
     Ok(Merged { path: target, records: all.len(), config })
 }

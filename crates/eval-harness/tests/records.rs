@@ -1,7 +1,7 @@
 //! Records: named by their configuration, resumed, cut back to whole records after a crash,
 //! never mixed, sharded and merged back to what one run writes.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use eval_harness::records::{RecordError, RecordFile, Shard, config_hash, merge};
 use serde_json::{Value, json};
@@ -146,19 +146,65 @@ fn shards_merge_into_what_one_run_writes() {
         shard_paths.push(file.path().to_path_buf());
     }
     // Every shard of the run is needed: the merged file stands for the whole run.
-    let error = merge(&shard_paths[..2]).expect_err("a shard short");
+    let error = merge(&shard_paths[..2], false).expect_err("a shard short");
     assert!(error.to_string().contains("shard(s) 3 of 3 not given"), "{error}");
-    let merged = merge(&shard_paths).expect("merges");
+    let merged = merge(&shard_paths, false).expect("merges");
     assert_eq!(merged.records, names.len());
     assert_eq!(std::fs::read_to_string(&merged.path).expect("reads"), std::fs::read_to_string(whole.path()).expect("reads"));
-    assert!(merge(&shard_paths).is_err(), "merging again over the result is refused");
+    assert!(merge(&shard_paths, false).is_err(), "merging again over the result is refused");
     // Shards of another configuration do not merge.
     let other = RecordFile::open(&dir.join("sharded"), "run", &json!({"agent": "planner"}), Some(Shard { index: 1, count: 2 }), false);
     let mut other = other.expect("opens");
     other.append(0, &json!({"task": "x"})).expect("appends");
     std::fs::remove_file(&merged.path).expect("removes");
-    let error = merge(&[shard_paths[0].clone(), other.path().to_path_buf()]).expect_err("mixed");
+    let error = merge(&[shard_paths[0].clone(), other.path().to_path_buf()], false).expect_err("mixed");
     assert!(error.to_string().contains("different runs"), "{error}");
+}
+
+/// A merged file stands for the whole run: shards that stopped short (killed, not resumed) are
+/// refused where the configuration gives the run's task count, unless the merge is asked to be
+/// partial; a record filed in another shard's file, or a shard file renamed to another run's
+/// name, is refused.
+#[test]
+fn a_merge_refuses_unfinished_shards_and_misfiled_records() {
+    let (_tmp_dir, dir) = scratch("unfinished");
+    let config = json!({"agent": "expert", "benchmark": "ipc", "tasks": {"count": 6}});
+    let names = ["t0", "t1", "t2", "t3", "t4", "t5"];
+    let shard_files = |dir: &Path, upto: usize| -> Vec<PathBuf> {
+        (1..=2)
+            .map(|index| {
+                let shard = Shard { index, count: 2 };
+                let mut file = RecordFile::open(dir, "run", &config, Some(shard), false).expect("opens");
+                for (i, name) in names.iter().enumerate().take(upto).filter(|(i, _)| shard.selects(*i)) {
+                    file.append(i, &json!({"task": name})).expect("appends");
+                }
+                file.path().to_path_buf()
+            })
+            .collect()
+    };
+    // Shard 2 was killed after its first task (t1): t3 and t5 are missing.
+    let short = shard_files(&dir.join("short"), 5);
+    let mut file = RecordFile::open(&dir.join("short"), "run", &config, Some(Shard { index: 2, count: 2 }), true).expect("opens");
+    file.append(1, &json!({"task": "t1"})).expect("appends");
+    drop(file);
+    let error = merge(&short, false).expect_err("short");
+    assert!(error.to_string().contains("4 of the run's 6 tasks recorded (shard 2 of 2 has 1 of its 3)"), "{error}");
+    let merged = merge(&short, true).expect("a partial merge, asked for");
+    assert_eq!(merged.records, 4);
+    // A record in the wrong shard's file (index 2 is shard 1's).
+    let whole = shard_files(&dir.join("misfiled"), 6);
+    let mut text = std::fs::read_to_string(&whole[1]).expect("reads");
+    text = text.replace("\"index\":1,", "\"index\":2,");
+    std::fs::write(&whole[1], text).expect("writes");
+    let error = merge(&whole, false).expect_err("misfiled");
+    assert!(error.to_string().contains("task t1 has index 2, which is not shard 2 of 2's"), "{error}");
+    // A shard file renamed into another run's name.
+    let renamed = shard_files(&dir.join("renamed"), 6);
+    let name = renamed[1].file_name().unwrap().to_str().unwrap().to_string();
+    let elsewhere = renamed[1].with_file_name(name.replacen("run-", "run-0", 1));
+    std::fs::rename(&renamed[1], &elsewhere).expect("renames");
+    let error = merge(&[renamed[0].clone(), elsewhere], false).expect_err("renamed");
+    assert!(error.to_string().contains("shards of different runs do not merge"), "{error}");
 }
 
 #[test]

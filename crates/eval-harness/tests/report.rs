@@ -654,7 +654,7 @@ fn shards_beside_their_merged_file_are_read_once() {
     }
     let stem = "virtualhome-rearrange-planner-1a1f05079ed4";
     let shards: Vec<PathBuf> = (1..=2).map(|i| dir.join(format!("{stem}.shard-{i}-of-2.jsonl"))).collect();
-    let merged = eval_harness::records::merge(&shards).expect("the shards merge");
+    let merged = eval_harness::records::merge(&shards, false).expect("the shards merge");
     assert_eq!(merged.path, dir.join(format!("{stem}.jsonl")));
 
     let report_of = |dir: &Path| {

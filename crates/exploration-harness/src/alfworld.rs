@@ -1,5 +1,5 @@
-//! The agent on ALFWorld, with the systematic explorer (the paper's model-free control for
-//! Phase I): explore until Ready, write ŝ0 as a PDDL problem of ALFWorld's own domain from
+//! The agent on ALFWorld, with the systematic explorer (a control of this project's, not the
+//! paper's: Phase I's controller alone, no model) or a model's policy: explore until Ready, write ŝ0 as a PDDL problem of ALFWorld's own domain from
 //! what was perceived (the hand-over, Eq. 4), plan it with the caller's Phase II, bind the plan
 //! back to perceived names through β and run it open-loop in the environment, whose goal check
 //! alone says whether the episode succeeded.

@@ -20,6 +20,7 @@ use transition_model::State;
 use vlm_client::{ChatModel, ChatRequest, Message, Sampling};
 
 use crate::episode::{Grounded, PhaseTwo};
+use crate::phase1::RunError;
 
 /// How the chat model is asked.
 #[derive(Debug, Clone, PartialEq)]
@@ -101,13 +102,27 @@ pub fn read_plan(grounded: &Grounded, text: &str) -> ReadPlan {
 }
 
 /// Phase II by `chat`: the planning prompt of ŝ0, one reply, the plan read from it.
-pub fn plan_by_chat(chat: &mut dyn ChatModel, grounded: &Grounded, config: &ChatPlannerConfig) -> Result<PhaseTwo, String> {
+/// A model that cannot be asked ([`vlm_client::ChatErrorKind::is_unavailable`]) is the run's
+/// failure; any other error (a prompt past the model's context, say) is this planner's: no
+/// plan, with the error as the reason.
+pub fn plan_by_chat(chat: &mut dyn ChatModel, grounded: &Grounded, config: &ChatPlannerConfig) -> Result<PhaseTwo, RunError> {
     let initial = grounded.model.initial_state();
     let prompt = mcts::prompt::planning_prompt(&grounded.model, &grounded.spelling, &initial, &config.prompt);
     let request = ChatRequest::new(vec![Message::system(prompt.system), Message::user(prompt.user)])
         .with_sampling(config.sampling.clone())
         .with_thinking(config.thinking);
-    let reply = chat.chat(&request).map_err(|e| format!("{}: {e}", chat.endpoint()))?;
+    let reply = match chat.chat(&request) {
+        Ok(reply) => reply,
+        Err(e) if e.kind.is_unavailable() => return Err(RunError(format!("the chat planner is unavailable: {e}"))),
+        Err(e) => {
+            return Ok(PhaseTwo {
+                model_calls: 1,
+                detail: json!({"planner": "chat", "thinking": config.thinking, "error": e.to_string()}),
+                no_plan: Some(format!("the chat planner's request failed: {e}")),
+                ..PhaseTwo::default()
+            });
+        }
+    };
     let plan_text = strip_thinking(&reply.text);
     let read = read_plan(grounded, plan_text);
     let reasoning_chars = reply.reasoning.as_ref().map_or(0, String::len) + (reply.text.len() - plan_text.len());

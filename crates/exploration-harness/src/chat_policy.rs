@@ -12,7 +12,7 @@ use serde_json::{Value, json};
 use vlm_client::{ChatModel, ChatRequest, Image, Message, Sampling, chat_json};
 
 use crate::evidence::Fact;
-use crate::phase1::{Policy, PolicyInput, PolicyReply, PolicyUsage, Skill};
+use crate::phase1::{Policy, PolicyError, PolicyInput, PolicyReply, PolicyUsage, RunError, Skill};
 
 /// Output tokens per reply (Appendix Table 6).
 pub const MAX_REPLY_TOKENS: u32 = 512;
@@ -97,25 +97,35 @@ impl Policy for ChatPolicy {
         self.name.clone()
     }
 
-    fn choose(&mut self, input: &PolicyInput<'_>) -> Result<PolicyReply, String> {
+    fn choose(&mut self, input: &PolicyInput<'_>) -> Result<PolicyReply, PolicyError> {
         let text = user_prompt(input);
         let mut user = Message::user(text.clone());
         self.usage.observations += 1;
         if let Some(image) = &input.observation.image {
-            let image = Image::from_bytes(image.bytes.clone()).map_err(|e| format!("the observation's picture: {e}"))?;
+            // A picture the API cannot carry is the run's failure: no model could read it.
+            let image =
+                Image::from_bytes(image.bytes.clone()).map_err(|e| RunError(format!("the observation's picture cannot be sent: {e}")))?;
             user = user.with_image(image);
             self.usage.images += 1;
         }
         let request = ChatRequest::new(vec![Message::system(system_prompt(input.benchmark)), user])
             .with_sampling(Sampling::greedy(MAX_REPLY_TOKENS))
+            // Thinking off (the paper's Phase I setting; a template without it ignores this).
+            .with_thinking(false)
             .with_json_schema(reply_schema(&input.skills.list));
         self.last_prompt = text;
-        let reply = chat_json(self.model.as_mut(), &request).map_err(|e| e.to_string())?;
+        let reply = chat_json(self.model.as_mut(), &request).map_err(|e| {
+            if e.kind.is_unavailable() {
+                PolicyError::Run(RunError(format!("the chat model is unavailable: {e}")))
+            } else {
+                PolicyError::Unreadable(e.to_string())
+            }
+        })?;
         self.usage.calls += 1;
         self.usage.prompt_tokens += reply.usage.prompt_tokens;
         self.usage.generated_tokens += reply.usage.completion_tokens;
         self.usage.cached_calls += u64::from(reply.reply.cached);
-        read_reply(&reply.value)
+        read_reply(&reply.value).map_err(PolicyError::Unreadable)
     }
 
     fn usage(&self) -> PolicyUsage {

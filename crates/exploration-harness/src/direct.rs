@@ -38,8 +38,9 @@
 //!
 //! The failure attribution of §5.3 for direct policies: `grounding` when the failure threshold
 //! ended the episode, `goal` otherwise (the interaction limit, or a premature `DONE`).
-//! A model that is unreachable (connection, timeout, 5xx, 429, a bad URL or a missing key) is
-//! an error of the run ([`DirectError`]), not an episode outcome, so a rerun can resume it.
+//! A model that is unreachable ([`ChatErrorKind::is_unavailable`]: connection, timeout, 5xx,
+//! 429, a bad URL, a missing key, 401/403/404) is an error of the run ([`DirectError`]), not an
+//! episode outcome, so a rerun can resume it.
 
 use std::time::Instant;
 
@@ -364,10 +365,6 @@ pub fn unreadable_feedback(error: &str) -> String {
 
 /// A chat error the run cannot go on after (the model is unreachable or misconfigured),
 /// rather than a reply the model got wrong.
-fn unavailable(kind: &ChatErrorKind) -> bool {
-    kind.is_transient() || matches!(kind, ChatErrorKind::BadUrl(_) | ChatErrorKind::MissingApiKey(_))
-}
-
 fn clip(text: &str, chars: usize) -> String {
     text.chars().take(chars).collect()
 }
@@ -419,6 +416,8 @@ pub fn run_direct<E: Environment + Judge>(
         usage.observations += 1;
         let request = ChatRequest::new(vec![Message::system(system.clone()), user])
             .with_sampling(Sampling::greedy(config.max_reply_tokens))
+            // Thinking off (the paper's direct interactive setting).
+            .with_thinking(false)
             .with_json_schema(reply_schema());
         let before = model.usage();
         let asked = Instant::now();
@@ -432,7 +431,7 @@ pub fn run_direct<E: Environment + Judge>(
                 usage.model_calls += 1 + u64::from(json.repaired);
                 (json.reply.text.clone(), read_reply(&json.value))
             }
-            Err(error) if unavailable(&error.kind) => return Err(DirectError::Unavailable(error)),
+            Err(error) if error.kind.is_unavailable() => return Err(DirectError::Unavailable(error)),
             Err(error) => {
                 let (calls, text, message) = match &error.kind {
                     ChatErrorKind::InvalidJson { error, reply } => (2, reply.clone(), error.clone()),

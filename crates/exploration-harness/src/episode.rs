@@ -51,7 +51,7 @@ use transition_model::{Spelling, TransitionModel};
 
 use crate::evidence::Fact;
 use crate::goal::ClassGoal;
-use crate::phase1::{Adapter, Decision, Exploration, Frontier, Policy, PolicyUsage, StepRecord, explore, resume};
+use crate::phase1::{Adapter, Decision, Exploration, Frontier, Policy, PolicyUsage, RunError, StepRecord, explore, resume};
 
 /// ŝ0 and β.
 #[derive(Debug, Clone, PartialEq, Eq, Serialize)]
@@ -113,7 +113,7 @@ pub struct PhaseTwo {
     pub search_tree: Option<mcts::TreeSummary>,
     /// Set when the planner ended without a plan (why: a search's stop, `WallClock`), with
     /// `actions` empty: the episode keeps this attempt's model calls, tokens, detail and tree,
-    /// which an `Err` would lose. `Err` is for a planner that could not run.
+    /// which an `Err` would lose. `Err` ([`RunError`]) is for a planner that could not run.
     pub no_plan: Option<String>,
     /// Set when the plan as written went on past `actions` with a step that is not applicable
     /// (an unconstrained decoder's, or a chat planner's): `actions` is the applicable prefix,
@@ -122,8 +122,10 @@ pub struct PhaseTwo {
     pub invalid_step: Option<String>,
 }
 
-/// Phase II: a planner on the grounded problem.
-pub type Planner<'a> = dyn FnMut(&Grounded) -> Result<PhaseTwo, String> + 'a;
+/// Phase II: a planner on the grounded problem. A planner that ran and found no plan returns
+/// [`PhaseTwo::no_plan`]; `Err` is for one that could not run (its model unreachable, a
+/// setting it refuses), which ends the run rather than the episode ([`RunError`]).
+pub type Planner<'a> = dyn FnMut(&Grounded) -> Result<PhaseTwo, RunError> + 'a;
 
 /// The terminal failure class (module documentation).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
@@ -209,12 +211,12 @@ pub fn run_episode<E: Environment + Judge>(
     goal: &ClassGoal,
     config: EpisodeConfig,
     plan: &mut Planner<'_>,
-) -> Episode {
+) -> Result<Episode, RunError> {
     let start = Instant::now();
     let first = env.reset();
     // A policy's usage is summed over its life; a harness reuses one policy across episodes.
     let usage_before = policy.usage();
-    let exploration = explore(env, adapter, policy, goal, &first, config.budget, config.frontier);
+    let exploration = explore(env, adapter, policy, goal, &first, config.budget, config.frontier)?;
     let phase1_ms = start.elapsed().as_secs_f64() * 1e3;
     let (precision, recall) = score(adapter, goal, &exploration, &env.hidden_atoms());
     let mut episode = Episode {
@@ -284,7 +286,7 @@ pub fn run_episode<E: Environment + Judge>(
                     if refuted.len() == 1 { "it" } else { "them" }
                 );
                 let before = exploration.record.steps.len();
-                exploration = resume(env, adapter, policy, goal, exploration, &feedback, config.budget, config.frontier);
+                exploration = resume(env, adapter, policy, goal, exploration, &feedback, config.budget, config.frontier)?;
                 episode.steps.extend(exploration.record.steps[before..].iter().cloned());
                 episode.phase1_steps = exploration.record.steps.len();
                 episode.phase1_stop = exploration.stop.clone();
@@ -302,16 +304,8 @@ pub fn run_episode<E: Environment + Judge>(
             explored_out = first_plan;
             break;
         }
-        let planned = plan(&grounded);
+        let phase2 = plan(&grounded)?;
         episode.phase2_ms += t.elapsed().as_secs_f64() * 1e3;
-        let phase2 = match planned {
-            Ok(p) => p,
-            Err(e) => {
-                episode.failure = Some(format!("no plan: {e}"));
-                episode.no_plan = true;
-                break;
-            }
-        };
         episode.phase2_calls += phase2.model_calls;
         episode.phase2_tokens += phase2.generated_tokens;
         episode.phase2_detail = phase2.detail.clone();
@@ -398,7 +392,7 @@ pub fn run_episode<E: Environment + Judge>(
             Attribution::Goal
         });
     }
-    episode
+    Ok(episode)
 }
 
 /// The perceived instances (through β) that a goal fact of ŝ0 names where that fact can never

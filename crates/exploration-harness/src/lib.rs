@@ -41,8 +41,14 @@
 /// location: it learns it from the game's "Nothing happens." to a `go to`, and ŝ0 gives such
 /// places one location ([`alfworld::colocated`]); a failed hand-over is attributed to
 /// `representation` (Phase I's state was insufficient), not `search`; 13: Phase I's prompt gives
-/// VirtualHome an example fact in its own vocabulary (it showed ALFWorld's `inReceptacle`).
-pub const HARNESS_VERSION: u32 = 13;
+/// VirtualHome an example fact in its own vocabulary (it showed ALFWorld's `inReceptacle`);
+/// 14: a model that cannot be asked, or a planner that cannot run, stops the run instead of
+/// being recorded as the agent's failure ([`RunError`]; A*'s proof that no plan exists and a
+/// prompt past the model's context are no plan); Phase I and the direct policy ask for thinking
+/// off, and Phase II's prompt is rendered thinking off (the paper's decoding settings; a
+/// template without a thinking mode, SmolLM2's, renders as before); a skill the step budget
+/// cuts short is `cut`, not `success`.
+pub const HARNESS_VERSION: u32 = 14;
 
 pub mod alfworld;
 pub mod chat_planner;
@@ -60,4 +66,4 @@ pub use episode::{Attribution, Episode, EpisodeConfig, Grounded, Handing, Handov
 pub use evidence::{Belief, Fact, Percept, perceive_alfworld};
 pub use goal::{ClassGoal, ClassLiteral, GoalError, Symbol, parse_goal};
 pub use ontology::{Ontology, OntologyError};
-pub use phase1::{Adapter, Frontier, Policy, PolicyUsage, Skill, Skills, Systematic};
+pub use phase1::{Adapter, Frontier, Policy, PolicyError, PolicyUsage, RunError, Skill, Skills, Systematic};

@@ -165,8 +165,9 @@ pub struct Decision {
     pub refused: Vec<String>,
     /// The policy said Done before Ready and the harness took the sweep's skill instead.
     pub required: bool,
-    /// `success`, `failed` (a command was not executed), `refused` (not a skill of K_t) or
-    /// `error` (the policy's reply could not be read; `feedback` holds the error).
+    /// `success`, `failed` (a command was not executed), `cut` (the step budget ran out before
+    /// the skill's last command), `refused` (not a skill of K_t) or `error` (the policy's reply
+    /// could not be read; `feedback` holds the error).
     pub outcome: &'static str,
     /// The outcome the policy is told next turn.
     pub feedback: String,
@@ -232,11 +233,30 @@ impl PolicyUsage {
     }
 }
 
+/// Why a policy gave no reply.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+pub enum PolicyError {
+    /// The model answered, but not with a reply that can be read: the model's failure, refused
+    /// like an invalid skill.
+    #[error("{0}")]
+    Unreadable(String),
+    /// The model could not be asked: the run's failure, not the model's ([`RunError`]).
+    #[error(transparent)]
+    Run(#[from] RunError),
+}
+
+/// A failure of the run rather than of the agent: a model that cannot be reached, a setting it
+/// refuses, an internal error. The episode is not an outcome: a harness stops the run without
+/// recording it, and a rerun resumes that task.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error("{0}")]
+pub struct RunError(pub String);
+
 /// The policy f_φ (paper Eq. 2).
 pub trait Policy {
     /// `systematic`, `openai:URL`, `local:NAME`, ...
     fn name(&self) -> String;
-    fn choose(&mut self, input: &PolicyInput<'_>) -> Result<PolicyReply, String>;
+    fn choose(&mut self, input: &PolicyInput<'_>) -> Result<PolicyReply, PolicyError>;
     /// Usage summed over every call so far (a harness reading one episode takes the difference:
     /// [`PolicyUsage::since`]).
     fn usage(&self) -> PolicyUsage;
@@ -251,7 +271,7 @@ impl Policy for Systematic {
         "systematic".into()
     }
 
-    fn choose(&mut self, input: &PolicyInput<'_>) -> Result<PolicyReply, String> {
+    fn choose(&mut self, input: &PolicyInput<'_>) -> Result<PolicyReply, PolicyError> {
         let skill = input.skills.sweep.map_or(Skill::Done, |i| input.skills.list[i].clone());
         Ok(PolicyReply { proposed: Vec::new(), done: skill == Skill::Done, skill })
     }
@@ -340,7 +360,7 @@ pub fn explore(
     first: &Observation,
     budget: usize,
     frontier: Option<Frontier>,
-) -> Exploration {
+) -> Result<Exploration, RunError> {
     let mut belief = Belief::default();
     adapter.observe(first, 0, &mut belief);
     let start = Exploration { belief, record: Record::default(), stop: String::new(), observation: first.clone() };
@@ -360,7 +380,7 @@ pub fn resume(
     feedback: &str,
     budget: usize,
     frontier: Option<Frontier>,
-) -> Exploration {
+) -> Result<Exploration, RunError> {
     let Exploration { mut belief, mut record, observation, .. } = exploration;
     let objects = adapter.objects_to_find(goal);
     let sentence = env.goal().sentence.clone();
@@ -404,7 +424,8 @@ pub fn resume(
         };
         let reply = match policy.choose(&input) {
             Ok(reply) => reply,
-            Err(e) => {
+            Err(PolicyError::Run(e)) => return Err(e),
+            Err(PolicyError::Unreadable(e)) => {
                 // An unreadable reply is refused like an invalid skill.
                 refusals += 1;
                 feedback = "Your reply could not be read; answer with the JSON asked for.".to_string();
@@ -470,6 +491,8 @@ pub fn resume(
         let mut pending = adapter.commands(&reply.skill, goal, &belief, &record);
         pending.reverse();
         let mut followed = false;
+        // The step budget ran out before a command of the skill could be sent.
+        let mut cut = false;
         // The recovery command, once sent (`Adapter::recover`).
         let (mut recovered, mut recovering) = (false, false);
         loop {
@@ -485,6 +508,7 @@ pub fn resume(
                 None => break,
             };
             if record.steps.len() >= budget {
+                cut = true;
                 break;
             }
             let result = env.step(&command);
@@ -523,7 +547,11 @@ pub fn resume(
             (true, true) => format!("Not every listed object is grounded yet, so the harness inspected instead: {}.", reply.skill),
             (false, _) => format!("The previous action could not be executed: {reason}."),
         };
-        let outcome = if executed_all { "success" } else { "failed" };
+        let outcome = match (executed_all, cut) {
+            (false, _) => "failed",
+            (true, true) => "cut",
+            (true, false) => "success",
+        };
         record.decisions.push(Decision {
             skill: reply.skill.to_string(),
             offered,
@@ -535,7 +563,7 @@ pub fn resume(
             feedback: feedback.clone(),
         });
     };
-    Exploration { belief, record, stop, observation }
+    Ok(Exploration { belief, record, stop, observation })
 }
 
 #[cfg(test)]

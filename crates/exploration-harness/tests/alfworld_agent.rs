@@ -53,8 +53,13 @@ fn play(path: &Path, ontology: &Ontology, domain: &pddl_syntax::Domain, grammar:
     let mut env = AlfworldEnv::from_game_file(path).unwrap();
     let goal = parse_goal(env.goal()).unwrap();
     let mut adapter = AlfworldAdapter::new(ontology.clone(), domain.clone(), grammar.to_string(), env.goal());
-    let mut planner = |g: &Grounded| a_star(&g.model).map(|actions| PhaseTwo { actions, ..PhaseTwo::default() });
-    run_episode(&mut env, &mut adapter, &mut Systematic, &goal, EpisodeConfig::open_loop(55), &mut planner)
+    let mut planner = |g: &Grounded| {
+        Ok(match a_star(&g.model) {
+            Ok(actions) => PhaseTwo { actions, ..PhaseTwo::default() },
+            Err(why) => PhaseTwo { no_plan: Some(why), ..PhaseTwo::default() },
+        })
+    };
+    run_episode(&mut env, &mut adapter, &mut Systematic, &goal, EpisodeConfig::open_loop(55), &mut planner).expect("the run goes on")
 }
 
 /// The grounded problem checks against ALFWorld's domain.
@@ -151,8 +156,11 @@ fn no_phase_one_skill_of_the_controller_repeats_a_target() {
         let goal = parse_goal(env.goal()).unwrap();
         let mut adapter = AlfworldAdapter::new(ontology.clone(), domain.clone(), grammar.clone(), env.goal());
         let mut policy = Restless::new(1 + i % 3, i % 2 == 1);
-        let mut planner = |_: &Grounded| Err::<PhaseTwo, String>("no Phase II here".into());
-        let episode = run_episode(&mut env, &mut adapter, &mut policy, &goal, EpisodeConfig::open_loop(55), &mut planner);
+        let mut planner = |_: &Grounded| {
+            Ok::<PhaseTwo, exploration_harness::RunError>(PhaseTwo { no_plan: Some("no Phase II here".into()), ..PhaseTwo::default() })
+        };
+        let episode =
+            run_episode(&mut env, &mut adapter, &mut policy, &goal, EpisodeConfig::open_loop(55), &mut planner).expect("the run goes on");
         assert_no_target_repeats(&episode, &trial.display().to_string());
         let looks: Vec<&str> = episode.steps.iter().filter(|s| s.phase == "explore").map(|s| s.command.as_str()).collect();
         let examined: Vec<&&str> = looks.iter().filter(|c| c.starts_with("examine ")).collect();
@@ -177,7 +185,7 @@ fn closed_loop_replans_after_a_refused_step() {
         // First call: a put, which the game refuses (nothing is held), then A*'s plan.
         let mut planner = |g: &Grounded| {
             calls += 1;
-            let plan = a_star(&g.model)?;
+            let plan = a_star(&g.model).expect("A* plans the hand-over");
             if calls > 1 {
                 return Ok(PhaseTwo { actions: plan, ..PhaseTwo::default() });
             }
@@ -195,7 +203,8 @@ fn closed_loop_replans_after_a_refused_step() {
             &goal,
             EpisodeConfig { closed_loop, ..EpisodeConfig::open_loop(55) },
             &mut planner,
-        );
+        )
+        .expect("the run goes on");
         if closed_loop {
             assert!(episode.success, "{:?}", episode.failure);
             assert_eq!(episode.handovers, 2);
@@ -379,9 +388,43 @@ fn a_failed_hand_over_is_attributed_to_representation() {
     let mut env = AlfworldEnv::from_game_file(game).unwrap();
     let goal = parse_goal(env.goal()).unwrap();
     let mut adapter = NoHandover(AlfworldAdapter::new(ontology(), domain, grammar, env.goal()));
-    let mut planner = |_: &Grounded| -> Result<PhaseTwo, String> { panic!("no hand-over, no planning") };
-    let episode = run_episode(&mut env, &mut adapter, &mut Systematic, &goal, EpisodeConfig::open_loop(55), &mut planner);
+    let mut planner = |_: &Grounded| -> Result<PhaseTwo, exploration_harness::RunError> { panic!("no hand-over, no planning") };
+    let episode =
+        run_episode(&mut env, &mut adapter, &mut Systematic, &goal, EpisodeConfig::open_loop(55), &mut planner).expect("the run goes on");
     assert!(!episode.success);
     assert_eq!(episode.failure.as_deref(), Some("the goal names a class with no perceived instance"));
     assert_eq!(episode.attribution, Some(exploration_harness::Attribution::Representation));
+}
+
+/// A skill whose commands the step budget cuts short is `cut`, not `success`: the sweep's
+/// `goto` of a closed place sends `go to` and then `open`; with the budget spent after the
+/// `go to`, the skill is cut, and one step more lets it end as a success.
+#[test]
+fn a_skill_the_budget_cuts_short_is_not_a_success() {
+    use exploration_harness::phase1::explore;
+    let (domain, grammar) = domain_and_grammar();
+    let explore_within = |game: &Path, budget: usize| {
+        let mut env = AlfworldEnv::from_game_file(game).unwrap();
+        let goal = parse_goal(env.goal()).unwrap();
+        let mut adapter = AlfworldAdapter::new(ontology(), domain.clone(), grammar.clone(), env.goal());
+        let first = env.reset();
+        explore(&mut env, &mut adapter, &mut Systematic, &goal, &first, budget, None).expect("the run goes on")
+    };
+    // The first game whose sweep opens a place on arrival: that skill's first step.
+    let (game, k) = first_trials(1)
+        .into_iter()
+        .find_map(|game| {
+            let whole = explore_within(&game, 55);
+            let two = whole.record.decisions.iter().find(|d| d.steps.len() == 2 && d.outcome == "success")?;
+            assert!(whole.record.steps[two.steps[1]].command.starts_with("open "), "{:?}", whole.record.steps[two.steps[1]]);
+            Some((game, two.steps[0] + 1))
+        })
+        .expect("a sweep that opens a place on arrival");
+    let cut = explore_within(&game, k);
+    let last = cut.record.decisions.last().expect("a decision");
+    assert_eq!((last.outcome, last.steps.len()), ("cut", 1), "{last:?}");
+    assert_eq!(cut.record.steps.len(), k);
+    let whole = explore_within(&game, k + 1);
+    let same = &whole.record.decisions[cut.record.decisions.len() - 1];
+    assert_eq!((same.skill.as_str(), same.outcome, same.steps.len()), (last.skill.as_str(), "success", 2));
 }

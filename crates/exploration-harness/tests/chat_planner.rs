@@ -7,24 +7,29 @@ use std::path::{Path, PathBuf};
 
 use exploration_harness::alfworld::AlfworldAdapter;
 use exploration_harness::chat_planner::{ChatPlannerConfig, plan_by_chat, strip_thinking};
-use exploration_harness::{EpisodeConfig, Grounded, Ontology, Systematic, parse_goal, run_episode};
+use exploration_harness::{Attribution, EpisodeConfig, Grounded, Ontology, RunError, Systematic, parse_goal, run_episode};
 use household_sim::{AlfworldEnv, Environment};
-use vlm_client::{ChatError, ChatModel, ChatReply, ChatRequest, Usage};
+use vlm_client::{ChatError, ChatErrorKind, ChatModel, ChatReply, ChatRequest, Usage};
 
 fn fixtures() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../../fixtures")
 }
 
 /// Answers with `answer(plan lines)`, where the plan is A*'s on the grounded problem.
+/// With `fail`, every request fails so.
 struct Scripted<'a> {
     answer: &'a dyn Fn(&[String]) -> String,
     plan: Vec<String>,
     requests: Vec<ChatRequest>,
+    fail: Option<ChatErrorKind>,
 }
 
 impl ChatModel for Scripted<'_> {
     fn chat(&mut self, request: &ChatRequest) -> Result<ChatReply, ChatError> {
         self.requests.push(request.clone());
+        if let Some(kind) = &self.fail {
+            return Err(ChatError { kind: kind.clone(), url: "scripted".into(), attempts: 3, elapsed: Default::default() });
+        }
         let usage = Usage { requests: 1, prompt_tokens: 300, completion_tokens: 42, reasoning_tokens: None, images: 0 };
         Ok(ChatReply::local((self.answer)(&self.plan), usage))
     }
@@ -40,6 +45,16 @@ impl ChatModel for Scripted<'_> {
 
 /// One episode on a pick-and-place game with the chat planner answering `answer`.
 fn episode(answer: &dyn Fn(&[String]) -> String, config: &ChatPlannerConfig) -> (exploration_harness::Episode, Vec<ChatRequest>) {
+    let (ep, requests) = attempt(answer, config, None);
+    (ep.expect("the run goes on"), requests)
+}
+
+/// The episode, or the run's error, with the chat planner failing as `fail` says.
+fn attempt(
+    answer: &dyn Fn(&[String]) -> String,
+    config: &ChatPlannerConfig,
+    fail: Option<ChatErrorKind>,
+) -> (Result<exploration_harness::Episode, RunError>, Vec<ChatRequest>) {
     let game = fixtures().join("alfworld/valid_seen/pick_and_place_simple-Book-None-Sofa-229/trial_T20190907_042856_259139/game.tw-pddl");
     let ontology =
         Ontology::from_text(&std::fs::read_to_string(fixtures().join("ontology/alfworld.txt")).unwrap(), "alfworld.txt").unwrap();
@@ -50,9 +65,9 @@ fn episode(answer: &dyn Fn(&[String]) -> String, config: &ChatPlannerConfig) -> 
     let mut adapter = AlfworldAdapter::new(ontology, domain, grammar, env.goal());
     let mut requests = Vec::new();
     let mut planner = |g: &Grounded| {
-        let actions = heuristics::search::optimal_plan_expanding(&g.model, 1_000_000).map_err(|s| format!("{s:?}"))?;
+        let actions = heuristics::search::optimal_plan_expanding(&g.model, 1_000_000).expect("A* plans the hand-over");
         let plan = actions.iter().map(|&a| g.spelling.spell(a).expect("spelled").to_string()).collect();
-        let mut chat = Scripted { answer, plan, requests: Vec::new() };
+        let mut chat = Scripted { answer, plan, requests: Vec::new(), fail: fail.clone() };
         let result = plan_by_chat(&mut chat, g, config);
         requests = chat.requests;
         result
@@ -104,6 +119,27 @@ fn a_line_naming_no_applicable_action_ends_the_plan_at_its_valid_prefix() {
     let request = &requests[0];
     assert_eq!(request.chat_template_kwargs.as_ref().unwrap()["enable_thinking"], false);
     assert_eq!((request.sampling.temperature, request.sampling.max_tokens), (Some(0.0), Some(512)));
+}
+
+/// A planner that cannot reach its model stops the run: no episode to record (a rerun resumes
+/// the task); a request the server refuses for itself (a prompt past the context) is the
+/// planner's failure, recorded as no plan.
+#[test]
+fn an_unreachable_planner_stops_the_run_and_a_refused_request_is_no_plan() {
+    let answer = |plan: &[String]| plan.join("\n");
+    for kind in [ChatErrorKind::Connect("refused".into()), ChatErrorKind::Status { status: 503, body: String::new(), retry_after: None }] {
+        let (ep, requests) = attempt(&answer, &ChatPlannerConfig::greedy(), Some(kind.clone()));
+        let error = ep.expect_err("the run stops");
+        assert!(error.0.contains("unavailable"), "{kind:?}: {error}");
+        assert_eq!(requests.len(), 1);
+    }
+    let too_long = ChatErrorKind::Status { status: 400, body: "the prompt is too long".into(), retry_after: None };
+    let (ep, _) = attempt(&answer, &ChatPlannerConfig::greedy(), Some(too_long));
+    let ep = ep.expect("an episode");
+    assert!(!ep.success && ep.no_plan, "{:?}", ep.failure);
+    assert!(ep.failure.as_deref().is_some_and(|f| f.contains("too long")), "{:?}", ep.failure);
+    assert_eq!(ep.phase2_calls, 1);
+    assert_eq!(ep.attribution, Some(Attribution::Search));
 }
 
 #[test]

@@ -73,11 +73,13 @@ fn a_chat_policy_explores_and_its_proposals_stay_hypotheses() {
         let goal = parse_goal(env.goal()).unwrap();
         let mut adapter = AlfworldAdapter::new(ontology.clone(), domain.clone(), grammar.clone(), env.goal());
         let mut planner = |g: &Grounded| {
-            heuristics::search::optimal_plan_expanding(&g.model, EXPANSIONS)
-                .map(|actions| PhaseTwo { actions, ..PhaseTwo::default() })
-                .map_err(|s| format!("{s:?}"))
+            heuristics::search::optimal_plan_expanding(&g.model, EXPANSIONS).map_or_else(
+                |s| Ok(PhaseTwo { no_plan: Some(format!("{s:?}")), ..PhaseTwo::default() }),
+                |actions| Ok(PhaseTwo { actions, ..PhaseTwo::default() }),
+            )
         };
-        let episode = run_episode(&mut env, &mut adapter, &mut policy, &goal, EpisodeConfig::open_loop(55), &mut planner);
+        let episode =
+            run_episode(&mut env, &mut adapter, &mut policy, &goal, EpisodeConfig::open_loop(55), &mut planner).expect("the run goes on");
         won += usize::from(episode.success);
         let usage = episode.phase1_usage;
         assert_eq!(usage.calls as usize, episode.decisions.len() + usize::from(episode.phase1_stop == "done"), "{}", game.display());
@@ -110,9 +112,69 @@ fn the_phase_one_prompt_of_a_first_step() {
     let mut adapter = AlfworldAdapter::new(ontology, domain, grammar, env.goal());
     let mut policy = ChatPolicy::new(Box::new(Scripted { usage: Usage::default(), prompts: Vec::new() }), "scripted");
     let first = env.reset();
-    let exploration = explore(&mut env, &mut adapter, &mut policy, &goal, &first, 2, None);
+    let exploration = explore(&mut env, &mut adapter, &mut policy, &goal, &first, 2, None).expect("the run goes on");
     assert!(!exploration.record.steps.is_empty());
     insta::assert_snapshot!(policy.last_prompt);
+}
+
+/// Fails every request as `kind` says once `answered` good replies are spent.
+struct Failing {
+    kind: vlm_client::ChatErrorKind,
+    answered: usize,
+    inner: Scripted,
+}
+
+impl ChatModel for Failing {
+    fn chat(&mut self, request: &ChatRequest) -> Result<ChatReply, ChatError> {
+        if self.answered == 0 {
+            return Err(ChatError { kind: self.kind.clone(), url: "scripted".into(), attempts: 3, elapsed: Default::default() });
+        }
+        self.answered -= 1;
+        self.inner.chat(request)
+    }
+
+    fn endpoint(&self) -> String {
+        "failing".into()
+    }
+
+    fn usage(&self) -> Usage {
+        self.inner.usage
+    }
+}
+
+/// A model that cannot be asked (after the client's retries) stops Phase I with the run's
+/// error, not a refusal the episode would keep; a reply that cannot be read is the model's
+/// failure, refused, and exploration goes on.
+#[test]
+fn an_unreachable_model_stops_the_run_and_an_unreadable_reply_is_refused() {
+    use exploration_harness::phase1::explore;
+    use vlm_client::ChatErrorKind;
+    let (ontology, domain, grammar) = alfworld_parts();
+    let game = fixtures()
+        .join("alfworld/valid_seen/pick_clean_then_place_in_recep-Mug-None-CoffeeMachine-26/trial_T20190907_233056_022802/game.tw-pddl");
+    let run = |kind: ChatErrorKind| {
+        let mut env = AlfworldEnv::from_game_file(&game).unwrap();
+        let goal = parse_goal(env.goal()).unwrap();
+        let mut adapter = AlfworldAdapter::new(ontology.clone(), domain.clone(), grammar.clone(), env.goal());
+        let failing = Failing { kind, answered: 0, inner: Scripted { usage: Usage::default(), prompts: Vec::new() } };
+        let mut policy = ChatPolicy::new(Box::new(failing), "failing");
+        let first = env.reset();
+        explore(&mut env, &mut adapter, &mut policy, &goal, &first, 10, None)
+    };
+    for kind in [
+        ChatErrorKind::Timeout(std::time::Duration::from_secs(60)),
+        ChatErrorKind::Status { status: 404, body: "no such model".into(), retry_after: None },
+    ] {
+        let error = run(kind.clone()).expect_err("the run stops");
+        assert!(error.0.contains("unavailable"), "{kind:?}: {error}");
+    }
+    let unreadable = ChatErrorKind::InvalidJson { error: "expected an object".into(), reply: "go to the fridge".into() };
+    let exploration = run(unreadable).expect("an unreadable reply is the model's failure");
+    assert_eq!(exploration.record.decisions.iter().filter(|d| d.outcome == "error").count(), 3, "{:?}", exploration.record.decisions);
+    assert_eq!(
+        exploration.stop,
+        "policy error: scripted: the reply is not the JSON asked for: expected an object; reply: go to the fridge (after 3 attempt(s), 0.0 s)"
+    );
 }
 
 /// Proposes random facts (over names from the prompt and made-up ones) and a random valid skill.
@@ -181,7 +243,7 @@ proptest::proptest! {
         let mut policy = ChatPolicy::new(Box::new(Random { rng: household_sim::PythonRandom::new(seed), usage: Usage::default() }), "random");
         let first = env.reset();
         let frontier = frontier.map(|(width, narrowing)| exploration_harness::Frontier { width, narrowing });
-        let exploration = explore(&mut env, &mut adapter, &mut policy, &goal, &first, 30, frontier);
+        let exploration = explore(&mut env, &mut adapter, &mut policy, &goal, &first, 30, frontier).expect("the run goes on");
         for decision in &exploration.record.decisions {
             let gotos = decision.offered.iter().filter(|s| s.starts_with("goto ")).count();
             proptest::prop_assert!(gotos <= frontier.map_or(usize::MAX, |f| f.width), "{:?} offered {gotos} places", frontier);
@@ -205,7 +267,10 @@ impl exploration_harness::Policy for LastPlace {
         "last-place".into()
     }
 
-    fn choose(&mut self, input: &exploration_harness::phase1::PolicyInput<'_>) -> Result<exploration_harness::phase1::PolicyReply, String> {
+    fn choose(
+        &mut self,
+        input: &exploration_harness::phase1::PolicyInput<'_>,
+    ) -> Result<exploration_harness::phase1::PolicyReply, exploration_harness::PolicyError> {
         use exploration_harness::Skill;
         let skill = input.skills.list.iter().rev().find(|s| matches!(s, Skill::Goto(_))).cloned().unwrap_or(Skill::Done);
         Ok(exploration_harness::phase1::PolicyReply { proposed: Vec::new(), skill, done: false })
@@ -232,7 +297,7 @@ fn a_narrowing_frontier_closes_in_on_the_place_a_model_keeps_passing_over() {
         let mut adapter = AlfworldAdapter::new(ontology.clone(), domain.clone(), grammar.clone(), env.goal());
         let first = env.reset();
         let frontier = Some(Frontier { width: 3, narrowing });
-        let exploration = explore(&mut env, &mut adapter, &mut LastPlace, &goal, &first, 12, frontier);
+        let exploration = explore(&mut env, &mut adapter, &mut LastPlace, &goal, &first, 12, frontier).expect("the run goes on");
         let decisions = &exploration.record.decisions;
         assert!(decisions.len() >= 4, "{decisions:?}");
         let gotos = |d: &exploration_harness::phase1::Decision| d.offered.iter().filter(|s| s.starts_with("goto ")).count();

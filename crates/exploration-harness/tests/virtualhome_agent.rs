@@ -58,7 +58,7 @@ fn play_task_with(task: VirtualhomeTask, path: &Path, benchmark: &str, ontology:
         assert!(g.model.validate(&plan).is_ok(), "{}: plan invalid for its grounded problem", path.display());
         Ok(PhaseTwo { actions: plan, ..PhaseTwo::default() })
     };
-    run_episode(&mut env, &mut adapter, &mut Systematic, &goal, config, &mut planner)
+    run_episode(&mut env, &mut adapter, &mut Systematic, &goal, config, &mut planner).expect("the run goes on")
 }
 
 fn tasks(dir: &Path) -> Vec<PathBuf> {
@@ -323,8 +323,11 @@ fn no_phase_one_skill_of_the_controller_repeats_a_target() {
         let goal = parse_goal(env.goal()).unwrap();
         let mut adapter = VirtualhomeAdapter::new(ontology.clone()).unwrap();
         let mut policy = Restless::new(1 + i % 3, i % 2 == 1);
-        let mut planner = |_: &Grounded| Err::<PhaseTwo, String>("no Phase II here".into());
-        let episode = run_episode(&mut env, &mut adapter, &mut policy, &goal, EpisodeConfig::open_loop(60), &mut planner);
+        let mut planner = |_: &Grounded| {
+            Ok::<PhaseTwo, exploration_harness::RunError>(PhaseTwo { no_plan: Some("no Phase II here".into()), ..PhaseTwo::default() })
+        };
+        let episode =
+            run_episode(&mut env, &mut adapter, &mut policy, &goal, EpisodeConfig::open_loop(60), &mut planner).expect("the run goes on");
         assert_no_target_repeats(&episode, &path.display().to_string());
         assert_phase_one_never_refused(&episode, &path.display().to_string());
     }
@@ -352,9 +355,10 @@ fn phase_one_spending_the_budget_is_an_exploration_failure() {
         let called = std::cell::Cell::new(false);
         let mut planner = |_: &Grounded| {
             called.set(true);
-            Err::<PhaseTwo, String>("no plan here".into())
+            Ok::<PhaseTwo, exploration_harness::RunError>(PhaseTwo { no_plan: Some("no plan here".into()), ..PhaseTwo::default() })
         };
-        let episode = run_episode(&mut env, &mut adapter, &mut Systematic, &goal, EpisodeConfig::open_loop(budget), &mut planner);
+        let episode = run_episode(&mut env, &mut adapter, &mut Systematic, &goal, EpisodeConfig::open_loop(budget), &mut planner)
+            .expect("the run goes on");
         (episode, called.get())
     };
     let (first, _) = run(20);
@@ -377,7 +381,8 @@ fn phase_one_spending_the_budget_is_an_exploration_failure() {
         optimal.set(heuristics::search::optimal_plan_expanding(&g.model, EXPANSIONS).map_or(0, |p| p.len()));
         Ok(PhaseTwo { no_plan: Some("Exhausted: no plan".into()), ..PhaseTwo::default() })
     };
-    let episode = run_episode(&mut env, &mut adapter, &mut Systematic, &goal, EpisodeConfig::open_loop(k + 1), &mut planner);
+    let episode = run_episode(&mut env, &mut adapter, &mut Systematic, &goal, EpisodeConfig::open_loop(k + 1), &mut planner)
+        .expect("the run goes on");
     assert!(optimal.get() > 1, "the optimal plan takes {} steps", optimal.get());
     assert_eq!((episode.precision, episode.recall), (Some(1.0), Some(1.0)));
     assert_eq!(episode.attribution, Some(Attribution::Representation), "{:?}", episode.failure);
@@ -403,9 +408,10 @@ fn a_star_within_the_steps_left_proves_that_no_plan_fits_where_lm_cut_cannot() {
             plan_fit(&g.model, 8, 200_000, None),
             plan_fit(&g.model, 7, 1, None),
         ));
-        a_star(g).map(|actions| PhaseTwo { actions, ..PhaseTwo::default() })
+        Ok(PhaseTwo { actions: a_star(g).expect("A* plans the hand-over"), ..PhaseTwo::default() })
     };
-    let episode = run_episode(&mut env, &mut adapter, &mut Systematic, &goal, EpisodeConfig::open_loop(20), &mut planner);
+    let episode =
+        run_episode(&mut env, &mut adapter, &mut Systematic, &goal, EpisodeConfig::open_loop(20), &mut planner).expect("the run goes on");
     assert!(episode.success, "{:?}", episode.failure);
     assert_eq!(episode.plan.len(), 8);
     assert_eq!(fits.into_inner(), vec![(Some(7), PlanFit::NoneFits, PlanFit::Fits(8), PlanFit::Unknown)]);
@@ -431,7 +437,8 @@ fn a_phase_two_without_a_plan_keeps_its_usage_and_was_told_the_steps_left() {
             ..PhaseTwo::default()
         })
     };
-    let episode = run_episode(&mut env, &mut adapter, &mut Systematic, &goal, EpisodeConfig::open_loop(20), &mut planner);
+    let episode =
+        run_episode(&mut env, &mut adapter, &mut Systematic, &goal, EpisodeConfig::open_loop(20), &mut planner).expect("the run goes on");
     assert!(!episode.success);
     assert_eq!((episode.phase2_calls, episode.phase2_tokens), (7, 5));
     assert_eq!(episode.phase2_detail["stop"], "WallClock");
@@ -457,7 +464,8 @@ fn a_plan_step_that_cannot_be_grounded_ends_the_episode_at_grounding() {
         };
         Ok(PhaseTwo { actions: plan[..1].to_vec(), invalid_step: Some("walk to the moon".into()), ..PhaseTwo::default() })
     };
-    let episode = run_episode(&mut env, &mut adapter, &mut Systematic, &goal, EpisodeConfig::open_loop(20), &mut planner);
+    let episode =
+        run_episode(&mut env, &mut adapter, &mut Systematic, &goal, EpisodeConfig::open_loop(20), &mut planner).expect("the run goes on");
     assert!(!episode.success && episode.plan_invalid && !episode.no_plan);
     assert_eq!(episode.plan.len(), 1);
     assert_eq!(episode.failure.as_deref(), Some("plan step 2 cannot be grounded: walk to the moon"));

@@ -29,11 +29,41 @@ impl ChatTemplate {
     /// Renders `(role, content)` messages with the assistant's turn opened
     /// (`add_generation_prompt = true`).
     pub fn render(&self, messages: &[(&str, &str)], bos_token: &str, eos_token: &str) -> Result<String, LmError> {
+        self.render_with(messages, bos_token, eos_token, &serde_json::Map::new())
+    }
+
+    /// [`ChatTemplate::render`] with `kwargs` as further template variables, as vLLM and
+    /// llama-server pass a request's `chat_template_kwargs` (Qwen3's `enable_thinking`); the
+    /// variables above take precedence over a key of the same name.
+    pub fn render_with(
+        &self,
+        messages: &[(&str, &str)],
+        bos_token: &str,
+        eos_token: &str,
+        kwargs: &serde_json::Map<String, serde_json::Value>,
+    ) -> Result<String, LmError> {
         let messages: Vec<Value> = messages.iter().map(|&(role, content)| context! { role, content }).collect();
         let template = self.environment.get_template(NAME).map_err(|e| LmError::ChatTemplate(describe(&e)))?;
         template
-            .render(context! { messages, add_generation_prompt => true, bos_token, eos_token })
+            .render(context! { messages, add_generation_prompt => true, bos_token, eos_token, ..Value::from(object(kwargs)) })
             .map_err(|e| LmError::ChatTemplate(describe(&e)))
+    }
+}
+
+/// A JSON object as template variables (written out: minijinja's serde bridge is a feature this
+/// workspace does not build).
+fn object(map: &serde_json::Map<String, serde_json::Value>) -> std::collections::BTreeMap<String, Value> {
+    map.iter().map(|(key, value)| (key.clone(), json(value))).collect()
+}
+
+fn json(value: &serde_json::Value) -> Value {
+    match value {
+        serde_json::Value::Null => Value::from(()),
+        serde_json::Value::Bool(b) => Value::from(*b),
+        serde_json::Value::Number(n) => n.as_i64().map(Value::from).unwrap_or_else(|| Value::from(n.as_f64().unwrap_or(f64::NAN))),
+        serde_json::Value::String(s) => Value::from(s.as_str()),
+        serde_json::Value::Array(items) => Value::from(items.iter().map(json).collect::<Vec<_>>()),
+        serde_json::Value::Object(map) => Value::from(object(map)),
     }
 }
 

@@ -88,8 +88,10 @@ impl LocalChat {
         };
         let texts: Vec<(&str, String)> = request.messages.iter().map(|m| (m.role.as_str(), m.joined_text())).collect();
         let pairs: Vec<(&str, &str)> = texts.iter().map(|(role, text)| (*role, text.as_str())).collect();
+        // The request's `chat_template_kwargs` reach the template, as a server passes them.
+        let kwargs = request.chat_template_kwargs.clone().unwrap_or_default();
         let text = template
-            .render(&pairs, &spelled(vocabulary.bos()), &spelled(Some(vocabulary.eos())))
+            .render_with(&pairs, &spelled(vocabulary.bos()), &spelled(Some(vocabulary.eos())), &kwargs)
             .map_err(|e| ChatErrorKind::Model(e.to_string()))?;
         tokenizer.encode_prompt(&text).map_err(|e| ChatErrorKind::Model(e.to_string()))
     }

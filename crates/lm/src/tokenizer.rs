@@ -469,12 +469,16 @@ impl Tokenizer {
     }
 
     /// The prompt text for a system message and a user message, rendered by the model's chat
-    /// template with the generation prompt (the assistant's turn) opened.
+    /// template with the generation prompt (the assistant's turn) opened, thinking off
+    /// (`enable_thinking = false`, which templates without a thinking mode ignore): the paper's
+    /// setting for every condition but the thinking ones (Appendix, decoding settings).
     pub fn chat_prompt(&self, system: &str, user: &str) -> Result<String, LmError> {
         let template = self.chat_template.as_ref().ok_or(LmError::NoChatTemplate)?;
         let bos = self.vocabulary.bos().and_then(|id| self.vocabulary.token_bytes(id)).map(|b| String::from_utf8_lossy(b).into_owned());
         let eos = self.vocabulary.token_bytes(self.vocabulary.eos()).map(|b| String::from_utf8_lossy(b).into_owned());
-        template.render(&[("system", system), ("user", user)], bos.as_deref().unwrap_or(""), eos.as_deref().unwrap_or(""))
+        let mut kwargs = serde_json::Map::new();
+        kwargs.insert("enable_thinking".into(), serde_json::Value::Bool(false));
+        template.render_with(&[("system", system), ("user", user)], bos.as_deref().unwrap_or(""), eos.as_deref().unwrap_or(""), &kwargs)
     }
 }
 

@@ -234,15 +234,21 @@ fn the_gguf_route_with_the_qwen2_pre_tokenizer_agrees_on_the_same_vocabulary() {
 }
 
 /// Qwen3's template adds an empty `<think>\n\n</think>\n\n` to the generation prompt only when
-/// `enable_thinking` is false; `chat_prompt` leaves it undefined, so the assistant turn is
-/// opened bare (thinking mode, as `transformers` renders it by default).
+/// `enable_thinking` is false. `chat_prompt` renders thinking off (the paper's setting for every
+/// condition but the thinking ones); `render` without variables leaves it undefined, so the
+/// assistant turn is opened bare (thinking mode, as `transformers` renders it by default), and
+/// `render_with` passes a request's `chat_template_kwargs` as a server does.
 #[test]
-fn the_chat_prompt_is_chatml_with_the_assistant_turn_opened_and_no_think_block() {
+fn the_chat_prompt_is_chatml_with_the_assistant_turn_opened_and_thinking_off() {
     let prompt = qwen3().chat_prompt("You are a household robot.", "Put a clean mug in the coffee machine.").expect("renders");
-    assert_eq!(
-        prompt,
-        "<|im_start|>system\nYou are a household robot.<|im_end|>\n<|im_start|>user\nPut a clean mug in the coffee machine.<|im_end|>\n<|im_start|>assistant\n"
-    );
+    let bare = "<|im_start|>system\nYou are a household robot.<|im_end|>\n<|im_start|>user\nPut a clean mug in the coffee machine.<|im_end|>\n<|im_start|>assistant\n";
+    assert_eq!(prompt, format!("{bare}<think>\n\n</think>\n\n"));
+    let template = qwen3().chat_template().expect("the config has one");
+    let pair = [("system", "You are a household robot."), ("user", "Put a clean mug in the coffee machine.")];
+    assert_eq!(template.render(&pair, "", "<|im_end|>").expect("renders"), bare);
+    let mut on = serde_json::Map::new();
+    on.insert("enable_thinking".into(), serde_json::Value::Bool(true));
+    assert_eq!(template.render_with(&pair, "", "<|im_end|>", &on).expect("renders"), bare);
     let ids = qwen3().encode(&prompt).expect("encodes");
     assert_eq!(ids.first(), Some(&151_644));
     assert_eq!(ids.iter().filter(|&&id| id == 151_645).count(), 2);

@@ -392,6 +392,8 @@ fn the_pddl_prompt_of_ipc_blocks_instance_1() {
     insta::assert_snapshot!(snapshot_text(&prompt));
 }
 
+/// The assistant's turn opens right after the prompt, thinking off (Qwen3's template writes
+/// the empty think block: the paper's Phase II decodes with thinking off).
 #[test]
 fn render_opens_the_assistant_turn_right_after_the_prompt() {
     let path = benchmark_data::fixtures_dir().join("tokenizers/qwen3/tokenizer.json");
@@ -400,7 +402,9 @@ fn render_opens_the_assistant_turn_right_after_the_prompt() {
     let task = load_one(Benchmark::VirtualhomeEai, "1004_2");
     let prompt = prompt(&task, Relevance::default());
     let rendered = prompt.render(&model).expect("chat template renders");
-    let expected =
-        format!("<|im_start|>system\n{}<|im_end|>\n<|im_start|>user\n{}<|im_end|>\n<|im_start|>assistant\n", prompt.system, prompt.user);
+    let expected = format!(
+        "<|im_start|>system\n{}<|im_end|>\n<|im_start|>user\n{}<|im_end|>\n<|im_start|>assistant\n<think>\n\n</think>\n\n",
+        prompt.system, prompt.user
+    );
     assert_eq!(rendered, expected);
 }

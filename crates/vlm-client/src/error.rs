@@ -60,4 +60,14 @@ impl ChatErrorKind {
             _ => false,
         }
     }
+
+    /// Errors of the run rather than of the model's answer: the model could not be asked
+    /// (transient errors that outlived the retries, a bad URL, a missing key, a server that
+    /// refuses the credentials or does not serve the model: 401, 403, 404). A harness stops
+    /// on these instead of counting them against the model.
+    pub fn is_unavailable(&self) -> bool {
+        self.is_transient()
+            || matches!(self, ChatErrorKind::BadUrl(_) | ChatErrorKind::MissingApiKey(_))
+            || matches!(self, ChatErrorKind::Status { status: 401 | 403 | 404, .. })
+    }
 }

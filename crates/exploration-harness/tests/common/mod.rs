@@ -23,7 +23,7 @@ impl Policy for Restless {
         "restless".into()
     }
 
-    fn choose(&mut self, input: &PolicyInput<'_>) -> Result<PolicyReply, String> {
+    fn choose(&mut self, input: &PolicyInput<'_>) -> Result<PolicyReply, exploration_harness::PolicyError> {
         let choices: Vec<&Skill> = input.skills.list.iter().filter(|s| **s != Skill::Done).collect();
         self.turn += 1;
         let at_hand = choices.iter().find(|s| matches!(s, Skill::Open(_) | Skill::Close(_) | Skill::Look));
