@@ -642,6 +642,26 @@ fn table_7_bolds_the_best_and_what_is_not_significantly_worse() {
     assert!(p[0] >= 0.05 && p[1] < 0.05, "{p:?}");
 }
 
+/// Table 7 averages a condition's runs as they are; runs of different task sets (one seed's
+/// run cut short) are marked with each run's task count, not averaged silently.
+#[test]
+fn table_7_marks_runs_of_different_task_sets() {
+    let (_tmp_dir, dir) = scratch("table-7-runs");
+    for (seed, tasks) in [(0, 12), (42, 12), (1738, 9)] {
+        let config = serde_json::json!({"agent": "ours", "benchmark": "alfworld-seen", "mode": "sample", "lm": "uniform", "seed": seed});
+        let mut file = eval_harness::records::RecordFile::open(&dir, "alfworld-seen-ours", &config, None, false).expect("opens");
+        for task in 0..tasks {
+            let record = serde_json::json!({"task": format!("t{task:02}"), "agent": "ours", "success": task % 2 == 0, "seed": seed});
+            file.append(task, &record).expect("appends");
+        }
+    }
+    let paths = record_paths(&[dir]).expect("record files");
+    let sets: Vec<_> = paths.iter().map(|p| load(p).expect("a record file")).collect();
+    let markdown = build(&sets, &ReportOptions::default()).expect("a report").markdown;
+    let table = markdown.split("## ").find(|s| s.starts_with("Accuracy and robustness (Table 7)")).expect("Table 7");
+    assert!(table.contains("(runs of 12/12/9 tasks)"), "{table}");
+}
+
 /// A folder after `merge` holds the shards and the merged file: the report reads the merged
 /// file once, says the shards were left out, and its tables are those of the shards alone; a
 /// shard resumed after the merge (a record the merged file lacks) asks for the merge again.

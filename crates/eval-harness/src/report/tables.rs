@@ -302,6 +302,15 @@ fn accuracy_table(study: &Study<'_>, options: &ReportOptions) -> Result<Table, R
                     by_task.entry(task).or_default().push(indicator(ok));
                 }
             }
+            // Runs of different task sets (one cut short, a subset edited between them) are
+            // averaged as they are, and said so: each run's task count beside the accuracy.
+            let outcomes: Vec<BTreeMap<&str, bool>> = runs.iter().map(Run::outcomes).collect();
+            let accuracy = if outcomes.windows(2).all(|w| w[0].keys().eq(w[1].keys())) {
+                accuracy
+            } else {
+                let counts: Vec<String> = outcomes.iter().map(|o| o.len().to_string()).collect();
+                format!("{accuracy} (runs of {} tasks)", counts.join("/"))
+            };
             let tasks: Vec<Vec<f64>> = by_task.into_values().collect();
             let interval = stats::task_cluster_bootstrap(&tasks, &options.bootstrap).map_err(stats_error(format!(
                 "bootstrap of {} on {}",
