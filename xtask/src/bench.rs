@@ -43,11 +43,18 @@ enum Which {
         #[arg(long)]
         json: bool,
     },
-    /// Search speed and coverage on the IPC fixtures, ours beside Fast Downward's search.
+    /// Search speed and coverage, ours beside Fast Downward's search on the same files: the IPC
+    /// fixtures, or the benchmarks' own problem files (ALFWorld's games, EAI's tasks).
     Plan {
         /// Configurations: astar-lmcut, astar-lmcut-sym (over states up to interchangeable objects), lazy-ff (lazy GBFS with h_FF), lazy-ff-po (with preferred operators).
         #[arg(long, default_value = "lazy-ff,astar-lmcut")]
         configs: String,
+        /// Comma-separated benchmarks (ipc, alfworld-seen, alfworld-train, virtualhome-eai).
+        #[arg(long, default_value = "ipc")]
+        benchmark: String,
+        /// At most this many tasks of each benchmark, evenly spaced.
+        #[arg(long)]
+        limit: Option<usize>,
         /// Seconds per search, for both planners.
         #[arg(long, default_value_t = 60.0, value_parser = crate::input::positive_seconds)]
         time_limit: f64,
@@ -99,7 +106,9 @@ enum Which {
 pub fn run(args: BenchArgs) -> anyhow::Result<ExitCode> {
     match args.which {
         Which::Ground { benchmark, limit, runs, no_reference, json } => ground(&benchmark, limit, runs.max(1), no_reference, json),
-        Which::Plan { configs, time_limit, filter, json } => plan(&configs, time_limit, filter.as_deref(), json),
+        Which::Plan { configs, benchmark, limit, time_limit, filter, json } => {
+            plan(&configs, &benchmark, limit, time_limit, filter.as_deref(), json)
+        }
         Which::Mask { tokenizer, every, no_reference, json } => crate::mask_bench::run(tokenizer, every, no_reference, json),
         Which::Env { subset, limit, runs, no_reference, json } => crate::env::bench(&subset, limit, runs.max(1), no_reference, json),
         Which::Lm(args) => crate::lm::bench(args),
@@ -181,6 +190,41 @@ fn fd_compatible(files: &TaskFiles) -> anyhow::Result<(String, String)> {
     Ok((domain.to_string(), problem.to_string()))
 }
 
+/// The files Fast Downward reads for `files`: ALFWorld's rewritten by [`fd_compatible`] into
+/// `scratch`, the others as they are.
+fn fd_files(files: &TaskFiles, scratch: &Path) -> anyhow::Result<(PathBuf, PathBuf)> {
+    if !matches!(files.extra, Extra::Alfworld(_)) {
+        return Ok((files.domain_path.clone(), files.problem_path.clone()));
+    }
+    let (domain, problem) = fd_compatible(files)?;
+    let (d, p) = (scratch.join("domain.pddl"), scratch.join("problem.pddl"));
+    std::fs::write(&d, domain)?;
+    std::fs::write(&p, problem)?;
+    Ok((d, p))
+}
+
+/// `benchmarks` as `--benchmark` names them (a comma list, or `all`).
+fn benchmarks_named(benchmarks: &str) -> anyhow::Result<Vec<Benchmark>> {
+    if benchmarks == "all" {
+        return Ok(vec![Benchmark::Ipc, Benchmark::AlfworldSeen, Benchmark::AlfworldTrain, Benchmark::VirtualhomeEai]);
+    }
+    benchmarks
+        .split(',')
+        .map(|n| {
+            Benchmark::from_name(n.trim())
+                .ok_or_else(|| crate::input::unknown("benchmark", n, Benchmark::ALL.iter().map(|b| b.name())).into())
+        })
+        .collect()
+}
+
+/// At most `limit` of `all`, evenly spaced.
+fn spaced<T>(all: &[T], limit: Option<usize>) -> Vec<&T> {
+    match limit {
+        Some(n) if n < all.len() => (0..n).map(|i| &all[i * all.len() / n]).collect(),
+        _ => all.iter().collect(),
+    }
+}
+
 fn time_ours(files: &TaskFiles, runs: usize) -> anyhow::Result<(f64, grounding::Task)> {
     let mut times = Vec::with_capacity(runs);
     let mut task = None;
@@ -195,16 +239,7 @@ fn time_ours(files: &TaskFiles, runs: usize) -> anyhow::Result<(f64, grounding::
 }
 
 fn ground(benchmarks: &str, limit: Option<usize>, runs: usize, no_reference: bool, json: bool) -> anyhow::Result<ExitCode> {
-    let benchmarks: Vec<Benchmark> = if benchmarks == "all" {
-        vec![Benchmark::Ipc, Benchmark::AlfworldSeen, Benchmark::AlfworldTrain, Benchmark::VirtualhomeEai]
-    } else {
-        benchmarks
-            .split(',')
-            .map(|n| {
-                Benchmark::from_name(n.trim()).ok_or_else(|| crate::input::unknown("benchmark", n, Benchmark::ALL.iter().map(|b| b.name())))
-            })
-            .collect::<Result<_, _>>()?
-    };
+    let benchmarks = benchmarks_named(benchmarks)?;
     let reference = if no_reference { None } else { fd_translator() };
     if !no_reference && reference.is_none() {
         eprintln!(
@@ -218,10 +253,7 @@ fn ground(benchmarks: &str, limit: Option<usize>, runs: usize, no_reference: boo
     let mut rows = Vec::new();
     for benchmark in benchmarks {
         let all = benchmark_data::load(benchmark)?;
-        let tasks: Vec<&TaskFiles> = match limit {
-            Some(n) if n < all.len() => (0..n).map(|i| &all[i * all.len() / n]).collect(),
-            _ => all.iter().collect(),
-        };
+        let tasks: Vec<&TaskFiles> = spaced(&all, limit);
         let (mut ours_total, mut fd_total, mut ratios) = (0.0, 0.0, Vec::new());
         let (mut our_facts, mut our_actions, mut fd_facts, mut fd_operators, mut fd_failed) = (0usize, 0usize, 0u64, 0u64, 0usize);
         for files in &tasks {
@@ -234,15 +266,7 @@ fn ground(benchmarks: &str, limit: Option<usize>, runs: usize, no_reference: boo
                 "ours_ms": ours_s * 1e3, "facts": task.facts.len(), "actions": task.actions.len(),
             });
             if let Some((python, bin)) = &reference {
-                let (domain_path, problem_path) = if matches!(files.extra, Extra::Alfworld(_)) {
-                    let (domain, problem) = fd_compatible(files)?;
-                    let (d, p) = (scratch.join("domain.pddl"), scratch.join("problem.pddl"));
-                    std::fs::write(&d, domain)?;
-                    std::fs::write(&p, problem)?;
-                    (d, p)
-                } else {
-                    (files.domain_path.clone(), files.problem_path.clone())
-                };
+                let (domain_path, problem_path) = fd_files(files, &scratch)?;
                 match run_fd(python, bin, &domain_path, &problem_path, &scratch) {
                     Ok(fd) => {
                         fd_total += fd.wall_s;
@@ -337,6 +361,8 @@ const PLAN_CONFIGS: &[PlanConfig] = &[
 ];
 
 struct FdSearch {
+    /// Why Fast Downward did not search (an unsupported task or configuration).
+    error: Option<String>,
     solved: bool,
     cost: Option<u64>,
     expanded: u64,
@@ -380,7 +406,16 @@ fn run_fd_search(downward: &Path, sas: &Path, search: &str, time_limit: f64) -> 
         .context("cannot run Fast Downward's search")?;
     let stdout = String::from_utf8_lossy(&output.stdout);
     let solved = stdout.contains("Solution found!");
+    // Fast Downward's exit codes: 34 an unsupported task (LM-cut with axioms, from EAI's
+    // disjunctions), 35 an unsupported configuration; the time limit's is `timeout`'s 124.
+    let error = match output.status.code() {
+        Some(34) => Some("unsupported task (exit 34)".to_string()),
+        Some(35) => Some("unsupported configuration (exit 35)".to_string()),
+        Some(code) if !solved && code != 12 && code != 11 && code != 124 && code != 23 => Some(format!("exit {code}")),
+        _ => None,
+    };
     Ok(FdSearch {
+        error,
         solved,
         cost: solved.then(|| number_in(&stdout, "Plan cost:").map(|c| c as u64)).flatten(),
         expanded: expansions_in(&stdout),
@@ -388,7 +423,15 @@ fn run_fd_search(downward: &Path, sas: &Path, search: &str, time_limit: f64) -> 
     })
 }
 
-fn plan(configs: &str, time_limit: f64, filter: Option<&str>, json: bool) -> anyhow::Result<ExitCode> {
+fn plan(
+    configs: &str,
+    benchmarks: &str,
+    limit: Option<usize>,
+    time_limit: f64,
+    filter: Option<&str>,
+    json: bool,
+) -> anyhow::Result<ExitCode> {
+    let benchmarks = benchmarks_named(benchmarks)?;
     let chosen: Vec<&PlanConfig> = configs
         .split(',')
         .map(|name| {
@@ -411,11 +454,20 @@ fn plan(configs: &str, time_limit: f64, filter: Option<&str>, json: bool) -> any
         // Per domain: coverage of each, and expansions and seconds over the instances both
         // solved (so a slow timeout does not decide the rate).
         let mut per_domain: std::collections::BTreeMap<String, [f64; 6]> = std::collections::BTreeMap::new();
-        for files in benchmark_data::load(Benchmark::Ipc)? {
+        let mut all = Vec::new();
+        for benchmark in &benchmarks {
+            let loaded = benchmark_data::load(*benchmark)?;
+            all.extend(spaced(&loaded, limit).into_iter().cloned().map(|files| (*benchmark, files)));
+        }
+        for (benchmark, files) in all {
             if filter.is_some_and(|f| !files.id.contains(f)) {
                 continue;
             }
-            let domain = files.id.split('/').next().unwrap_or_default().to_string();
+            // IPC by its domains; a benchmark's own problems are one domain.
+            let domain = match benchmark {
+                Benchmark::Ipc => files.id.split('/').next().unwrap_or_default().to_string(),
+                other => other.name().to_string(),
+            };
             let model = transition_model::TransitionModel::new(crate::input::ground(&files)?);
             let mut heuristic = heuristics::by_name(config.heuristic, &model).context("heuristic")?;
             let mut search_config = heuristics::search::SearchConfig::new(config.algorithm);
@@ -433,8 +485,20 @@ fn plan(configs: &str, time_limit: f64, filter: Option<&str>, json: bool) -> any
             let entry = per_domain.entry(domain).or_default();
             entry[0] += f64::from(u8::from(ours_solved));
             if let (Some((python, bin)), Some(downward)) = (&reference, &downward) {
-                run_fd(python, bin, &files.domain_path, &files.problem_path, &scratch)?;
+                let (domain_path, problem_path) = fd_files(&files, &scratch)?;
+                // A task Fast Downward cannot take is a row of its own, not the end of the run.
+                if let Err(error) = run_fd(python, bin, &domain_path, &problem_path, &scratch) {
+                    row["fd_error"] = json!(error.to_string());
+                    if !json {
+                        println!("{row}");
+                    }
+                    rows.push(row);
+                    continue;
+                }
                 let fd = run_fd_search(downward, &scratch.join("output.sas"), config.fast_downward, time_limit)?;
+                if let Some(error) = &fd.error {
+                    row["fd_error"] = json!(error);
+                }
                 row["fd_solved"] = json!(fd.solved);
                 row["fd_cost"] = json!(fd.cost);
                 row["fd_expanded"] = json!(fd.expanded);

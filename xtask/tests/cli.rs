@@ -202,6 +202,38 @@ fn plan_reports_unsolvable_tasks() {
     assert!(value["lmcut"].is_null() && value["ff"].is_null() && value["hmax"].is_null(), "{value}");
 }
 
+/// `bench plan` on a benchmark's own problems: a row per task and configuration, the summary
+/// by benchmark; where Fast Downward is installed, its figures (or its reason not to search,
+/// LM-cut on the axioms ALFWorld's goals become) on the same files.
+#[test]
+fn bench_plan_runs_on_the_benchmarks_own_problems() {
+    let output = xtask(&[
+        "bench",
+        "plan",
+        "--benchmark",
+        "alfworld-seen,virtualhome-eai",
+        "--limit",
+        "2",
+        "--configs",
+        "lazy-ff,astar-lmcut",
+        "--json",
+    ]);
+    assert!(output.status.success(), "{}", String::from_utf8_lossy(&output.stderr));
+    let report: serde_json::Value = serde_json::from_str(stdout(&output).trim()).expect("one JSON object");
+    let rows = report["tasks"].as_array().expect("rows");
+    assert_eq!(rows.len(), 8, "2 tasks of 2 benchmarks under 2 configurations");
+    assert!(rows.iter().all(|r| r["solved"] == true), "ours solves every one: {rows:?}");
+    for config in ["lazy-ff", "astar-lmcut"] {
+        for benchmark in ["alfworld-seen", "virtualhome-eai"] {
+            assert_eq!(report["configs"][config][benchmark]["coverage"], 2.0, "{report}");
+        }
+    }
+    if rows.iter().any(|r| r.get("fd_solved").is_some()) {
+        let alfworld_lmcut = rows.iter().find(|r| r["config"] == "astar-lmcut" && r["task"].as_str().unwrap().contains("trial_")).unwrap();
+        assert!(alfworld_lmcut["fd_error"].as_str().is_some_and(|e| e.contains("unsupported")), "{alfworld_lmcut}");
+    }
+}
+
 #[test]
 fn bench_mask_reports_the_issue_figures_and_agrees_with_llguidance() {
     let output = xtask(&["bench", "mask", "--every", "70", "--json"]);
