@@ -495,7 +495,17 @@ fn plan(
                     rows.push(row);
                     continue;
                 }
-                let fd = run_fd_search(downward, &scratch.join("output.sas"), config.fast_downward, time_limit)?;
+                let fd = match run_fd_search(downward, &scratch.join("output.sas"), config.fast_downward, time_limit) {
+                    Ok(fd) => fd,
+                    Err(error) => {
+                        row["fd_error"] = json!(error.to_string());
+                        if !json {
+                            println!("{row}");
+                        }
+                        rows.push(row);
+                        continue;
+                    }
+                };
                 if let Some(error) = &fd.error {
                     row["fd_error"] = json!(error);
                 }
