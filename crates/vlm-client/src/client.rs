@@ -30,7 +30,8 @@ pub struct ClientConfig {
     pub api_key_env: Option<String>,
     pub retry: RetryPolicy,
     /// The strongest way of asking for JSON to try first; a server that refuses a
-    /// `response_format` with a 400 is asked again the next weaker way, which is kept.
+    /// `response_format` with a 400 is asked again the next weaker way, which is kept for that
+    /// schema.
     pub json_mode: JsonMode,
 }
 
@@ -53,7 +54,11 @@ pub struct ChatClient {
     endpoint: String,
     agent: ureq::Agent,
     api_key: Option<String>,
-    json_mode: JsonMode,
+    /// The weaker mode kept for each schema (by its JSON text) a server refused in a stronger
+    /// one. Per schema, not for the client's life: a server may refuse one schema and take
+    /// another, and a request's mode must not depend on which requests came before it (a
+    /// resumed run asks as an uninterrupted one does).
+    weakened: std::collections::BTreeMap<String, JsonMode>,
     usage: Usage,
 }
 
@@ -70,7 +75,7 @@ impl ChatClient {
         Ok(ChatClient {
             endpoint: format!("{}/chat/completions", config.base_url),
             agent: transport::agent(config.retry.timeout),
-            json_mode: config.json_mode,
+            weakened: std::collections::BTreeMap::new(),
             api_key,
             usage: Usage::default(),
             config,
@@ -81,9 +86,10 @@ impl ChatClient {
         &self.config
     }
 
-    /// How JSON is asked for now (weaker than configured after a refusal).
-    pub fn json_mode(&self) -> JsonMode {
-        self.json_mode
+    /// How JSON is asked for with `schema` now: as configured, or weaker after the server
+    /// refused that schema in a stronger mode and took it in this one.
+    pub fn json_mode(&self, schema: &serde_json::Value) -> JsonMode {
+        self.weakened.get(&schema.to_string()).copied().unwrap_or(self.config.json_mode)
     }
 }
 
@@ -94,7 +100,8 @@ impl ChatModel for ChatClient {
         // A 400/422 may refuse the JSON mode, or something else (a prompt past the context, a bad
         // image): a weaker mode is tried, and kept only once a request in it succeeds, so an
         // error of another kind never weakens the requests after it.
-        let mut mode = self.json_mode;
+        let key = request.json_schema.as_ref().map(|schema| schema.to_string());
+        let mut mode = key.as_ref().and_then(|k| self.weakened.get(k)).copied().unwrap_or(self.config.json_mode);
         loop {
             let body = request.body(&self.config.model, mode).to_string();
             let result = transport::post_json(&self.agent, &self.endpoint, body.as_bytes(), self.api_key.as_deref(), &self.config.retry);
@@ -113,8 +120,10 @@ impl ChatModel for ChatClient {
                     }
                 }
             };
-            if request.json_schema.is_some() {
-                self.json_mode = mode;
+            if let Some(key) = &key
+                && mode != self.config.json_mode
+            {
+                self.weakened.insert(key.clone(), mode);
             }
             let attempts = delivered.attempts + extra_attempts;
             self.usage.requests += u64::from(delivered.attempts);

@@ -226,6 +226,29 @@ fn a_server_refusing_response_format_is_asked_more_plainly() {
     assert_eq!(formats, [json!("json_schema"), json!("json_object"), Value::Null, Value::Null]);
 }
 
+/// A server that refuses one schema and takes another: the weaker mode is kept for the schema it
+/// was refused, not for every later request, so a request is asked the same way whatever came
+/// before it (a resumed run asks as an uninterrupted one).
+#[test]
+fn a_weaker_mode_is_kept_for_the_schema_that_needed_it() {
+    let refusal = "{\"error\": {\"message\": \"this schema is not supported\"}}";
+    let (address, seen) = serve(vec![
+        status(400, Vec::new(), refusal),
+        ok(completion("{\"skill\": \"Done\"}")),
+        ok(completion("{\"skill\": \"Done\"}")),
+        ok(completion("{\"skill\": \"Done\"}")),
+    ]);
+    let mut client = client(address);
+    let refused = skill_request();
+    let mut other = skill_request();
+    other.json_schema = Some(json!({"type": "object", "properties": {"skill": {"enum": ["Done"]}}, "required": ["skill"]}));
+    assert_eq!(chat_json(&mut client, &refused).expect("json").reply.json_mode, Some(JsonMode::Object));
+    assert_eq!(chat_json(&mut client, &other).expect("json").reply.json_mode, Some(JsonMode::Schema));
+    assert_eq!(chat_json(&mut client, &refused).expect("json").reply.attempts, 1);
+    let formats: Vec<Value> = seen.all().into_iter().map(|(_, body)| body["response_format"]["type"].clone()).collect();
+    assert_eq!(formats, [json!("json_schema"), json!("json_object"), json!("json_schema"), json!("json_object")]);
+}
+
 /// A 400 that is not about the JSON mode (a prompt past the context) fails in every mode, and
 /// the next request is asked with the full schema again: only a weaker mode that worked is kept.
 #[test]
@@ -240,7 +263,7 @@ fn an_error_of_another_kind_does_not_weaken_later_requests() {
     let mut client = client(address);
     let error = chat_json(&mut client, &skill_request()).expect_err("too long in every mode");
     assert!(matches!(error.kind, ChatErrorKind::Status { status: 400, .. }), "{error}");
-    assert_eq!(client.json_mode(), JsonMode::Schema);
+    assert_eq!(client.json_mode(skill_request().json_schema.as_ref().unwrap()), JsonMode::Schema);
     let reply = chat_json(&mut client, &skill_request()).expect("json");
     assert_eq!((reply.reply.json_mode, reply.reply.attempts), (Some(JsonMode::Schema), 1));
     let formats: Vec<Value> = seen.all().into_iter().map(|(_, body)| body["response_format"]["type"].clone()).collect();
