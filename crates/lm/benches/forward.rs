@@ -1,14 +1,36 @@
-//! Criterion benches of the local forward pass: prefill (a short prompt, and one as long as a
-//! VirtualHome Phase I prompt, where attention is most of the time), one decode step, and a
-//! sibling branch after a shared prefix. On the fetched SmolLM2 file when it is in the model cache (see
-//! `cargo xtask fetch-model`), else on the tiny random-weight model, so that the bench always runs.
+//! Criterion benches of the local forward pass on real prompts: the prefill of Phase II's
+//! prompt for EAI task 1004_2 and of the direct policy's first prompt on a rearrangement task
+//! (the longer), as the workspace's snapshot tests pin them (`crates/mcts/tests/snapshots`,
+//! `crates/exploration-harness/tests/snapshots`, so they change when the prompts do), through
+//! the model's chat template; one decode step; and a sibling branch after a shared prefix. On
+//! the fetched SmolLM2 file when it is in the model cache (see `cargo xtask fetch-model`), else
+//! on the tiny random-weight model, so that the bench always runs (its name says which).
 
 use std::hint::black_box;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use criterion::{Criterion, criterion_group, criterion_main};
 use lm::tiny::{TinySpec, write_tiny_gguf};
 use lm::{LanguageModel, LocalModel};
+
+/// The text of an insta snapshot, past its header.
+fn snapshot(relative: &str) -> String {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("..").join(relative);
+    let text = std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    text.splitn(3, "---\n").nth(2).unwrap_or_else(|| panic!("{}: no snapshot header", path.display())).to_string()
+}
+
+/// Phase II's prompt of EAI 1004_2 (`[system]` and `[user]` sections) and the direct policy's
+/// first prompt of a rearrangement task (its first line as the system message), as token ids
+/// through `model`'s chat template.
+fn real_prompts(model: &LocalModel) -> [(&'static str, Vec<u32>); 2] {
+    let planning = snapshot("mcts/tests/snapshots/prompt__the_virtualhome_prompt_of_eai_1004_2.snap");
+    let (system, user) = planning.trim_start_matches("[system]\n").split_once("\n[user]\n").expect("[system] and [user] sections");
+    let direct = snapshot("exploration-harness/tests/snapshots/direct__the_first_prompt_of_a_rearrangement_task.snap");
+    let (first, rest) = direct.split_once('\n').expect("lines");
+    let encode = |system: &str, user: &str| model.encode(&model.chat_prompt(system, user).expect("renders")).expect("encodes");
+    [("phase2_eai", encode(system.trim(), user.trim())), ("direct_rearrange", encode(first, rest.trim()))]
+}
 
 fn model_path() -> (PathBuf, &'static str) {
     let smollm2 = lm::default_model_path();
@@ -23,32 +45,30 @@ fn model_path() -> (PathBuf, &'static str) {
 fn forward(c: &mut Criterion) {
     let (path, name) = model_path();
     let mut model = LocalModel::load(&path).expect("model loads");
-    let text = "Your task is to: put a clean mug in the coffeemachine. You see a cabinet 1, a fridge 1 and a sinkbasin 1. ";
-    let base = model.encode(text).expect("encodes");
-    let prefix: Vec<u32> = base.iter().copied().cycle().take(128).collect();
-
-    c.bench_function(&format!("{name}/prefill_128"), |b| {
+    let [(short_name, short), (long_name, long)] = real_prompts(&model);
+    c.bench_function(&format!("{name}/prefill_{short_name}_{}", short.len()), |b| {
         b.iter(|| {
             model.clear_cache();
-            black_box(model.next_logprobs(&prefix).expect("runs"));
+            black_box(model.next_logprobs(&short).expect("runs"));
         })
     });
-    // A Phase I prompt on VirtualHome is 1,000 to 1,600 tokens (the room's objects listed).
-    let long: Vec<u32> = base.iter().copied().cycle().take(1024).collect();
     let mut group = c.benchmark_group(name);
     group.sample_size(10);
-    group.bench_function("prefill_1024", |b| {
+    group.bench_function(format!("prefill_{long_name}_{}", long.len()), |b| {
         b.iter(|| {
             model.clear_cache();
             black_box(model.next_logprobs(&long).expect("runs"));
         })
     });
     group.finish();
+    // The branch: the Phase II prompt, then a different last token each time.
+    let prefix = short.clone();
+    let base = short;
     let mut decode = prefix.clone();
     model.next_logprobs(&decode).expect("runs");
     decode.push(base[0]);
     let mut step = 0usize;
-    c.bench_function(&format!("{name}/sibling_of_1_after_128"), |b| {
+    c.bench_function(&format!("{name}/sibling_of_1_after_{}", prefix.len()), |b| {
         b.iter(|| {
             // A different last token each time: the cache rewinds by one and runs one token.
             step += 1;
