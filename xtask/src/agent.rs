@@ -326,11 +326,21 @@ impl PhaseTwoRunner {
             Decoder::with_end_policy(model, &grounded.spelling, Arc::clone(vocab), self.decode.value(), self.decode.end_policy());
         let outcome = match decoder.decode(lm.as_mut(), &tokens, &initial, &config) {
             Ok(outcome) => outcome,
-            // ŝ0's prompt does not fit the model's context: this model cannot plan this task.
+            // The sequence (ŝ0's prompt and the plan so far) does not fit the model's context,
+            // here or at a server that refuses it (a 4xx other than a missing model, key or
+            // rate): this model cannot plan this task, an outcome; the search's tree is lost.
             Err(e @ DecodeError::Model(lm::LmError::ContextOverflow { .. })) => {
                 return Ok(PhaseTwo {
-                    no_plan: Some(format!("the prompt does not fit: {e}")),
+                    no_plan: Some(format!("the model's context is exceeded: {e}")),
                     detail: json!({"planner": "mcts", "mode": self.decode.mode.to_string(), "stop": "ContextOverflow", "prompt_tokens": tokens.len()}),
+                    ..PhaseTwo::default()
+                });
+            }
+            Err(DecodeError::Model(lm::LmError::Http(e))) if matches!(e.kind, lm::HttpErrorKind::Status { status, .. } if (400..500).contains(&status) && ![401, 403, 404, 408, 429].contains(&status)) =>
+            {
+                return Ok(PhaseTwo {
+                    no_plan: Some(format!("the model server refused the request: {e}")),
+                    detail: json!({"planner": "mcts", "mode": self.decode.mode.to_string(), "stop": "Refused", "prompt_tokens": tokens.len()}),
                     ..PhaseTwo::default()
                 });
             }

@@ -406,12 +406,13 @@ fn run_fd_search(downward: &Path, sas: &Path, search: &str, time_limit: f64) -> 
         .context("cannot run Fast Downward's search")?;
     let stdout = String::from_utf8_lossy(&output.stdout);
     let solved = stdout.contains("Solution found!");
-    // Fast Downward's exit codes: 34 an unsupported task (LM-cut with axioms, from EAI's
-    // disjunctions), 35 an unsupported configuration; the time limit's is `timeout`'s 124.
+    // Fast Downward's exit codes (its `returncodes.py`): 11 unsolvable, 12 unsolved by an
+    // incomplete search, 22-24 out of memory or time, and `timeout`'s 124 are a search's
+    // outcomes; 34 is a task the search does not support (LM-cut with axioms, which ALFWorld's
+    // and EAI's goals become); any other failure is an error of its own.
     let error = match output.status.code() {
         Some(34) => Some("unsupported task (exit 34)".to_string()),
-        Some(35) => Some("unsupported configuration (exit 35)".to_string()),
-        Some(code) if !solved && code != 12 && code != 11 && code != 124 && code != 23 => Some(format!("exit {code}")),
+        Some(code) if !solved && ![11, 12, 22, 23, 24, 124].contains(&code) => Some(format!("exit {code}")),
         _ => None,
     };
     Ok(FdSearch {

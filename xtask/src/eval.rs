@@ -369,17 +369,30 @@ fn config(args: &EvalArgs, suite: Suite, tasks: &[EvalTask]) -> anyhow::Result<V
     }
     // A model or tokenizer named by its path is named by its content too: a file replaced at
     // the same path is another model (`smollm2` is fetched by a pinned digest already).
+    // Only the models this agent loads: Phase I's (the direct agent's), and for `ours` Phase
+    // II's, `--lm` with its tokenizer or the chat planner.
     let mut files = serde_json::Map::new();
-    let specs = [&args.episode.explorer, &args.episode.lm.lm].into_iter().chain(args.episode.chat.chat_planner.as_ref());
-    for spec in specs {
-        if let crate::model_spec::ModelSpec::Gguf(path) = spec {
-            files.insert(path.display().to_string(), json!(crate::pypi::sha256_of(path)?));
+    let mut loaded: Vec<PathBuf> = Vec::new();
+    if args.agent != AgentName::Expert
+        && let crate::model_spec::ModelSpec::Gguf(path) = &args.episode.explorer
+    {
+        loaded.push(path.clone());
+    }
+    if args.agent == AgentName::Ours {
+        match &args.episode.chat.chat_planner {
+            Some(crate::model_spec::ModelSpec::Gguf(path)) => loaded.push(path.clone()),
+            Some(_) => {}
+            None => {
+                if let crate::model_spec::ModelSpec::Gguf(path) = &args.episode.lm.lm {
+                    loaded.push(path.clone());
+                }
+                loaded.extend(args.episode.lm.tokenizer.iter().cloned());
+            }
         }
     }
-    if args.agent == AgentName::Ours
-        && let Some(path) = &args.episode.lm.tokenizer
-    {
-        files.insert(path.display().to_string(), json!(crate::pypi::sha256_of(path)?));
+    for path in loaded {
+        let digest = crate::pypi::sha256_of(&path).map_err(|e| InputError(format!("{e:#}")))?;
+        files.insert(path.display().to_string(), json!(digest));
     }
     if !files.is_empty() {
         config.as_object_mut().expect("object").insert("files_sha256".into(), Value::Object(files));
@@ -513,7 +526,9 @@ fn finish(args: &EvalArgs, mut summaries: serde_json::Map<String, Value>, writte
     } else {
         println!("report: {report}");
         if args.shard.is_some() {
-            println!("this shard's records only: `cargo xtask merge` the shards, then `cargo xtask report` the merged file");
+            println!(
+                "this shard's records only: `cargo xtask merge` the shards (with --partial for a --limit run), then `cargo xtask report` the merged file"
+            );
         }
     }
     Ok(ExitCode::SUCCESS)

@@ -236,9 +236,12 @@ impl RecordFile {
 }
 
 /// Writes `path` whole or not at all: `bytes` into a temporary file beside it, synced, then
-/// renamed over `path`, and the folder synced so that the rename survives a crash.
+/// renamed over `path`, and the folder synced so that the rename survives a crash. The
+/// temporary file is this process's own, so that shards started together, each writing the
+/// same configuration file, never write into one temporary file.
 fn write_whole(path: &Path, bytes: &[u8]) -> Result<(), RecordError> {
-    let partial = path.with_extension(format!("{}.partial", path.extension().and_then(|e| e.to_str()).unwrap_or_default()));
+    let extension = path.extension().and_then(|e| e.to_str()).unwrap_or_default();
+    let partial = path.with_extension(format!("{extension}.{}.partial", std::process::id()));
     let mut file = File::create(&partial).map_err(io(&partial))?;
     file.write_all(bytes).map_err(io(&partial))?;
     file.sync_all().map_err(io(&partial))?;

@@ -662,6 +662,28 @@ fn table_7_marks_runs_of_different_task_sets() {
     assert!(table.contains("(runs of 12/12/9 tasks)"), "{table}");
 }
 
+/// One run over two benchmarks is one condition: the task list a configuration names (`tasks`,
+/// its count and digest, which differ by benchmark) belongs to the benchmark, as `subset` does.
+#[test]
+fn the_task_list_names_the_benchmark_not_the_condition() {
+    let (_tmp_dir, dir) = scratch("task-lists");
+    for (benchmark, count, digest) in [("alfworld-seen", 4, "aaaaaa"), ("virtualhome-eai", 3, "bbbbbb")] {
+        let config = serde_json::json!({"agent": "ours", "benchmark": benchmark, "mode": "constrained-mcts", "lm": "uniform",
+            "tasks": {"count": count, "ids_sha256": digest}, "files_sha256": {"/m.gguf": "cc"}});
+        let mut file = eval_harness::records::RecordFile::open(&dir, &format!("{benchmark}-ours"), &config, None, false).expect("opens");
+        for task in 0..count {
+            file.append(task, &serde_json::json!({"task": format!("t{task}"), "agent": "ours", "success": true})).expect("appends");
+        }
+    }
+    let paths = record_paths(&[dir]).expect("record files");
+    let sets: Vec<_> = paths.iter().map(|p| load(p).expect("a record file")).collect();
+    let markdown = build(&sets, &ReportOptions::default()).expect("a report").markdown;
+    let table = markdown.split("## ").find(|s| s.starts_with("Accuracy and robustness (Table 7)")).expect("Table 7");
+    let rows: Vec<&str> = table.lines().filter(|l| l.starts_with("| Ours")).collect();
+    assert_eq!(rows.len(), 1, "{table}");
+    assert!(!rows[0].contains('—') && !rows[0].contains("ids_sha256"), "{table}");
+}
+
 /// A folder after `merge` holds the shards and the merged file: the report reads the merged
 /// file once, says the shards were left out, and its tables are those of the shards alone; a
 /// shard resumed after the merge (a record the merged file lacks) asks for the merge again.

@@ -363,8 +363,7 @@ pub fn unreadable_feedback(error: &str) -> String {
     )
 }
 
-/// A chat error the run cannot go on after (the model is unreachable or misconfigured),
-/// rather than a reply the model got wrong.
+/// The first `chars` characters of `text`.
 fn clip(text: &str, chars: usize) -> String {
     text.chars().take(chars).collect()
 }

@@ -21,15 +21,17 @@ fn snapshot(relative: &str) -> String {
 }
 
 /// Phase II's prompt of EAI 1004_2 (`[system]` and `[user]` sections) and the direct policy's
-/// first prompt of a rearrangement task (its first line as the system message), as token ids
+/// first prompt of a rearrangement task (its system message, then the user's from the goal on),
+/// as token ids
 /// through `model`'s chat template.
 fn real_prompts(model: &LocalModel) -> [(&'static str, Vec<u32>); 2] {
     let planning = snapshot("mcts/tests/snapshots/prompt__the_virtualhome_prompt_of_eai_1004_2.snap");
     let (system, user) = planning.trim_start_matches("[system]\n").split_once("\n[user]\n").expect("[system] and [user] sections");
     let direct = snapshot("exploration-harness/tests/snapshots/direct__the_first_prompt_of_a_rearrangement_task.snap");
-    let (first, rest) = direct.split_once('\n').expect("lines");
+    // The snapshot joins the system and user messages; the user's starts at the goal.
+    let (direct_system, direct_user) = direct.split_once("\nGoal:").expect("the goal line");
     let encode = |system: &str, user: &str| model.encode(&model.chat_prompt(system, user).expect("renders")).expect("encodes");
-    [("phase2_eai", encode(system.trim(), user.trim())), ("direct_rearrange", encode(first, rest.trim()))]
+    [("phase2_eai", encode(system.trim(), user.trim())), ("direct_rearrange", encode(direct_system, &format!("Goal:{direct_user}")))]
 }
 
 fn model_path() -> (PathBuf, &'static str) {
@@ -38,7 +40,8 @@ fn model_path() -> (PathBuf, &'static str) {
         return (smollm2, "smollm2");
     }
     let tiny = std::env::temp_dir().join(format!("lm-bench-tiny-{}.gguf", std::process::id()));
-    write_tiny_gguf(&tiny, &TinySpec { context_length: 2048, ..TinySpec::default() }).expect("tiny model");
+    // Byte-level with few merges: the direct prompt is about 3,000 of its tokens.
+    write_tiny_gguf(&tiny, &TinySpec { context_length: 8192, ..TinySpec::default() }).expect("tiny model");
     (tiny, "tiny")
 }
 

@@ -59,6 +59,10 @@ pub struct ChatClient {
     /// another, and a request's mode must not depend on which requests came before it (a
     /// resumed run asks as an uninterrupted one does).
     weakened: std::collections::BTreeMap<String, JsonMode>,
+    /// The server refused `chat_template_kwargs` by name (a hosted API that takes no template
+    /// arguments): requests go without them from then on. A property of the server, the same
+    /// for every request, so it does not make one request depend on another.
+    no_template_kwargs: bool,
     usage: Usage,
 }
 
@@ -76,6 +80,7 @@ impl ChatClient {
             endpoint: format!("{}/chat/completions", config.base_url),
             agent: transport::agent(config.retry.timeout),
             weakened: std::collections::BTreeMap::new(),
+            no_template_kwargs: false,
             api_key,
             usage: Usage::default(),
             config,
@@ -102,6 +107,12 @@ impl ChatModel for ChatClient {
         // error of another kind never weakens the requests after it.
         let key = request.json_schema.as_ref().map(|schema| schema.to_string());
         let mut mode = key.as_ref().and_then(|k| self.weakened.get(k)).copied().unwrap_or(self.config.json_mode);
+        let without_kwargs;
+        let mut request = request;
+        if self.no_template_kwargs && request.chat_template_kwargs.is_some() {
+            without_kwargs = ChatRequest { chat_template_kwargs: None, ..request.clone() };
+            request = &without_kwargs;
+        }
         loop {
             let body = request.body(&self.config.model, mode).to_string();
             let result = transport::post_json(&self.agent, &self.endpoint, body.as_bytes(), self.api_key.as_deref(), &self.config.retry);
@@ -109,6 +120,20 @@ impl ChatModel for ChatClient {
                 Ok(delivered) => delivered,
                 Err(error) => {
                     self.usage.requests += u64::from(error.attempts);
+                    // A server that does not take template arguments names the field it refuses
+                    // (OpenAI: "Unrecognized request argument supplied: chat_template_kwargs").
+                    if let ChatErrorKind::Status { status: 400 | 422, body, .. } = &error.kind
+                        && request.chat_template_kwargs.is_some()
+                        && body.contains("chat_template_kwargs")
+                    {
+                        self.no_template_kwargs = true;
+                        let before = error.attempts + extra_attempts;
+                        return self.chat(&ChatRequest { chat_template_kwargs: None, ..request.clone() }).map(|mut reply| {
+                            reply.attempts += before;
+                            reply.usage.requests += u64::from(before);
+                            reply
+                        });
+                    }
                     let refused_format = matches!(error.kind, ChatErrorKind::Status { status: 400 | 422, .. });
                     match mode.weaker() {
                         Some(weaker) if refused_format && request.json_schema.is_some() => {

@@ -249,6 +249,21 @@ fn a_weaker_mode_is_kept_for_the_schema_that_needed_it() {
     assert_eq!(formats, [json!("json_schema"), json!("json_object"), json!("json_schema"), json!("json_object")]);
 }
 
+/// A hosted API that takes no template arguments refuses `chat_template_kwargs` by name: the
+/// request goes again without them, and so do later ones (a property of the server).
+#[test]
+fn a_server_refusing_template_arguments_is_asked_without_them() {
+    let refusal = "{\"error\": {\"message\": \"Unrecognized request argument supplied: chat_template_kwargs\"}}";
+    let (address, seen) =
+        serve(vec![status(400, Vec::new(), refusal), ok(completion("{\"skill\": \"Done\"}")), ok(completion("{\"skill\": \"Done\"}"))]);
+    let mut client = client(address);
+    let reply = chat_json(&mut client, &skill_request().with_thinking(false)).expect("json");
+    assert_eq!((reply.reply.json_mode, reply.reply.attempts), (Some(JsonMode::Schema), 2));
+    chat_json(&mut client, &skill_request().with_thinking(false)).expect("json");
+    let kwargs: Vec<bool> = seen.all().into_iter().map(|(_, body)| body.get("chat_template_kwargs").is_some()).collect();
+    assert_eq!(kwargs, [true, false, false]);
+}
+
 /// A 400 that is not about the JSON mode (a prompt past the context) fails in every mode, and
 /// the next request is asked with the full schema again: only a weaker mode that worked is kept.
 #[test]

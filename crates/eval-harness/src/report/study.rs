@@ -12,9 +12,9 @@ use super::ReportError;
 use super::load::{Record, RecordSet};
 use crate::records::RecordError;
 
-/// Configuration keys that name the benchmark (and which of its tasks) rather than the
-/// condition.
-const BENCHMARK_KEYS: [&str; 3] = ["benchmark", "subset", "task_dir"];
+/// Configuration keys that name the benchmark (and which of its tasks: `tasks` is the task
+/// list's count and digest) rather than the condition; a key stands for the keys under it too.
+const BENCHMARK_KEYS: [&str; 4] = ["benchmark", "subset", "task_dir", "tasks"];
 
 /// The column a record set belongs to: its benchmark, or the subset of it the run took
 /// (`alfworld-seen-12`; `eval --subset default` gives each benchmark its own, so the subset
@@ -184,7 +184,7 @@ fn flatten(prefix: &str, value: &Value, out: &mut BTreeMap<String, Value>) {
 fn flat(config: &Map<String, Value>, leave_out: &[&str]) -> BTreeMap<String, Value> {
     let mut out = BTreeMap::new();
     flatten("", &Value::Object(config.clone()), &mut out);
-    out.retain(|k, _| !leave_out.contains(&k.as_str()));
+    out.retain(|k, _| !leave_out.iter().any(|l| k == l || k.strip_prefix(l).is_some_and(|rest| rest.starts_with('.'))));
     out
 }
 
