@@ -680,6 +680,9 @@ pub struct MergeArgs {
 pub fn merge(args: MergeArgs) -> anyhow::Result<ExitCode> {
     let merged = eval_harness::records::merge(&args.shards, args.partial).map_err(|e| InputError(e.to_string()))?;
     println!("{} records of configuration {} -> {}", merged.records, merged.config, merged.path.display());
+    if merged.expected.is_none() {
+        eprintln!("the configuration beside the shards gives no task count: whether every shard ran to its end is not checked");
+    }
     Ok(ExitCode::SUCCESS)
 }
 

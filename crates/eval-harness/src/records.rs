@@ -303,6 +303,9 @@ pub struct Merged {
     pub path: PathBuf,
     pub records: usize,
     pub config: String,
+    /// The run's task count from the configuration beside the shards; `None` when it gives
+    /// none (an older configuration, or none beside them), so completeness went unchecked.
+    pub expected: Option<u64>,
 }
 
 /// Joins shard files (`<stem>-<hash>.shard-i-of-n.jsonl`) of one configuration into
@@ -424,5 +427,5 @@ pub fn merge(shards: &[PathBuf], partial: bool) -> Result<Merged, RecordError> {
     }
     let text: String = all.iter().map(|r| Value::Object(r.clone()).to_string() + "\n").collect();
     write_whole(&target, text.as_bytes())?;
-    Ok(Merged { path: target, records: all.len(), config })
+    Ok(Merged { path: target, records: all.len(), config, expected })
 }

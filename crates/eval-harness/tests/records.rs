@@ -149,7 +149,7 @@ fn shards_merge_into_what_one_run_writes() {
     let error = merge(&shard_paths[..2], false).expect_err("a shard short");
     assert!(error.to_string().contains("shard(s) 3 of 3 not given"), "{error}");
     let merged = merge(&shard_paths, false).expect("merges");
-    assert_eq!(merged.records, names.len());
+    assert_eq!((merged.records, merged.expected), (names.len(), None), "a configuration without a task count");
     assert_eq!(std::fs::read_to_string(&merged.path).expect("reads"), std::fs::read_to_string(whole.path()).expect("reads"));
     assert!(merge(&shard_paths, false).is_err(), "merging again over the result is refused");
     // Shards of another configuration do not merge.
@@ -190,7 +190,7 @@ fn a_merge_refuses_unfinished_shards_and_misfiled_records() {
     let error = merge(&short, false).expect_err("short");
     assert!(error.to_string().contains("4 of the run's 6 tasks recorded (shard 2 of 2 has 1 of its 3)"), "{error}");
     let merged = merge(&short, true).expect("a partial merge, asked for");
-    assert_eq!(merged.records, 4);
+    assert_eq!((merged.records, merged.expected), (4, Some(6)));
     // A record in the wrong shard's file (index 2 is shard 1's).
     let whole = shard_files(&dir.join("misfiled"), 6);
     let mut text = std::fs::read_to_string(&whole[1]).expect("reads");
