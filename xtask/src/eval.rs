@@ -391,7 +391,7 @@ fn config(args: &EvalArgs, suite: Suite, tasks: &[EvalTask]) -> anyhow::Result<V
         }
     }
     for path in loaded {
-        let digest = crate::pypi::sha256_of(&path).map_err(|e| InputError(format!("{e:#}")))?;
+        let digest = crate::pypi::sha256_remembered(&path).map_err(|e| InputError(format!("{e:#}")))?;
         files.insert(path.display().to_string(), json!(digest));
     }
     if !files.is_empty() {

@@ -42,6 +42,24 @@ pub fn download_wheel(python: &str, package: &str, dir: &Path) -> anyhow::Result
 }
 
 /// The file's sha256, in lower-case hex.
+/// [`sha256_of`], computed once per file for the life of the process (a file is known by its
+/// path, length and modification time): a run's configuration names a model by its digest for
+/// each benchmark and seed, and a model file is gigabytes.
+pub fn sha256_remembered(path: &Path) -> anyhow::Result<String> {
+    use std::sync::{Mutex, OnceLock};
+    type Seen = std::collections::BTreeMap<(std::path::PathBuf, u64, Option<std::time::SystemTime>), String>;
+    static SEEN: OnceLock<Mutex<Seen>> = OnceLock::new();
+    let meta = std::fs::metadata(path).with_context(|| format!("{}: cannot read", path.display()))?;
+    let key = (path.to_path_buf(), meta.len(), meta.modified().ok());
+    let seen = SEEN.get_or_init(|| Mutex::new(Seen::new()));
+    if let Some(digest) = seen.lock().unwrap_or_else(|e| e.into_inner()).get(&key) {
+        return Ok(digest.clone());
+    }
+    let digest = sha256_of(path)?;
+    seen.lock().unwrap_or_else(|e| e.into_inner()).insert(key, digest.clone());
+    Ok(digest)
+}
+
 pub fn sha256_of(path: &Path) -> anyhow::Result<String> {
     let mut file = std::fs::File::open(path).with_context(|| format!("{}: cannot read", path.display()))?;
     let mut hasher = Sha256::new();
@@ -67,4 +85,23 @@ pub fn with_pip<T>(dir: &Path, hint: &str, work: impl FnOnce(&str, &Path) -> any
         eprintln!("error: {error:#}");
         ExitCode::from(3)
     }))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The remembered digest is the file's, and a file rewritten (another length) is hashed again.
+    #[test]
+    fn a_remembered_digest_follows_the_file() {
+        let dir = tempfile::tempdir().expect("temporary folder");
+        let path = dir.path().join("model.gguf");
+        std::fs::write(&path, b"abc").expect("writes");
+        let first = sha256_remembered(&path).expect("hashes");
+        assert_eq!(first, "ba7816bf8f01cfea414140de5dae2223b00361a396177a9cb410ff61f20015ad", "sha256 of abc");
+        assert_eq!(sha256_remembered(&path).expect("hashes"), first);
+        std::fs::write(&path, b"abcd").expect("writes");
+        assert_eq!(sha256_remembered(&path).expect("hashes"), sha256_of(&path).expect("hashes"));
+        assert_ne!(sha256_remembered(&path).expect("hashes"), first);
+    }
 }
