@@ -139,7 +139,7 @@ pub fn explorer(spec: &ModelSpec, served_model: &str, cache: Option<&std::path::
             Some(url) => format!("{url} served-model:{served_model}"),
             None => {
                 let path = crate::lm::resolve_spec(spec)?;
-                format!("{spec} sha256:{}", crate::pypi::sha256_of(&path)?)
+                format!("{spec} sha256:{}", crate::pypi::sha256_remembered(&path)?)
             }
         };
         model = Box::new(CachedChat::open(model, &identity, file).map_err(|e| InputError(e.to_string()))?);
@@ -326,25 +326,21 @@ impl PhaseTwoRunner {
             Decoder::with_end_policy(model, &grounded.spelling, Arc::clone(vocab), self.decode.value(), self.decode.end_policy());
         let outcome = match decoder.decode(lm.as_mut(), &tokens, &initial, &config) {
             Ok(outcome) => outcome,
-            // The sequence (ŝ0's prompt and the plan so far) does not fit the model's context,
-            // here or at a server that refuses it (a 4xx other than a missing model, key or
-            // rate): this model cannot plan this task, an outcome; the search's tree is lost.
-            Err(e @ DecodeError::Model(lm::LmError::ContextOverflow { .. })) => {
+            Err(e) => {
+                // The sequence (ŝ0's prompt and the plan so far) does not fit the model's
+                // context, or a server refused the request for itself: this model cannot plan
+                // this task, an outcome (the search's tree is lost). Anything else stops the run.
+                let stop = match &e {
+                    DecodeError::Model(lm::LmError::ContextOverflow { .. }) => "ContextOverflow",
+                    DecodeError::Model(lm::LmError::Http(http)) if http.kind.is_refusal() => "Refused",
+                    _ => return Err(RunError(format!("decoding: {e}"))),
+                };
                 return Ok(PhaseTwo {
-                    no_plan: Some(format!("the model's context is exceeded: {e}")),
-                    detail: json!({"planner": "mcts", "mode": self.decode.mode.to_string(), "stop": "ContextOverflow", "prompt_tokens": tokens.len()}),
+                    no_plan: Some(format!("{stop}: {e}")),
+                    detail: json!({"planner": "mcts", "mode": self.decode.mode.to_string(), "stop": stop, "prompt_tokens": tokens.len()}),
                     ..PhaseTwo::default()
                 });
             }
-            Err(DecodeError::Model(lm::LmError::Http(e))) if matches!(e.kind, lm::HttpErrorKind::Status { status, .. } if (400..500).contains(&status) && ![401, 403, 404, 408, 429].contains(&status)) =>
-            {
-                return Ok(PhaseTwo {
-                    no_plan: Some(format!("the model server refused the request: {e}")),
-                    detail: json!({"planner": "mcts", "mode": self.decode.mode.to_string(), "stop": "Refused", "prompt_tokens": tokens.len()}),
-                    ..PhaseTwo::default()
-                });
-            }
-            Err(e) => return Err(RunError(format!("decoding: {e}"))),
         };
         let detail = json!({
             "planner": "mcts", "mode": outcome.mode, "stop": outcome.stop, "valid": outcome.valid, "solved": outcome.solved,

@@ -487,40 +487,29 @@ fn plan(
             entry[0] += f64::from(u8::from(ours_solved));
             if let (Some((python, bin)), Some(downward)) = (&reference, &downward) {
                 let (domain_path, problem_path) = fd_files(&files, &scratch)?;
-                // A task Fast Downward cannot take is a row of its own, not the end of the run.
-                if let Err(error) = run_fd(python, bin, &domain_path, &problem_path, &scratch) {
-                    row["fd_error"] = json!(error.to_string());
-                    if !json {
-                        println!("{row}");
-                    }
-                    rows.push(row);
-                    continue;
-                }
-                let fd = match run_fd_search(downward, &scratch.join("output.sas"), config.fast_downward, time_limit) {
-                    Ok(fd) => fd,
-                    Err(error) => {
-                        row["fd_error"] = json!(error.to_string());
-                        if !json {
-                            println!("{row}");
+                // A task Fast Downward cannot translate or search is a row of its own (its
+                // `fd_error`), not the end of the run.
+                let fd = run_fd(python, bin, &domain_path, &problem_path, &scratch)
+                    .and_then(|_| run_fd_search(downward, &scratch.join("output.sas"), config.fast_downward, time_limit));
+                match fd {
+                    Err(error) => row["fd_error"] = json!(error.to_string()),
+                    Ok(fd) => {
+                        if let Some(error) = &fd.error {
+                            row["fd_error"] = json!(error);
                         }
-                        rows.push(row);
-                        continue;
+                        row["fd_solved"] = json!(fd.solved);
+                        row["fd_cost"] = json!(fd.cost);
+                        row["fd_expanded"] = json!(fd.expanded);
+                        row["fd_search_s"] = json!(fd.search_s);
+                        row["fd_expansions_per_s"] = json!(fd.expanded as f64 / fd.search_s.max(1e-9));
+                        entry[3] += f64::from(u8::from(fd.solved));
+                        if fd.solved && ours_solved {
+                            entry[1] += ours.expanded as f64;
+                            entry[2] += ours_s;
+                            entry[4] += fd.expanded as f64;
+                            entry[5] += fd.search_s;
+                        }
                     }
-                };
-                if let Some(error) = &fd.error {
-                    row["fd_error"] = json!(error);
-                }
-                row["fd_solved"] = json!(fd.solved);
-                row["fd_cost"] = json!(fd.cost);
-                row["fd_expanded"] = json!(fd.expanded);
-                row["fd_search_s"] = json!(fd.search_s);
-                row["fd_expansions_per_s"] = json!(fd.expanded as f64 / fd.search_s.max(1e-9));
-                entry[3] += f64::from(u8::from(fd.solved));
-                if fd.solved && ours_solved {
-                    entry[1] += ours.expanded as f64;
-                    entry[2] += ours_s;
-                    entry[4] += fd.expanded as f64;
-                    entry[5] += fd.search_s;
                 }
             }
             if !json {

@@ -41,7 +41,6 @@ pub fn download_wheel(python: &str, package: &str, dir: &Path) -> anyhow::Result
         .context("pip reported success but left no wheel")
 }
 
-/// The file's sha256, in lower-case hex.
 /// [`sha256_of`], computed once per file for the life of the process (a file is known by its
 /// path, length and modification time): a run's configuration names a model by its digest for
 /// each benchmark and seed, and a model file is gigabytes.
@@ -60,6 +59,7 @@ pub fn sha256_remembered(path: &Path) -> anyhow::Result<String> {
     Ok(digest)
 }
 
+/// The file's sha256, in lower-case hex.
 pub fn sha256_of(path: &Path) -> anyhow::Result<String> {
     let mut file = std::fs::File::open(path).with_context(|| format!("{}: cannot read", path.display()))?;
     let mut hasher = Sha256::new();

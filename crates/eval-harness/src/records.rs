@@ -318,21 +318,23 @@ pub struct Merged {
 /// with `partial`).
 pub fn merge(shards: &[PathBuf], partial: bool) -> Result<Merged, RecordError> {
     let first = shards.first().ok_or_else(|| RecordError::Merge("no shard files given".into()))?;
-    let name = first.file_name().and_then(|n| n.to_str()).unwrap_or_default();
-    let base = name.split(".shard-").next().unwrap_or(name).trim_end_matches(".jsonl");
+    // Each file's `<stem>-<hash>` and shard, from its name.
+    let named: Vec<(String, Shard)> = shards
+        .iter()
+        .map(|path| {
+            let name = path.file_name().and_then(|n| n.to_str()).unwrap_or_default();
+            name.strip_suffix(".jsonl")
+                .and_then(|n| n.rsplit_once(".shard-"))
+                .and_then(|(base, i_of_n)| Some((base.to_string(), i_of_n.replace("-of-", "/").parse::<Shard>().ok()?)))
+                .ok_or_else(|| RecordError::Merge(format!("{}: not a shard file (`<stem>-<hash>.shard-i-of-n.jsonl`)", path.display())))
+        })
+        .collect::<Result<_, _>>()?;
+    let base = named[0].0.as_str();
     let mut all: Vec<Map<String, Value>> = Vec::new();
     let mut config: Option<String> = None;
     // Every file is a shard of one run: the name's `<stem>-<hash>` is the first's.
-    let shard_of = |path: &Path| -> Result<(String, Shard), RecordError> {
-        let name = path.file_name().and_then(|n| n.to_str()).unwrap_or_default();
-        name.strip_suffix(".jsonl")
-            .and_then(|n| n.rsplit_once(".shard-"))
-            .and_then(|(base, i_of_n)| Some((base.to_string(), i_of_n.replace("-of-", "/").parse::<Shard>().ok()?)))
-            .ok_or_else(|| RecordError::Merge(format!("{}: not a shard file (`<stem>-<hash>.shard-i-of-n.jsonl`)", path.display())))
-    };
-    for path in shards {
-        let (file_base, shard) = shard_of(path)?;
-        if file_base != base {
+    for (path, (file_base, shard)) in shards.iter().zip(&named) {
+        if file_base.as_str() != base {
             return Err(RecordError::Merge(format!(
                 "{}: a shard of {file_base}, not of {base}: shards of different runs do not merge",
                 path.display()
@@ -373,10 +375,7 @@ pub fn merge(shards: &[PathBuf], partial: bool) -> Result<Merged, RecordError> {
         return Err(RecordError::Merge(format!("the records are of configuration {config}, the files' names of {base}")));
     }
     // Every shard of the run, once: a merged file short of a shard would pass for the whole run.
-    let mut numbers = Vec::with_capacity(shards.len());
-    for path in shards {
-        numbers.push(shard_of(path)?.1);
-    }
+    let numbers: Vec<Shard> = named.iter().map(|(_, shard)| *shard).collect();
     let count = numbers[0].count;
     if let Some(other) = numbers.iter().find(|s| s.count != count) {
         return Err(RecordError::Merge(format!("shards of {count} and of {} given: one run's shards all have the same n", other.count)));

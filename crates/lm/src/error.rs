@@ -123,4 +123,30 @@ impl HttpErrorKind {
             HttpErrorKind::BadUrl(_) | HttpErrorKind::MalformedJson(_) => false,
         }
     }
+
+    /// A server that refused this request for itself (a 4xx: a prompt past its context, say),
+    /// not one that cannot be asked (transient errors, 401, 403, 404, as
+    /// `vlm_client::ChatErrorKind::is_unavailable` has them): the request's failure, which a
+    /// harness records rather than stopping on.
+    pub fn is_refusal(&self) -> bool {
+        matches!(self, HttpErrorKind::Status { status: 400..=499, .. })
+            && !self.is_transient()
+            && !matches!(self, HttpErrorKind::Status { status: 401 | 403 | 404, .. })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A 4xx the server gives the request itself is a refusal; one about the server, the key or
+    /// the rate, and any other failure, is not.
+    #[test]
+    fn a_refusal_is_a_4xx_about_the_request() {
+        let status = |status| HttpErrorKind::Status { status, body: String::new(), retry_after: None };
+        assert!(status(400).is_refusal() && status(413).is_refusal() && status(422).is_refusal());
+        for other in [status(401), status(403), status(404), status(408), status(429), status(500), HttpErrorKind::Io("reset".into())] {
+            assert!(!other.is_refusal(), "{other}");
+        }
+    }
 }

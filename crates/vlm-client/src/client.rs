@@ -128,7 +128,8 @@ impl ChatModel for ChatClient {
                     {
                         self.no_template_kwargs = true;
                         let before = error.attempts + extra_attempts;
-                        return self.chat(&ChatRequest { chat_template_kwargs: None, ..request.clone() }).map(|mut reply| {
+                        // Asked again from the start, which now leaves them out.
+                        return self.chat(request).map(|mut reply| {
                             reply.attempts += before;
                             reply.usage.requests += u64::from(before);
                             reply
