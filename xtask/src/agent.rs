@@ -136,7 +136,9 @@ pub fn explorer(spec: &ModelSpec, served_model: &str, cache: Option<&std::path::
         // What names the model's answers: the file's digest for a local model, the server and
         // the served model's name otherwise.
         let identity = match spec.url() {
-            Some(url) => format!("{url} served-model:{served_model}"),
+            // With what the server lists: another model behind the same URL and name is
+            // asked again, not answered with the first one's replies.
+            Some(url) => format!("{url} served-model:{served_model} serves:{}", crate::model_spec::served_identity(url, served_model)?),
             None => {
                 let path = crate::lm::resolve_spec(spec)?;
                 format!("{spec} sha256:{}", crate::pypi::sha256_remembered(&path)?)

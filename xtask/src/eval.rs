@@ -192,6 +192,12 @@ fn tasks(suite: Suite, agent: AgentName, task_dir: Option<&Path>, subset: Option
 }
 
 /// The expert's record: the benchmark's plan validated through the symbolic pipeline.
+/// The version of what [`expert`] finds: raised whenever grounding, the transition model's
+/// validation or a benchmark's spelling of plans changes a verdict or a figure it records, so
+/// that a resumed replay never takes the old records as the new code's. 1: the first with a
+/// version (its configuration had none before).
+pub const EXPERT_REPLAY_VERSION: u32 = 1;
+
 fn expert(files: &TaskFiles) -> anyhow::Result<Value> {
     let start = Instant::now();
     let model = TransitionModel::new(crate::input::ground(files)?);
@@ -397,8 +403,28 @@ fn config(args: &EvalArgs, suite: Suite, tasks: &[EvalTask]) -> anyhow::Result<V
     if !files.is_empty() {
         config.as_object_mut().expect("object").insert("files_sha256".into(), Value::Object(files));
     }
-    // Every agent but the expert replay runs the exploration harness: its behaviour's version.
+    // What each server the agent asks serves (a request's model name does not say: llama.cpp's
+    // server answers to any name), so that another model behind the same URL and name is
+    // another run. Only the models this agent asks, as for `files_sha256`.
+    let mut asked: Vec<(&crate::model_spec::ModelSpec, &str)> = Vec::new();
+    let served_name = args.episode.lm.served_model.as_str();
     if args.agent != AgentName::Expert {
+        asked.push((&args.episode.explorer, served_name));
+    }
+    if args.agent == AgentName::Ours {
+        match &args.episode.chat.chat_planner {
+            Some(planner) => asked.push((planner, served_name)),
+            None => asked.push((&args.episode.lm.lm, served_name)),
+        }
+    }
+    if let Some(served) = crate::model_spec::served_entry(&asked)? {
+        config.as_object_mut().expect("object").insert("served".into(), served);
+    }
+    // Every agent but the expert replay runs the exploration harness: its behaviour's version;
+    // the expert replay has a version of its own.
+    if args.agent == AgentName::Expert {
+        config.as_object_mut().expect("object").insert("replay".into(), json!(EXPERT_REPLAY_VERSION));
+    } else {
         config.as_object_mut().expect("object").insert("harness".into(), json!(exploration_harness::HARNESS_VERSION));
     }
     let task_dir = if suite == Suite::VirtualhomeEai { args.task_dir.as_ref().map(|p| p.display().to_string()) } else { None };

@@ -98,6 +98,63 @@ pub fn chat_model(text: &str) -> Result<ModelSpec, String> {
     taking(text, &[|s| !matches!(s, ModelSpec::Uniform | ModelSpec::Systematic)], "a chat model (smollm2, openai:URL, a .gguf path)")
 }
 
+/// What the server at `url` serves when asked for `name`, by its model list
+/// ([`vlm_client::served_models`]): the entry named `name`; the only entry, where the server
+/// lists one and `name` is not it (llama.cpp's server answers to any name with the file it
+/// loaded); else every id listed (`{"listed": [...]}`); `"unlisted"` where the server has no
+/// list. A server that cannot be reached is an error: the run cannot say what it would record.
+/// Asked once per process for each URL and name.
+pub fn served_identity(url: &str, name: &str) -> anyhow::Result<serde_json::Value> {
+    use serde_json::json;
+    use std::collections::BTreeMap;
+    use std::sync::{Mutex, OnceLock};
+    static ASKED: OnceLock<Mutex<BTreeMap<(String, String), serde_json::Value>>> = OnceLock::new();
+    let key = (url.to_string(), name.to_string());
+    if let Some(known) = ASKED.get_or_init(Default::default).lock().expect("not poisoned").get(&key) {
+        return Ok(known.clone());
+    }
+    let policy = vlm_client::RetryPolicy { timeout: std::time::Duration::from_secs(30), ..vlm_client::RetryPolicy::default() };
+    let listed =
+        vlm_client::served_models(url, None, &policy).map_err(|e| anyhow::anyhow!("cannot ask {url} which model it serves: {e}"))?;
+    let entry = |m: &vlm_client::ServedModel| {
+        let mut entry = json!({ "id": m.id });
+        for (key, value) in [("root", &m.root), ("owned_by", &m.owned_by)] {
+            if let Some(value) = value {
+                entry[key] = json!(value);
+            }
+        }
+        entry
+    };
+    let identity = match listed {
+        None => json!("unlisted"),
+        Some(models) => match models.iter().find(|m| m.id == name) {
+            Some(model) => entry(model),
+            None if models.len() == 1 => entry(&models[0]),
+            None => {
+                let mut ids: Vec<&str> = models.iter().map(|m| m.id.as_str()).collect();
+                ids.sort_unstable();
+                json!({ "listed": ids })
+            }
+        },
+    };
+    ASKED.get_or_init(Default::default).lock().expect("not poisoned").insert(key, identity.clone());
+    Ok(identity)
+}
+
+/// The `served` entry of a run's configuration: for each served model among `models` (a spec
+/// and the name it is asked by), what its server serves ([`served_identity`]), keyed
+/// `URL served-model:NAME` (the chat cache's identity of a served model); `None`
+/// where the run asks no server, so that the hashes of other runs stay as they were.
+pub fn served_entry(models: &[(&ModelSpec, &str)]) -> anyhow::Result<Option<serde_json::Value>> {
+    let mut served = serde_json::Map::new();
+    for (spec, name) in models {
+        if let Some(url) = spec.url() {
+            served.insert(format!("{url} served-model:{name}"), served_identity(url, name)?);
+        }
+    }
+    Ok((!served.is_empty()).then_some(serde_json::Value::Object(served)))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -315,6 +315,18 @@ pub struct RunConfig<'a> {
     pub lm: &'a LmArgs,
     pub decode: &'a DecodeArgs,
     pub time_limit: f64,
+    /// What an `openai:` server serves ([`crate::model_spec::served_entry`]); absent otherwise.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub served: Option<serde_json::Value>,
+}
+
+impl<'a> RunConfig<'a> {
+    /// The configuration of a run of `decode` with `lm` on `set` of `benchmark`, asking an
+    /// `openai:` server what it serves.
+    pub fn new(benchmark: &'a str, set: &'a str, lm: &'a LmArgs, decode: &'a DecodeArgs, time_limit: f64) -> anyhow::Result<Self> {
+        let served = crate::model_spec::served_entry(&[(&lm.lm, &lm.served_model)])?;
+        Ok(RunConfig { benchmark, set, lm, decode, time_limit, served })
+    }
 }
 
 fn yes() -> bool {
@@ -388,7 +400,7 @@ pub fn plan_one(
     let vocab = Arc::new(mcts::constraint_vocabulary(lm.vocabulary()).context("the model's vocabulary")?);
     let (mut record, outcome, model) = solve(files, lm.as_mut(), &lm_args.lm.to_string(), &vocab, args, time_limit)?;
     // The settings that made this plan, hashed as a run's records are (the task is the set).
-    let config = RunConfig { benchmark: files.benchmark.name(), set: &files.id, lm: lm_args, decode: args, time_limit };
+    let config = RunConfig::new(files.benchmark.name(), &files.id, lm_args, args, time_limit)?;
     record.config = eval_harness::records::config_hash(&config);
     // The plan is checked once more by the validator, from the text as written.
     let spelling = spelling_for(files, &model)?;
@@ -476,7 +488,7 @@ pub fn run(args: Phase2Args) -> anyhow::Result<ExitCode> {
         None => args.benchmark.name().to_string(),
     };
     let variant = args.decode.variant();
-    let config = RunConfig { benchmark: args.benchmark.name(), set: &set, lm: &args.lm, decode: &args.decode, time_limit: args.time_limit };
+    let config = RunConfig::new(args.benchmark.name(), &set, &args.lm, &args.decode, args.time_limit)?;
     // Records in `<stem>-<hash>.jsonl`, the configuration beside them, appended whole and
     // resumed (eval_harness::records); a file of another configuration's records is refused.
     let stem = file_safe(&format!("{set}-{}{variant}-{lm_name}", args.decode.mode));

@@ -1,8 +1,14 @@
 //! `cargo xtask eval --agent direct`: a model that is not there, or no chat model at all, is
 //! bad input (exit 2) before any record file is made; so is a reply cache (`--chat-cache`)
-//! inside the records folder. Needs no model file.
+//! inside the records folder. A served model is named by what its server lists. Needs no
+//! model file.
 
 mod common;
+
+use std::io::{Read, Write};
+use std::net::{TcpListener, TcpStream};
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::{Arc, Mutex};
 
 use common::xtask;
 
@@ -54,4 +60,98 @@ fn a_reply_cache_inside_the_records_folder_is_refused() {
     let stderr = refused(&["--explorer", "no-such-model.gguf", "--chat-cache", cache.to_str().unwrap()], &dir);
     assert!(stderr.contains("keep the reply file out of the records folder"), "{stderr}");
     assert!(!dir.exists(), "no records, no reply file");
+}
+
+/// A model server on loopback: `GET /v1/models` lists `listed`'s one id, and every chat request
+/// is answered DONE (the direct agent ends its episode). Counts the chat requests.
+fn done_server(listed: Arc<Mutex<String>>, chats: Arc<AtomicUsize>) -> String {
+    let listener = TcpListener::bind("127.0.0.1:0").expect("bind");
+    let address = listener.local_addr().expect("address");
+    std::thread::spawn(move || {
+        for stream in listener.incoming() {
+            let Ok(stream) = stream else { return };
+            let (listed, chats) = (listed.clone(), chats.clone());
+            std::thread::spawn(move || serve_connection(stream, &listed, &chats));
+        }
+    });
+    format!("http://{address}/v1")
+}
+
+/// Requests on one kept-alive connection until the client closes it.
+fn serve_connection(mut stream: TcpStream, listed: &Mutex<String>, chats: &AtomicUsize) {
+    let mut buffer = Vec::new();
+    let mut chunk = [0u8; 65536];
+    loop {
+        let Some(end) = buffer.windows(4).position(|w| w == b"\r\n\r\n") else {
+            match stream.read(&mut chunk) {
+                Ok(n) if n > 0 => buffer.extend_from_slice(&chunk[..n]),
+                _ => return,
+            }
+            continue;
+        };
+        let head = String::from_utf8_lossy(&buffer[..end]).to_ascii_lowercase();
+        let length: usize = head.lines().find_map(|l| l.strip_prefix("content-length:")).map_or(0, |v| v.trim().parse().expect("length"));
+        while buffer.len() < end + 4 + length {
+            match stream.read(&mut chunk) {
+                Ok(n) if n > 0 => buffer.extend_from_slice(&chunk[..n]),
+                _ => return,
+            }
+        }
+        buffer.drain(..end + 4 + length);
+        let body = if head.starts_with("get /v1/models ") {
+            serde_json::json!({ "object": "list", "data": [{ "id": *listed.lock().unwrap(), "object": "model", "created": 1, "owned_by": "test" }] })
+        } else {
+            assert!(head.starts_with("post /v1/chat/completions "), "{head}");
+            chats.fetch_add(1, Ordering::SeqCst);
+            serde_json::json!({
+                "choices": [{ "message": { "role": "assistant", "content": "{\"action\": \"DONE\", \"done\": true}" }, "finish_reason": "stop" }],
+                "usage": { "prompt_tokens": 300, "completion_tokens": 12 }
+            })
+        }
+        .to_string();
+        let reply = format!("HTTP/1.1 200 OK\r\nContent-Type: application/json\r\nContent-Length: {}\r\n\r\n{body}", body.len());
+        if stream.write_all(reply.as_bytes()).is_err() {
+            return;
+        }
+    }
+}
+
+/// A server behind the same URL and model name can serve another model (llama.cpp's server
+/// answers to any name with the file it loaded): the run's configuration names what the server
+/// lists, so another model's records go to another file, and the same model's run resumes.
+#[test]
+fn a_served_model_is_named_by_what_its_server_lists() {
+    let (_tmp_dir, dir) = out("served");
+    let listed = Arc::new(Mutex::new("/models/first.gguf".to_string()));
+    let chats = Arc::new(AtomicUsize::new(0));
+    let url = done_server(listed.clone(), chats.clone());
+    let explorer = format!("openai:{url}");
+    let run = || {
+        #[rustfmt::skip]
+        let output = xtask(&[
+            "eval", "--agent", "direct", "--explorer", &explorer, "--served-model", "default", "--benchmark", "alfworld-seen",
+            "--limit", "1", "--out", dir.to_str().unwrap(), "--json",
+        ]);
+        assert_eq!(output.status.code(), Some(0), "{}", String::from_utf8_lossy(&output.stderr));
+        let summary: serde_json::Value = serde_json::from_slice(&output.stdout).expect("one JSON object");
+        std::path::PathBuf::from(summary["alfworld-seen"]["records"].as_str().expect("the records' file"))
+    };
+    let served = |records: &std::path::Path| {
+        let config: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(records.with_extension("config.json")).expect("config")).expect("JSON");
+        config["served"][format!("{url} served-model:default")].clone()
+    };
+    let first = run();
+    assert_eq!(served(&first), serde_json::json!({ "id": "/models/first.gguf", "owned_by": "test" }));
+    assert_eq!(chats.load(Ordering::SeqCst), 1, "one turn: DONE");
+    // The same model again: the run is done, nothing is asked.
+    assert_eq!(run(), first);
+    assert_eq!(chats.load(Ordering::SeqCst), 1);
+    // Another model behind the same URL and name: another run, in a file of its own.
+    *listed.lock().unwrap() = "/models/second.gguf".to_string();
+    let second = run();
+    assert_ne!(second, first);
+    assert_eq!(served(&second)["id"], "/models/second.gguf");
+    assert_eq!(chats.load(Ordering::SeqCst), 2);
+    assert_eq!(std::fs::read_to_string(&first).expect("records").lines().count(), 1, "the first run's records untouched");
 }

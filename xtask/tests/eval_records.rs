@@ -54,6 +54,15 @@ fn killed_runs_resume_to_exactly_the_records_of_an_uninterrupted_run() {
     assert!(eval(&whole).status().expect("runs").success());
     let expected = records(&whole);
     assert_eq!(expected.len(), 140);
+    // The replay's configuration carries its own version (it runs no exploration harness).
+    let config = std::fs::read_dir(&whole)
+        .expect("records folder")
+        .flatten()
+        .map(|e| e.path())
+        .find(|p| p.to_string_lossy().ends_with(".config.json"))
+        .expect("the configuration");
+    let config: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(config).expect("readable")).expect("JSON");
+    assert!(config["replay"].is_u64() && config.get("harness").is_none(), "{config}");
 
     let (_tmp_killed, killed) = run_dir("killed");
     // Whole records in the file so far (a killed run may leave a torn last line after them).

@@ -86,6 +86,9 @@ fn thinking_through_the_server_is_recorded_and_reported_as_thinking() {
     let config: serde_json::Value = serde_json::from_str(&read(records.with_extension("config.json"))).expect("JSON");
     assert_eq!((config["planner"].as_str(), config["chat_planner"]["thinking"].as_str()), (Some("chat"), Some("recommended")), "{config}");
     assert_eq!(config["decode"]["seed"], 42, "{config}");
+    // The configuration names what the server loaded, not only the name it was asked by.
+    let key = format!("{} served-model:default", server().trim_start_matches("openai:"));
+    assert!(config["served"][&key]["id"].as_str().is_some_and(|id| id.ends_with(".gguf")), "{config}");
     let record: serde_json::Value = serde_json::from_str(read(records).lines().next().expect("a record")).expect("JSON");
     let episode = &record["episode"];
     let detail = &episode["phase2_detail"];

@@ -11,9 +11,10 @@
 //! The key is the SHA-256 of the model's identity and the request's whole body
 //! ([`ChatRequest::body`]: messages with their pictures, sampling, seed, schema, template
 //! arguments). The identity is the caller's: it must change whenever the model would answer
-//! differently (a local model: its file's digest; a server: its URL and served model name). A
-//! served model is deterministic at temperature 0 only as far as the server is; the cache
-//! returns the reply it saw.
+//! differently (a local model: its file's digest; a server: its URL, the served model's name
+//! and what the server lists under it, [`crate::served_models`]). A served model is
+//! deterministic at temperature 0 only as far as the server is; the cache returns the reply
+//! it saw.
 //!
 //! The file is JSON lines, one reply a line, appended whole and flushed; a line torn by a
 //! killed process (the last one, without its newline) is dropped when the file is opened, or

@@ -16,6 +16,8 @@
 //!   environment): one deadline per attempt covering DNS, connect, request and reply;
 //!   bounded retries with exponential backoff and jitter, honouring `Retry-After` on 429 and
 //!   503. Every failure is a [`ChatError`] carrying the attempts and the elapsed time.
+//! - [`served_models`]: what a server lists at `GET /models`, which names a served model
+//!   where a request's `model` field does not (llama.cpp's server answers to any name).
 //!
 //! ```no_run
 //! use vlm_client::{ChatClient, ChatRequest, ClientConfig, Message, Sampling, chat_json};
@@ -37,6 +39,7 @@ mod client;
 mod error;
 mod json;
 mod message;
+mod models;
 mod reply;
 mod request;
 pub mod transport;
@@ -46,6 +49,7 @@ pub use client::{ChatClient, ChatModel, ClientConfig};
 pub use error::{ChatError, ChatErrorKind};
 pub use json::{JsonReply, chat_json, check_schema, first_object, read_json, validate};
 pub use message::{Image, ImageFormat, Message, Part, Role};
+pub use models::{ServedModel, parse_models, served_models};
 pub use reply::{ChatReply, Usage, parse_reply};
 pub use request::{ChatRequest, JsonMode, Sampling};
 pub use transport::RetryPolicy;

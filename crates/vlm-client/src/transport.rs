@@ -80,6 +80,16 @@ pub fn check_url(url: &str) -> Result<(), ChatErrorKind> {
 /// POSTs `body` to `url` under `policy`; a non-2xx status, a transport failure or a timeout
 /// after the last attempt is a [`ChatError`] carrying the attempts and the elapsed time.
 pub fn post_json(agent: &ureq::Agent, url: &str, body: &[u8], bearer: Option<&str>, policy: &RetryPolicy) -> Result<Delivered, ChatError> {
+    send(agent, url, Some(body), bearer, policy)
+}
+
+/// GETs `url` under `policy`, as [`post_json`] posts (a server's model list).
+pub fn get_json(agent: &ureq::Agent, url: &str, bearer: Option<&str>, policy: &RetryPolicy) -> Result<Delivered, ChatError> {
+    send(agent, url, None, bearer, policy)
+}
+
+/// One logical request, a POST of `body` or a GET, with the policy's retries.
+fn send(agent: &ureq::Agent, url: &str, body: Option<&[u8]>, bearer: Option<&str>, policy: &RetryPolicy) -> Result<Delivered, ChatError> {
     let start = Instant::now();
     let mut attempts = 0;
     let mut waited = Duration::ZERO;
@@ -123,12 +133,25 @@ fn jitter() -> f64 {
     (x >> 11) as f64 / (1u64 << 53) as f64
 }
 
-fn attempt(agent: &ureq::Agent, url: &str, body: &[u8], bearer: Option<&str>, timeout: Duration) -> Result<Vec<u8>, ChatErrorKind> {
-    let mut request = agent.post(url).header("Content-Type", "application/json").header("Accept", "application/json");
-    if let Some(token) = bearer {
-        request = request.header("Authorization", &format!("Bearer {token}"));
-    }
-    let mut response = request.send(body).map_err(|e| classify(e, timeout))?;
+fn attempt(agent: &ureq::Agent, url: &str, body: Option<&[u8]>, bearer: Option<&str>, timeout: Duration) -> Result<Vec<u8>, ChatErrorKind> {
+    let authorization = bearer.map(|token| format!("Bearer {token}"));
+    let sent = match body {
+        Some(body) => {
+            let mut request = agent.post(url).header("Content-Type", "application/json").header("Accept", "application/json");
+            if let Some(value) = &authorization {
+                request = request.header("Authorization", value);
+            }
+            request.send(body)
+        }
+        None => {
+            let mut request = agent.get(url).header("Accept", "application/json");
+            if let Some(value) = &authorization {
+                request = request.header("Authorization", value);
+            }
+            request.call()
+        }
+    };
+    let mut response = sent.map_err(|e| classify(e, timeout))?;
     let status = response.status().as_u16();
     let retry_after = response.headers().get("retry-after").and_then(|v| v.to_str().ok()).and_then(parse_retry_after);
     let bytes = response.body_mut().with_config().limit(MAX_BODY_BYTES).read_to_vec().map_err(|e| classify(e, timeout))?;

@@ -11,7 +11,8 @@ use std::time::Duration;
 
 use serde_json::{Value, json};
 use vlm_client::{
-    ChatClient, ChatErrorKind, ChatModel, ChatRequest, ClientConfig, Image, JsonMode, Message, RetryPolicy, Sampling, chat_json,
+    ChatClient, ChatErrorKind, ChatModel, ChatRequest, ClientConfig, Image, JsonMode, Message, RetryPolicy, Sampling, ServedModel,
+    chat_json, served_models,
 };
 
 /// What a test server does with one request.
@@ -119,6 +120,9 @@ fn read_request(stream: &mut TcpStream) -> Option<Value> {
     loop {
         if let Some(end) = buffer.windows(4).position(|w| w == b"\r\n\r\n") {
             let head = String::from_utf8_lossy(&buffer[..end]).to_ascii_lowercase();
+            if head.starts_with("get /v1/models http/1.1\r\n") {
+                return Some(json!({ "_get": "/v1/models" }));
+            }
             assert!(head.starts_with("post /v1/chat/completions http/1.1\r\n"), "{head}");
             let length: usize = head.lines().find_map(|l| l.strip_prefix("content-length:").map(|v| v.trim().parse().expect("length")))?;
             while buffer.len() < end + 4 + length {
@@ -380,4 +384,29 @@ fn bad_urls_fail_before_any_request() {
         assert!(matches!(error.kind, ChatErrorKind::BadUrl(_)), "{url}: {error}");
         assert_eq!(error.attempts, 0);
     }
+}
+
+#[test]
+fn the_model_list_names_what_the_server_serves() {
+    let policy = RetryPolicy {
+        timeout: Duration::from_millis(400),
+        max_retries: 1,
+        backoff: Duration::from_millis(1),
+        max_wait: Duration::from_secs(1),
+    };
+    let listed =
+        json!({ "object": "list", "data": [{ "id": "/models/smollm2.gguf", "object": "model", "created": 17, "owned_by": "llamacpp" }] });
+    let (address, seen) = serve(vec![status(503, Vec::new(), "loading"), ok(listed)]);
+    // A 503 is retried like a chat request; the list's entry comes back without its time stamp.
+    let models = served_models(&format!("http://{address}/v1/"), None, &policy).expect("listed").expect("a list");
+    assert_eq!(models, vec![ServedModel { id: "/models/smollm2.gguf".into(), root: None, owned_by: Some("llamacpp".into()) }]);
+    assert_eq!(seen.all().iter().map(|(_, request)| request["_get"].clone()).collect::<Vec<_>>(), vec![json!("/v1/models"); 2]);
+    // A server without the endpoint has no list: not an error.
+    let (address, _) = serve(vec![status(404, Vec::new(), "not found")]);
+    assert_eq!(served_models(&format!("http://{address}/v1"), None, &policy).expect("no list"), None);
+    // Nobody listening is the transport's error, after its retries.
+    let nobody = TcpListener::bind("127.0.0.1:0").expect("bind").local_addr().expect("address");
+    let error = served_models(&format!("http://{nobody}/v1"), None, &policy).expect_err("refused");
+    assert!(matches!(error.kind, ChatErrorKind::Connect(_)), "{error}");
+    assert_eq!(error.attempts, 2);
 }

@@ -51,3 +51,15 @@ fn plain_text_replies_and_usage() {
     assert_eq!(usage.requests, 1);
     assert!(usage.prompt_tokens > 10 && (1..=24).contains(&usage.completion_tokens), "{usage:?}");
 }
+
+#[test]
+fn the_server_lists_the_file_it_loaded() {
+    let url = std::env::var("NSEA_LLAMA_SERVER_URL").expect("NSEA_LLAMA_SERVER_URL: the base URL of a llama-server (see .ci/run)");
+    let models = vlm_client::served_models(&url, None, &vlm_client::RetryPolicy::default())
+        .expect("reachable")
+        .expect("llama-server lists its model");
+    // `.ci/run` starts the server without `--alias`: the id is the path of the GGUF it loaded,
+    // whatever name a request gives.
+    assert_eq!(models.len(), 1, "{models:?}");
+    assert!(models[0].id.ends_with(".gguf"), "{models:?}");
+}
