@@ -65,6 +65,33 @@ enum Which {
         #[arg(long)]
         json: bool,
     },
+    /// Heuristic evaluation time and values on the same states, ours beside pyperplan 2.1's
+    /// h_max, h_add, h_FF and LM-cut (the anchor venv's; it parses STRIPS with typing, so of the
+    /// IPC fixtures all but elevators' action costs).
+    Heuristic {
+        /// Comma-separated benchmarks (ipc, alfworld-seen, alfworld-train, virtualhome-eai).
+        #[arg(long, default_value = "ipc")]
+        benchmark: String,
+        /// At most this many tasks of each benchmark, evenly spaced.
+        #[arg(long)]
+        limit: Option<usize>,
+        /// Only tasks whose id contains this.
+        #[arg(long)]
+        filter: Option<String>,
+        /// The states: a seeded random walk of this many steps from the initial state (ALFWorld
+        /// and EAI: the states along the task's own plan).
+        #[arg(long, default_value_t = 50)]
+        walk: usize,
+        /// Timed passes over the states, for both (the median is reported).
+        #[arg(long, default_value_t = 5)]
+        runs: usize,
+        /// Skip pyperplan.
+        #[arg(long)]
+        no_reference: bool,
+        /// Print one JSON object.
+        #[arg(long)]
+        json: bool,
+    },
     /// Next-token masks over Qwen3's vocabulary on real states, ours beside llguidance.
     Mask {
         /// A Hugging Face tokenizer.json [default: fixtures/tokenizers/qwen3/tokenizer.json].
@@ -108,6 +135,9 @@ pub fn run(args: BenchArgs) -> anyhow::Result<ExitCode> {
         Which::Ground { benchmark, limit, runs, no_reference, json } => ground(&benchmark, limit, runs.max(1), no_reference, json),
         Which::Plan { configs, benchmark, limit, time_limit, filter, json } => {
             plan(&configs, &benchmark, limit, time_limit, filter.as_deref(), json)
+        }
+        Which::Heuristic { benchmark, limit, filter, walk, runs, no_reference, json } => {
+            heuristic(&benchmark, limit, filter.as_deref(), walk, runs.max(1), no_reference, json)
         }
         Which::Mask { tokenizer, every, no_reference, json } => crate::mask_bench::run(tokenizer, every, no_reference, json),
         Which::Env { subset, limit, runs, no_reference, json } => crate::env::bench(&subset, limit, runs.max(1), no_reference, json),
@@ -537,6 +567,169 @@ fn plan(
     let _ = std::fs::remove_dir_all(&scratch);
     if json {
         println!("{}", json!({ "configs": summary, "tasks": rows }));
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+/// The heuristics `bench heuristic` compares, by our names (pyperplan's script uses the same).
+const COMPARED_HEURISTICS: [&str; 4] = ["hmax", "hadd", "ff", "lmcut"];
+
+/// The states `bench heuristic` evaluates: along the task's own plan (ALFWorld's walkthrough,
+/// EAI's gold plan), else a seeded random walk of `walk` steps (as `cargo bench -p heuristics`).
+fn bench_states(model: &transition_model::TransitionModel, files: &TaskFiles, walk: usize) -> anyhow::Result<Vec<transition_model::State>> {
+    use transition_model::Spelling;
+    Ok(match &files.extra {
+        Extra::Alfworld(game) => {
+            let spelling = Spelling::alfworld(model.task(), &game.grammar)?;
+            model.states_along(&spelling, &game.walkthrough).map_err(|e| anyhow::anyhow!("{}: the walkthrough: {e:?}", files.id))?
+        }
+        Extra::Virtualhome { gold_plan: Some(plan), .. } => {
+            model.states_along(&Spelling::pddl(model.task()), plan).map_err(|e| anyhow::anyhow!("{}: the gold plan: {e:?}", files.id))?
+        }
+        _ => model.random_walk(0x9E37_79B9_7F4A_7C15, walk),
+    })
+}
+
+/// pyperplan's values and seconds per evaluation on `states` ([`COMPARED_HEURISTICS`]), from
+/// `tools/pyperplan_heuristics.py` in the anchor venv.
+fn run_pyperplan(
+    python: &Path,
+    files: &TaskFiles,
+    states: &[Vec<String>],
+    runs: usize,
+    scratch: &Path,
+) -> anyhow::Result<serde_json::Value> {
+    let states_path = scratch.join("states.json");
+    std::fs::write(&states_path, serde_json::to_vec(states)?)?;
+    let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("../tools/pyperplan_heuristics.py");
+    let output = Command::new(python)
+        .arg(&script)
+        .arg(&files.domain_path)
+        .arg(&files.problem_path)
+        .arg(&states_path)
+        .arg(runs.to_string())
+        .env("PYTHONHASHSEED", "0")
+        .output()
+        .context("cannot run pyperplan")?;
+    if !output.status.success() {
+        let stderr = String::from_utf8_lossy(&output.stderr);
+        bail!("pyperplan failed ({}): {}", output.status, stderr.lines().rev().find(|l| !l.trim().is_empty()).unwrap_or_default().trim());
+    }
+    serde_json::from_slice(&output.stdout).context("pyperplan's output is not JSON")
+}
+
+/// `bench heuristic`: each heuristic on the same states, ours and pyperplan's, one after the
+/// other per task (so both see the same load): the median time per evaluation over `runs`
+/// passes, and on how many states the values agree.
+fn heuristic(
+    benchmarks: &str,
+    limit: Option<usize>,
+    filter: Option<&str>,
+    walk: usize,
+    runs: usize,
+    no_reference: bool,
+    json: bool,
+) -> anyhow::Result<ExitCode> {
+    let benchmarks = benchmarks_named(benchmarks)?;
+    let python = anchor_venv().join("bin/python");
+    let reference = !no_reference && {
+        let found = Command::new(&python).args(["-c", "import pyperplan"]).output().is_ok_and(|o| o.status.success());
+        if !found {
+            eprintln!("pyperplan not found in {} (../shared/anchors/install.sh planning); reporting ours only", anchor_venv().display());
+        }
+        found
+    };
+    let scratch = std::env::temp_dir().join(format!("xtask-bench-heuristic-{}", std::process::id()));
+    std::fs::create_dir_all(&scratch)?;
+    let mut rows = Vec::new();
+    // Per heuristic: the sums of ours' and pyperplan's seconds per evaluation over the tasks
+    // both evaluated, the states compared and those whose values agree.
+    let mut totals: std::collections::BTreeMap<&str, [f64; 4]> = std::collections::BTreeMap::new();
+    if !json {
+        println!(
+            "{:<34} {:>6} {:>6}  {:<6} {:>12} {:>12} {:>8} {:>9}",
+            "task", "states", "facts", "h", "ours µs", "pyperplan µs", "ratio", "agree"
+        );
+    }
+    for benchmark in &benchmarks {
+        let loaded = benchmark_data::load(*benchmark)?;
+        for files in spaced(&loaded, limit) {
+            if filter.is_some_and(|f| !files.id.contains(f)) {
+                continue;
+            }
+            let model = transition_model::TransitionModel::new(crate::input::ground(files)?);
+            let states = bench_states(&model, files, walk)?;
+            let named: Vec<Vec<String>> =
+                states.iter().map(|s| s.facts().map(|f| model.task().fact_name(f).to_lowercase()).collect()).collect();
+            let theirs = if reference { Some(run_pyperplan(&python, files, &named, runs, &scratch)) } else { None };
+            let mut row =
+                json!({"benchmark": benchmark.name(), "task": files.id, "states": states.len(), "facts": model.task().facts.len()});
+            if let Some(Err(error)) = &theirs {
+                row["reference_error"] = json!(format!("{error:#}"));
+                if !json {
+                    println!("{:<34} {:>6} {:>6}  pyperplan: {error:#}", files.id, states.len(), model.task().facts.len());
+                }
+            }
+            let theirs = theirs.and_then(Result::ok);
+            if let Some(t) = &theirs {
+                row["reference_facts"] = t["facts"].clone();
+                row["reference_operators"] = t["operators"].clone();
+            }
+            for name in COMPARED_HEURISTICS {
+                let mut evaluator = heuristics::by_name(name, &model).context("a heuristic of ours")?;
+                let values: Vec<Option<u64>> = states.iter().map(|s| evaluator.evaluate(s).map(u64::from)).collect();
+                let mut passes = Vec::with_capacity(runs);
+                for _ in 0..runs {
+                    let start = Instant::now();
+                    for state in &states {
+                        std::hint::black_box(evaluator.evaluate(state));
+                    }
+                    passes.push(start.elapsed().as_secs_f64() / states.len().max(1) as f64);
+                }
+                passes.sort_by(f64::total_cmp);
+                let ours = passes[passes.len() / 2];
+                let mut entry = json!({"ours_seconds_per_evaluation": ours, "values": values});
+                let mut line =
+                    format!("{:<34} {:>6} {:>6}  {:<6} {:>12.2}", files.id, states.len(), model.task().facts.len(), name, ours * 1e6);
+                if let Some(h) = theirs.as_ref().map(|t| &t["heuristics"][name]) {
+                    let seconds = h["seconds_per_evaluation"].as_f64().context("pyperplan's time")?;
+                    let reference_values: Vec<Option<u64>> =
+                        h["values"].as_array().context("pyperplan's values")?.iter().map(serde_json::Value::as_u64).collect();
+                    let agree = values.iter().zip(&reference_values).filter(|(a, b)| a == b).count();
+                    entry["reference_seconds_per_evaluation"] = json!(seconds);
+                    entry["reference_values"] = json!(reference_values);
+                    entry["agree"] = json!(agree);
+                    let total = totals.entry(name).or_default();
+                    total[0] += ours;
+                    total[1] += seconds;
+                    total[2] += states.len() as f64;
+                    total[3] += agree as f64;
+                    line.push_str(&format!(" {:>12.2} {:>7.1}x {:>4}/{:<4}", seconds * 1e6, seconds / ours, agree, states.len()));
+                }
+                if !json {
+                    println!("{line}");
+                }
+                row[name] = entry;
+            }
+            rows.push(row);
+        }
+    }
+    std::fs::remove_dir_all(&scratch).ok();
+    let summary: serde_json::Map<String, serde_json::Value> = totals
+        .iter()
+        .map(|(name, [ours, theirs, states, agree])| {
+            ((*name).to_string(), json!({"pyperplan_over_ours": theirs / ours, "states": states, "agree": agree}))
+        })
+        .collect();
+    if json {
+        println!("{}", json!({"runs": runs, "walk": walk, "tasks": rows, "summary": summary}));
+    } else {
+        for (name, [ours, theirs, states, agree]) in &totals {
+            println!(
+                "{name}: pyperplan takes {:.1}x our time (summed over the tasks both evaluated); values agree on {agree}/{states} states",
+                theirs / ours
+            );
+        }
     }
     Ok(ExitCode::SUCCESS)
 }

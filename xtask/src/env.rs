@@ -14,8 +14,9 @@ use crate::input::InputError;
 pub struct EnvArgs {
     #[command(flatten)]
     pub which: TaskArgs,
-    /// Commands to send, one a line (blank lines and `#` lines skipped) [default: the game's
-    /// expert walkthrough].
+    /// Commands to send, one a line (blank lines and `#` lines skipped) [default: ALFWorld: the
+    /// game's expert walkthrough; the rearrangement set: the task's reference program; EAI:
+    /// none, the task files have no program].
     #[arg(long, conflicts_with = "random")]
     commands: Option<PathBuf>,
     /// Take N steps. ALFWorld: each a command drawn from the sorted admissible list by

@@ -80,12 +80,21 @@ pub fn load_task(benchmark: &str, task: &str, task_dir: Option<&std::path::Path>
 /// end, 1 when not; errors (exit 2) for a missing task or an unreadable command file.
 pub fn run(args: &VirtualhomeEnvArgs) -> anyhow::Result<ExitCode> {
     let task = load_task(&args.benchmark, &args.task, args.task_dir.as_deref())?;
+    let reference = task.reference_program.clone();
     let mut env = VirtualhomeEnv::new(task, &args.benchmark);
     let commands: Option<Vec<String>> = match &args.commands {
         Some(file) => {
             let text = std::fs::read_to_string(file)
                 .map_err(|e| crate::input::InputError(format!("{}: cannot read commands: {e}", file.display())))?;
             Some(text.lines().map(str::trim).filter(|l| !l.is_empty() && !l.starts_with('#')).map(str::to_string).collect())
+        }
+        // Without commands or random steps: the task's reference program (the rearrangement
+        // set's; EAI's task files have none, so nothing is played and the reset is shown).
+        None if args.random.is_none() => {
+            if reference.is_empty() {
+                eprintln!("{}: no reference program in the task file; give --commands FILE or --random N to play", args.task);
+            }
+            Some(reference)
         }
         None => None,
     };

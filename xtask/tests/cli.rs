@@ -234,6 +234,37 @@ fn bench_plan_runs_on_the_benchmarks_own_problems() {
     }
 }
 
+/// `bench heuristic`: every compared heuristic on the same random-walk states, the initial
+/// state's values those Fast Downward 26.6 gives (`fixtures/ipc/fd-reference.tsv`); where
+/// pyperplan is installed, its time beside ours, h_max and h_add equal on every state, and a
+/// domain its parser refuses (elevators' action costs) a row with the reason.
+#[test]
+fn bench_heuristic_evaluates_the_same_states_as_pyperplan() {
+    let output = xtask(&["bench", "heuristic", "--filter", "instance-13", "--walk", "12", "--runs", "1", "--json"]);
+    assert!(output.status.success(), "{}", String::from_utf8_lossy(&output.stderr));
+    let report: serde_json::Value = serde_json::from_str(stdout(&output).trim()).expect("one JSON object");
+    let rows = report["tasks"].as_array().expect("rows");
+    let logistics = rows.iter().find(|r| r["task"] == "logistics00/instance-13").expect("logistics00/instance-13");
+    assert_eq!(logistics["states"], 13, "the initial state and 12 steps");
+    for (name, initial) in [("hmax", 6), ("hadd", 37), ("ff", 29), ("lmcut", 29)] {
+        let values = logistics[name]["values"].as_array().expect("values");
+        assert_eq!((values.len(), values[0].as_u64()), (13, Some(initial)), "{name}: {}", logistics[name]);
+        assert!(logistics[name]["ours_seconds_per_evaluation"].as_f64().is_some_and(|s| s > 0.0));
+    }
+    if logistics.get("reference_facts").is_some() {
+        for name in ["hmax", "hadd"] {
+            assert_eq!(logistics[name]["agree"], 13, "{name}: {}", logistics[name]);
+            assert!(logistics[name]["reference_seconds_per_evaluation"].as_f64().is_some_and(|s| s > 0.0));
+        }
+        let output = xtask(&["bench", "heuristic", "--filter", "elevators-opt08/instance-20", "--walk", "2", "--runs", "1", "--json"]);
+        assert!(output.status.success(), "{}", String::from_utf8_lossy(&output.stderr));
+        let report: serde_json::Value = serde_json::from_str(stdout(&output).trim()).expect("one JSON object");
+        let elevators = &report["tasks"][0];
+        assert!(elevators["reference_error"].as_str().is_some_and(|e| e.contains("functions")), "{elevators}");
+        assert_eq!(elevators["lmcut"]["values"].as_array().map(Vec::len), Some(3), "ours still evaluates: {elevators}");
+    }
+}
+
 #[test]
 fn bench_mask_reports_the_issue_figures_and_agrees_with_llguidance() {
     let output = xtask(&["bench", "mask", "--every", "70", "--json"]);
@@ -414,6 +445,15 @@ fn env_virtualhome_prints_json_lines_and_the_verdict() {
     assert_eq!(stdout(&output).lines().count(), 17);
     let output = xtask(&["env", "--benchmark", "virtualhome-eai", "--task", "no_such_task", "--random", "3"]);
     assert_eq!(output.status.code(), Some(2));
+    // Without commands, a rearrangement task plays its reference program to the goal; an EAI
+    // task, whose file has no program, takes no step and says so.
+    let output = xtask(&["env", "--benchmark", "virtualhome-rearrange", "--task", "fridge-007", "--json"]);
+    assert_eq!(output.status.code(), Some(0), "{}", String::from_utf8_lossy(&output.stderr));
+    let last: serde_json::Value = serde_json::from_str(stdout(&output).lines().last().expect("verdict")).expect("JSON");
+    assert!(last["goal_reached"] == true && last["steps"].as_u64().is_some_and(|s| s > 0), "{last}");
+    let output = xtask(&["env", "--benchmark", "virtualhome-eai", "--task", "201_1", "--json"]);
+    assert_eq!((output.status.code(), stdout(&output).lines().count()), (Some(1), 2), "the reset and the verdict");
+    assert!(String::from_utf8_lossy(&output.stderr).contains("no reference program"));
 }
 
 #[test]

@@ -1,6 +1,7 @@
 //! One evaluation of each heuristic, on real states: along the ALFWorld walkthroughs and
-//! EAI gold plans, and along random walks in IPC tasks. The comparison with Fast Downward's
-//! search on the same tasks is `cargo xtask bench plan`.
+//! EAI gold plans, and along random walks in IPC tasks. The comparison with a reference on the
+//! same states is `cargo xtask bench heuristic` (pyperplan's evaluations of the same states,
+//! in one run), and with Fast Downward's search on the same tasks `cargo xtask bench plan`.
 
 use benchmark_data::{Benchmark, Extra, TaskFiles, load};
 use criterion::{Criterion, criterion_group, criterion_main};
