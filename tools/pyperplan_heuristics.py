@@ -6,9 +6,11 @@ h_max, h_add, h_FF and LM-cut.
 Usage:
     pyperplan_heuristics.py DOMAIN PROBLEM STATES.json RUNS
 
-STATES.json is a list of states, each the list of its true facts as `(pred a b)`. Each state is
-given to pyperplan as its facts that pyperplan's grounded task has (pyperplan leaves static facts
-out of its states, as we do). Prints one JSON object:
+STATES.json is {"facts": [...], "states": [[...], ...]}: every fact of our grounded task, and each
+state as the list of its true facts, all as `(pred a b)`. A state is given to pyperplan as its
+facts that pyperplan's grounded task has, and each fact pyperplan has that our task does not (our
+grounding leaves out facts no action changes) as pyperplan's initial state has it: such a fact
+holds in every state or in none. Prints one JSON object:
     {"facts": N, "operators": N, "states": N,
      "heuristics": {"hmax": {"seconds_per_evaluation": S, "values": [h or null, ...]}, ...}}
 where S is the median over RUNS passes over all states of the pass's time divided by the number
@@ -38,7 +40,10 @@ def main():
     parser = Parser(domain, problem)
     task = ground(parser.parse_problem(parser.parse_domain()))
     with open(states_path) as f:
-        states = [frozenset(fact.lower() for fact in state) & task.facts for state in json.load(f)]
+        given = json.load(f)
+    ours = {fact.lower() for fact in given["facts"]}
+    static_true = (task.facts - ours) & task.initial_state
+    states = [(frozenset(fact.lower() for fact in state) & task.facts) | static_true for state in given["states"]]
     nodes = [make_root_node(state) for state in states]
     out = {"facts": len(task.facts), "operators": len(task.operators), "states": len(states), "heuristics": {}}
     for name, make in HEURISTICS.items():

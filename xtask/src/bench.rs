@@ -284,6 +284,7 @@ fn ground(benchmarks: &str, limit: Option<usize>, runs: usize, no_reference: boo
     for benchmark in benchmarks {
         let all = benchmark_data::load(benchmark)?;
         let tasks: Vec<&TaskFiles> = spaced(&all, limit);
+        let bar = crate::input::progress_bar(format!("ground {}", benchmark.name()), tasks.len());
         let (mut ours_total, mut fd_total, mut ratios) = (0.0, 0.0, Vec::new());
         let (mut our_facts, mut our_actions, mut fd_facts, mut fd_operators, mut fd_failed) = (0usize, 0usize, 0u64, 0u64, 0usize);
         for files in &tasks {
@@ -315,10 +316,12 @@ fn ground(benchmarks: &str, limit: Option<usize>, runs: usize, no_reference: boo
                 }
             }
             if !json {
-                println!("{row}");
+                bar.suspend(|| println!("{row}"));
             }
             rows.push(row);
+            bar.inc(1);
         }
+        bar.finish_and_clear();
         ratios.sort_by(f64::total_cmp);
         let median_ratio = ratios.get(ratios.len() / 2).copied();
         let summary = json!({
@@ -490,10 +493,10 @@ fn plan(
             let loaded = benchmark_data::load(*benchmark)?;
             all.extend(spaced(&loaded, limit).into_iter().cloned().map(|files| (*benchmark, files)));
         }
+        all.retain(|(_, files)| filter.is_none_or(|f| files.id.contains(f)));
+        let bar = crate::input::progress_bar(format!("plan {}", config.name), all.len());
         for (benchmark, files) in all {
-            if filter.is_some_and(|f| !files.id.contains(f)) {
-                continue;
-            }
+            bar.set_message(files.id.clone());
             // IPC by its domains; a benchmark's own problems are one domain.
             let domain = match benchmark {
                 Benchmark::Ipc => files.id.split('/').next().unwrap_or_default().to_string(),
@@ -543,10 +546,12 @@ fn plan(
                 }
             }
             if !json {
-                println!("{row}");
+                bar.suspend(|| println!("{row}"));
             }
             rows.push(row);
+            bar.inc(1);
         }
+        bar.finish_and_clear();
         let mut domains = serde_json::Map::new();
         for (domain, [solved, expanded, seconds, fd_solved, fd_expanded, fd_seconds]) in per_domain {
             let rate = expanded / seconds.max(1e-9);
@@ -595,12 +600,13 @@ fn bench_states(model: &transition_model::TransitionModel, files: &TaskFiles, wa
 fn run_pyperplan(
     python: &Path,
     files: &TaskFiles,
+    facts: &[String],
     states: &[Vec<String>],
     runs: usize,
     scratch: &Path,
 ) -> anyhow::Result<serde_json::Value> {
     let states_path = scratch.join("states.json");
-    std::fs::write(&states_path, serde_json::to_vec(states)?)?;
+    std::fs::write(&states_path, serde_json::to_vec(&json!({"facts": facts, "states": states}))?)?;
     let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("../tools/pyperplan_heuristics.py");
     let output = Command::new(python)
         .arg(&script)
@@ -653,22 +659,23 @@ fn heuristic(
     }
     for benchmark in &benchmarks {
         let loaded = benchmark_data::load(*benchmark)?;
-        for files in spaced(&loaded, limit) {
-            if filter.is_some_and(|f| !files.id.contains(f)) {
-                continue;
-            }
+        let mut tasks = spaced(&loaded, limit);
+        tasks.retain(|files| filter.is_none_or(|f| files.id.contains(f)));
+        let bar = crate::input::progress_bar(format!("heuristic {}", benchmark.name()), tasks.len());
+        for files in tasks {
+            bar.set_message(files.id.clone());
+            let mut lines = Vec::new();
             let model = transition_model::TransitionModel::new(crate::input::ground(files)?);
             let states = bench_states(&model, files, walk)?;
             let named: Vec<Vec<String>> =
                 states.iter().map(|s| s.facts().map(|f| model.task().fact_name(f).to_lowercase()).collect()).collect();
-            let theirs = if reference { Some(run_pyperplan(&python, files, &named, runs, &scratch)) } else { None };
+            let facts: Vec<String> = model.task().fact_ids().map(|f| model.task().fact_name(f).to_lowercase()).collect();
+            let theirs = if reference { Some(run_pyperplan(&python, files, &facts, &named, runs, &scratch)) } else { None };
             let mut row =
                 json!({"benchmark": benchmark.name(), "task": files.id, "states": states.len(), "facts": model.task().facts.len()});
             if let Some(Err(error)) = &theirs {
                 row["reference_error"] = json!(format!("{error:#}"));
-                if !json {
-                    println!("{:<34} {:>6} {:>6}  pyperplan: {error:#}", files.id, states.len(), model.task().facts.len());
-                }
+                lines.push(format!("{:<34} {:>6} {:>6}  pyperplan: {error:#}", files.id, states.len(), model.task().facts.len()));
             }
             let theirs = theirs.and_then(Result::ok);
             if let Some(t) = &theirs {
@@ -706,13 +713,16 @@ fn heuristic(
                     total[3] += agree as f64;
                     line.push_str(&format!(" {:>12.2} {:>7.1}x {:>4}/{:<4}", seconds * 1e6, seconds / ours, agree, states.len()));
                 }
-                if !json {
-                    println!("{line}");
-                }
+                lines.push(line);
                 row[name] = entry;
             }
+            if !json {
+                bar.suspend(|| lines.iter().for_each(|line| println!("{line}")));
+            }
             rows.push(row);
+            bar.inc(1);
         }
+        bar.finish_and_clear();
     }
     std::fs::remove_dir_all(&scratch).ok();
     let summary: serde_json::Map<String, serde_json::Value> = totals

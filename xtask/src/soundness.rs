@@ -65,7 +65,9 @@ pub fn run(args: SoundnessArgs) -> anyhow::Result<ExitCode> {
         None => Box::new(std::io::stdout().lock()),
     };
     let (mut solved, mut ours_ok, mut gold_valid, mut gold_ok) = (0, 0, 0, 0);
+    let bar = crate::input::progress_bar("soundness".into(), files.len());
     for path in &files {
+        bar.inc(1);
         let task = VirtualhomeTask::load(path).map_err(|e| InputError(e.to_string()))?;
         let id = task.task_id.clone();
         let task_classes: Vec<&str> = classes.get(&id).map(|c| c.iter().map(String::as_str).collect()).unwrap_or_default();
@@ -75,7 +77,7 @@ pub fn run(args: SoundnessArgs) -> anyhow::Result<ExitCode> {
             Err(e) => {
                 row["status"] = json!("unexpressible");
                 row["error"] = json!(e.to_string());
-                writeln!(out, "{row}")?;
+                bar.suspend(|| writeln!(out, "{row}"))?;
                 continue;
             }
         };
@@ -127,9 +129,9 @@ pub fn run(args: SoundnessArgs) -> anyhow::Result<ExitCode> {
                 Err(why) => row["gold_error"] = json!(why),
             }
         }
-        writeln!(out, "{row}")?;
-        out.flush()?;
+        bar.suspend(|| writeln!(out, "{row}").and_then(|()| out.flush()))?;
     }
+    bar.finish_and_clear();
     eprintln!(
         "{} tasks: (a) A* solved {solved}, executed and reached the goal in our executor {ours_ok}; (b) gold PDDL plans {}: valid under the sound domain {gold_valid}, reached the goal in our executor {gold_ok}",
         files.len(),
