@@ -70,7 +70,7 @@ pub struct EpisodeArgs {
     #[command(flatten)]
     pub chat: ChatPlannerArgs,
     /// Environment steps for the whole episode [default: the paper's, 55 ALFWorld, 20 VirtualHome].
-    #[arg(long)]
+    #[arg(long, value_parser = crate::input::at_least_one)]
     pub budget: Option<usize>,
     /// Seconds of search for Phase II (the paper's 250 s per task, Appendix A.4; 60 s before
     /// HARNESS_VERSION 9).

@@ -80,7 +80,7 @@ fn read_image(path: &Path) -> anyhow::Result<Image> {
 }
 
 fn read_schema(path: &Path) -> anyhow::Result<Value> {
-    let text = std::fs::read_to_string(path).map_err(|e| InputError(format!("{}: cannot read: {e}", path.display())))?;
+    let text = crate::input::read_text(path)?;
     let schema: Value = serde_json::from_str(&text).map_err(|e| InputError(format!("{}: not JSON: {e}", path.display())))?;
     check_schema(&schema).map_err(|e| InputError(format!("{}: not a usable JSON schema: {e}", path.display())))?;
     Ok(schema)

@@ -112,8 +112,7 @@ pub fn run(args: EnvArgs) -> anyhow::Result<ExitCode> {
     };
     let mut env = AlfworldEnv::from_game_file(game).map_err(|e| InputError(e.to_string()))?;
     let plan: Vec<String> = match (&args.commands, args.random) {
-        (Some(path), _) => std::fs::read_to_string(path)
-            .map_err(|e| InputError(format!("{}: cannot read: {e}", path.display())))?
+        (Some(path), _) => crate::input::read_text(path)?
             .lines()
             .map(str::trim)
             .filter(|l| !l.is_empty() && !l.starts_with('#'))

@@ -73,7 +73,7 @@ pub fn load_task(benchmark: &str, task: &str, task_dir: Option<&std::path::Path>
     if !path.is_file() {
         bail!(crate::input::InputError(format!("no task {task} in {} (task files there are `<id>.json.gz`)", dir.display())));
     }
-    Ok(VirtualhomeTask::load(&path)?)
+    Ok(VirtualhomeTask::load(&path).map_err(|e| crate::input::InputError(e.to_string()))?)
 }
 
 /// Runs `cargo xtask env` for a VirtualHome benchmark. Exit 0 when the goal holds at the
@@ -84,8 +84,7 @@ pub fn run(args: &VirtualhomeEnvArgs) -> anyhow::Result<ExitCode> {
     let mut env = VirtualhomeEnv::new(task, &args.benchmark);
     let commands: Option<Vec<String>> = match &args.commands {
         Some(file) => {
-            let text = std::fs::read_to_string(file)
-                .map_err(|e| crate::input::InputError(format!("{}: cannot read commands: {e}", file.display())))?;
+            let text = crate::input::read_text(file)?;
             Some(text.lines().map(str::trim).filter(|l| !l.is_empty() && !l.starts_with('#')).map(str::to_string).collect())
         }
         // Without commands or random steps: the task's reference program (the rearrangement

@@ -99,7 +99,7 @@ pub struct EvalArgs {
     subset: String,
     /// Run at most this many tasks per benchmark (the first ones; records stay valid for a
     /// longer run of the same configuration).
-    #[arg(long)]
+    #[arg(long, value_parser = crate::input::at_least_one)]
     limit: Option<usize>,
     /// Run every n-th task only, `i/n` (1 <= i <= n), into its own shard file, its report into
     /// `<out>/report-shard-i-of-n`; `cargo xtask merge` joins the shards.
@@ -352,7 +352,11 @@ fn suite_subset(subset: &str, suite: Suite, agent: AgentName) -> Result<Option<S
             return Err(InputError(format!("--subset {name}: in a list, each subset's name starts with its benchmark's")));
         }
     }
-    Ok(names.iter().find(|name| stem(name).starts_with(suite.name())).map(|name| name.to_string()))
+    let mine: Vec<&&str> = names.iter().filter(|name| stem(name).starts_with(suite.name())).collect();
+    if let [first, second, ..] = mine[..] {
+        return Err(InputError(format!("--subset: {first} and {second} are both subsets of {}: give one a benchmark", suite.name())));
+    }
+    Ok(mine.first().map(|name| name.to_string()))
 }
 
 /// The configuration that names a run's records: everything that changes what it finds.
@@ -581,6 +585,10 @@ fn plan(args: &EvalArgs) -> anyhow::Result<Vec<Planned>> {
             })
             .collect::<Result<_, _>>()?
     };
+    // One run of a benchmark per command: twice would write one record file twice over.
+    if let Some(twice) = suites.iter().enumerate().find(|(i, s)| suites[..*i].contains(s)).map(|(_, s)| s.name()) {
+        return Err(InputError(format!("--benchmark names {twice} twice")).into());
+    }
     if args.agent == AgentName::Expert && suites.contains(&Suite::VirtualhomeRearrange) {
         return Err(InputError("--agent expert: the rearrangement set has no expert plans in the benchmark's own form".into()).into());
     }
@@ -604,7 +612,26 @@ fn plan(args: &EvalArgs) -> anyhow::Result<Vec<Planned>> {
         .into_iter()
         .map(|suite| {
             let subset = suite_subset(&args.subset, suite, args.agent)?;
-            Ok(Planned { suite, tasks: tasks(suite, args.agent, args.task_dir.as_deref(), subset.as_deref())? })
+            let tasks = tasks(suite, args.agent, args.task_dir.as_deref(), subset.as_deref())?;
+            // Nothing to run is said before any file is made (a record file of no task would
+            // stand in the records folder as a run).
+            let total = tasks.len().min(args.limit.unwrap_or(usize::MAX));
+            if total == 0 {
+                let listed = subset.as_deref().map_or_else(|| "its task folder".to_string(), |s| format!("the subset {s}"));
+                return Err(InputError(format!("{}: no task to run ({listed} holds none)", suite.name())).into());
+            }
+            if let Some(shard) = args.shard
+                && !(0..total).any(|i| shard.selects(i))
+            {
+                return Err(InputError(format!(
+                    "--shard {}/{}: selects none of the {total} tasks of {}",
+                    shard.index,
+                    shard.count,
+                    suite.name()
+                ))
+                .into());
+            }
+            Ok(Planned { suite, tasks })
         })
         .collect()
 }
@@ -629,6 +656,7 @@ fn run_once(args: &EvalArgs, planned: &[Planned]) -> anyhow::Result<(serde_json:
         let stem = format!("{}-{agent_name}", suite.name());
         let mut records = RecordFile::open(&args.out, &stem, &config(args, suite, tasks)?, args.shard, args.fresh)
             .map_err(|e| InputError(e.to_string()))?;
+        records.check_tasks(&tasks.iter().map(EvalTask::id).collect()).map_err(|e| InputError(e.to_string()))?;
         let total = tasks.len().min(args.limit.unwrap_or(usize::MAX));
         let selected = (0..total).filter(|&i| args.shard.is_none_or(|s| s.selects(i))).count();
         let bar = crate::input::progress_bar(format!("{} {agent_name}", suite.name()), selected);

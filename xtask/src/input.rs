@@ -32,7 +32,23 @@ impl std::fmt::Display for InputError {
 impl std::error::Error for InputError {}
 
 fn read(path: &Path) -> anyhow::Result<String> {
-    std::fs::read_to_string(path).map_err(|e| InputError(format!("{}: cannot read: {e}", path.display())).into())
+    read_text(path)
+}
+
+/// The text of a file the command line names: UTF-8 without a byte-order mark; an unreadable
+/// file, or a byte that is not UTF-8 (named by line and column), is bad input.
+pub fn read_text(path: &Path) -> anyhow::Result<String> {
+    benchmark_data::read_text(path).map_err(|e| match e {
+        benchmark_data::DataError::Io { source, .. } => InputError(format!("{}: cannot read: {source}", path.display())).into(),
+        other => InputError(other.to_string()).into(),
+    })
+}
+
+/// Whether `step` is one PDDL action, `(name arg ...)`: one parenthesised group, nothing
+/// nested, nothing before or after it.
+pub fn one_action(step: &str) -> bool {
+    let inner = step.strip_prefix('(').and_then(|s| s.strip_suffix(')'));
+    inner.is_some_and(|inner| !inner.trim().is_empty() && !inner.contains(['(', ')']))
 }
 
 impl TaskArgs {

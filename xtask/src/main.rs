@@ -164,14 +164,32 @@ fn run(command: Command) -> anyhow::Result<ExitCode> {
         }
         Command::Validate { task, plan, spelling } => {
             let files = task.load()?;
-            let text = std::fs::read_to_string(&plan).map_err(|e| InputError(format!("{}: cannot read: {e}", plan.display())))?;
-            let steps: Vec<&str> = text.lines().map(str::trim).filter(|l| !l.is_empty() && !l.starts_with(';')).collect();
-            let model = TransitionModel::new(input::ground(&files)?);
+            let text = input::read_text(&plan)?;
             let language = match spelling {
                 Some(language) => language,
                 None if task.is_game() => SurfaceLanguage::Alfworld,
                 None => SurfaceLanguage::Pddl,
             };
+            // One step a line with its line number: `;` starts a comment (a planner's
+            // `; cost = 12 (unit cost)`), `#` a comment line; blank lines are skipped. A PDDL
+            // step is one action, `(name arg ...)`: anything else is malformed input.
+            let mut lines = Vec::new();
+            let mut steps = Vec::new();
+            for (number, line) in text.lines().enumerate() {
+                let step = line.split(';').next().unwrap_or_default().trim();
+                if step.is_empty() || step.starts_with('#') {
+                    continue;
+                }
+                if language == SurfaceLanguage::Pddl && !input::one_action(step) {
+                    let shown: String = step.chars().take(120).collect();
+                    return Err(
+                        InputError(format!("{}:{}: `{shown}` is not one action `(name arg ...)`", plan.display(), number + 1)).into()
+                    );
+                }
+                lines.push(number + 1);
+                steps.push(step);
+            }
+            let model = TransitionModel::new(input::ground(&files)?);
             let spelling = match language {
                 SurfaceLanguage::Pddl => Spelling::pddl(model.task()),
                 SurfaceLanguage::Virtualhome => Spelling::virtualhome(model.task()),
@@ -188,7 +206,32 @@ fn run(command: Command) -> anyhow::Result<ExitCode> {
                     Ok(ExitCode::SUCCESS)
                 }
                 Err(error) => {
-                    println!("{}", error.describe(model.task()));
+                    let mut said = error.describe(model.task());
+                    // The step's line in the plan file, and for an action named with the
+                    // wrong number of arguments, how many its schema takes.
+                    if let transition_model::PlanError::UnknownAction { step, text }
+                    | transition_model::PlanError::Inapplicable { step, text, .. } = &error
+                    {
+                        let at = format!("invalid: step {step}");
+                        said = said.replacen(&format!("{at}:"), &format!("{at} ({}:{}):", plan.display(), lines[step - 1]), 1);
+                        if let transition_model::PlanError::UnknownAction { .. } = &error
+                            && language == SurfaceLanguage::Pddl
+                        {
+                            let words: Vec<&str> = text.trim_matches(|c| c == '(' || c == ')').split_whitespace().collect();
+                            if let Some(schema) =
+                                words.first().and_then(|name| model.task().schemas.iter().find(|s| s.name.eq_ignore_ascii_case(name)))
+                                && schema.params.len() != words.len() - 1
+                            {
+                                said.push_str(&format!(
+                                    " (`{}` takes {} argument{})",
+                                    schema.name,
+                                    schema.params.len(),
+                                    if schema.params.len() == 1 { "" } else { "s" }
+                                ));
+                            }
+                        }
+                    }
+                    println!("{said}");
                     Ok(ExitCode::from(1))
                 }
             }

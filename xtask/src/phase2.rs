@@ -445,7 +445,7 @@ pub struct Phase2Args {
     #[arg(long)]
     subset: Option<String>,
     /// Run at most this many tasks.
-    #[arg(long)]
+    #[arg(long, value_parser = crate::input::at_least_one)]
     limit: Option<usize>,
     #[command(flatten)]
     lm: LmArgs,
@@ -478,6 +478,11 @@ pub fn run(args: Phase2Args) -> anyhow::Result<ExitCode> {
         None => benchmark_data::load(benchmark)?,
     };
     tasks.truncate(args.limit.unwrap_or(usize::MAX));
+    if tasks.is_empty() {
+        return Err(
+            InputError(format!("{}: no task to run (the subset lists none)", args.subset.as_deref().unwrap_or(benchmark.name()))).into()
+        );
+    }
     let lm_name = args.lm.lm.short_name();
     // A subset given as a path is named by its file stem (`/tmp/hard.txt` → `hard`).
     let set = match &args.subset {

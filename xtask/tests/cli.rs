@@ -60,8 +60,34 @@ fn validate_reports_valid_invalid_and_bad_input_with_exit_codes() {
     assert_eq!(output.status.code(), Some(1));
     assert_eq!(
         stdout(&output).trim(),
-        "invalid: step 2: `(putin wineglass dishwasher)` ((putin wineglass dishwasher)) is not applicable: unmet (at dishwasher)"
+        format!(
+            "invalid: step 2 ({}:2): `(putin wineglass dishwasher)` ((putin wineglass dishwasher)) is not applicable: unmet (at dishwasher)",
+            swapped.display()
+        )
     );
+    // Comments (`;` to the end of a line, `#` lines) and blank lines are no steps; a step's
+    // line is the file's.
+    let commented = scratch(
+        &tmp,
+        "commented.plan",
+        "# by hand\n\n(grab wineglass kitchentable) ; first\n(putin wineglass dishwasher)\n(walk kitchentable dishwasher)\n",
+    );
+    let output = xtask(&["validate", "--domain", &domain, "--problem", &problem, "--plan", &commented.display().to_string()]);
+    assert_eq!(output.status.code(), Some(1));
+    assert!(stdout(&output).starts_with(&format!("invalid: step 2 ({}:4): ", commented.display())), "{}", stdout(&output));
+    // An action with the wrong number of arguments says how many its schema takes.
+    let arity = scratch(&tmp, "arity.plan", "(grab wineglass)\n");
+    let output = xtask(&["validate", "--domain", &domain, "--problem", &problem, "--plan", &arity.display().to_string()]);
+    assert_eq!(output.status.code(), Some(1));
+    assert!(stdout(&output).trim().ends_with("is not an action of this task (`grab` takes 2 arguments)"), "{}", stdout(&output));
+    // A line that is not one action is malformed input: exit 2, naming the file and line.
+    for (name, text) in [("unclosed.plan", "(grab wineglass kitchentable)\n(walk kitchentable dishwasher\n"), ("two.plan", "(grab wineglass kitchentable)\n(walk a b) (walk b a)\n")] {
+        let malformed = scratch(&tmp, name, text);
+        let output = xtask(&["validate", "--domain", &domain, "--problem", &problem, "--plan", &malformed.display().to_string()]);
+        assert_eq!(output.status.code(), Some(2), "{name}");
+        let stderr = String::from_utf8_lossy(&output.stderr);
+        assert!(stderr.contains(&format!("{}:2: `", malformed.display())) && stderr.contains("is not one action"), "{stderr}");
+    }
 
     let short = scratch(&tmp, "short.plan", "(grab wineglass kitchentable)\n");
     let output = xtask(&["validate", "--domain", &domain, "--problem", &problem, "--plan", &short.display().to_string()]);
@@ -72,7 +98,7 @@ fn validate_reports_valid_invalid_and_bad_input_with_exit_codes() {
     let unknown = scratch(&tmp, "unknown.plan", "(grab wineglass kitchentable)\n(teleport dishwasher)\n");
     let output = xtask(&["validate", "--domain", &domain, "--problem", &problem, "--plan", &unknown.display().to_string()]);
     assert_eq!(output.status.code(), Some(1));
-    assert!(stdout(&output).starts_with("invalid: step 2: `(teleport dishwasher)`"), "{}", stdout(&output));
+    assert!(stdout(&output).starts_with(&format!("invalid: step 2 ({}:2): `(teleport dishwasher)`", unknown.display())), "{}", stdout(&output));
 
     let broken = fixtures().join("pddl-invalid/unclosed-paren.domain.pddl");
     let output =
@@ -98,7 +124,7 @@ fn validate_reads_alfworld_commands_from_a_game() {
     let plan = scratch(&tmp, "wrong.txt", "use desklamp 1\n");
     let output = xtask(&["validate", "--game", &trial.display().to_string(), "--plan", &plan.display().to_string()]);
     assert_eq!(output.status.code(), Some(1));
-    assert!(stdout(&output).starts_with("invalid: step 1: `use desklamp 1`"), "{}", stdout(&output));
+    assert!(stdout(&output).starts_with(&format!("invalid: step 1 ({}:1): `use desklamp 1`", plan.display())), "{}", stdout(&output));
 }
 
 #[test]

@@ -155,3 +155,60 @@ fn a_served_model_is_named_by_what_its_server_lists() {
     assert_eq!(chats.load(Ordering::SeqCst), 2);
     assert_eq!(std::fs::read_to_string(&first).expect("records").lines().count(), 1, "the first run's records untouched");
 }
+
+/// Input that leaves nothing to run, or runs a benchmark twice, is refused before any file is
+/// made: an empty subset, a shard that selects no task, a benchmark named twice, two subsets
+/// of one benchmark, `--limit 0`.
+#[test]
+fn a_run_of_nothing_or_of_a_benchmark_twice_is_refused_before_any_file() {
+    let (tmp_dir, dir) = out("nothing");
+    let empty = tmp_dir.path().join("virtualhome-eai-empty.txt");
+    std::fs::write(&empty, "# nothing yet\n").expect("writes");
+    let one = tmp_dir.path().join("virtualhome-eai-one.txt");
+    std::fs::write(&one, "1004_2\n").expect("writes");
+    let (empty, one) = (empty.display().to_string(), one.display().to_string());
+    let both = format!("{one},{empty}");
+    let sweep = ["--agent", "planner", "--explorer", "systematic", "--benchmark", "virtualhome-eai"];
+    let cases: Vec<(Vec<&str>, &str)> = vec![
+        (vec!["--subset", &empty], "virtualhome-eai: no task to run"),
+        (vec!["--subset", &one, "--shard", "2/2"], "--shard 2/2: selects none of the 1 tasks of virtualhome-eai"),
+        (vec!["--subset", &both], "are both subsets of virtualhome-eai"),
+    ];
+    for (extra, said) in &cases {
+        let mut args = vec!["eval"];
+        args.extend(sweep);
+        args.extend(extra.iter().copied());
+        args.extend(["--out", dir.to_str().unwrap()]);
+        let output = xtask(&args);
+        let stderr = String::from_utf8_lossy(&output.stderr);
+        assert_eq!(output.status.code(), Some(2), "{extra:?}: {stderr}");
+        assert!(stderr.contains(said), "{extra:?}: {stderr}");
+        assert!(!dir.exists(), "{extra:?}: no records folder for a run that never started");
+    }
+    let stderr = refused(&["--benchmark", "virtualhome-eai,virtualhome-eai", "--agent", "planner", "--explorer", "systematic"], &dir);
+    assert!(stderr.contains("--benchmark names virtualhome-eai twice"), "{stderr}");
+    let output = xtask(&["eval", "--limit", "0", "--out", dir.to_str().unwrap()]);
+    assert_eq!(output.status.code(), Some(2), "{}", String::from_utf8_lossy(&output.stderr));
+    assert!(!dir.exists());
+}
+
+/// A record of a task outside the run's list (an edited file) is refused on resume, naming its
+/// line, rather than counted with the run's.
+#[test]
+fn a_record_of_another_task_is_refused_on_resume() {
+    let (_tmp_dir, dir) = out("foreign");
+    let args = ["eval", "--agent", "planner", "--explorer", "systematic", "--benchmark", "virtualhome-eai", "--limit", "1", "--json"];
+    let run = || xtask(&[&args[..], &["--out", dir.to_str().unwrap()]].concat());
+    let output = run();
+    assert_eq!(output.status.code(), Some(0), "{}", String::from_utf8_lossy(&output.stderr));
+    let summary: serde_json::Value = serde_json::from_slice(&output.stdout).expect("one JSON object");
+    let records = std::path::PathBuf::from(summary["virtualhome-eai"]["records"].as_str().expect("the records' file"));
+    let text = std::fs::read_to_string(&records).expect("records");
+    let line = text.lines().next().expect("a record");
+    let task = serde_json::from_str::<serde_json::Value>(line).expect("JSON")["task"].as_str().expect("a task").to_string();
+    std::fs::write(&records, format!("{text}{}\n", line.replace(&format!("\"task\":\"{task}\""), "\"task\":\"zzz_9\""))).expect("writes");
+    let output = run();
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert_eq!(output.status.code(), Some(2), "{stderr}");
+    assert!(stderr.contains(&format!("{}:2: task zzz_9 is not one of the run's", records.display())), "{stderr}");
+}

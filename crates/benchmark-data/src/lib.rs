@@ -60,10 +60,29 @@ pub enum DataError {
     UnknownSubsetTask { path: PathBuf, line: usize, id: String, benchmark: &'static str },
     #[error("{path}:{line}: task `{id}` is listed twice")]
     DuplicateSubsetTask { path: PathBuf, line: usize, id: String },
+    #[error("{path}:{line}:{column}: not UTF-8 text (byte 0x{byte:02x})")]
+    NotUtf8 { path: PathBuf, line: usize, column: usize, byte: u8 },
+}
+
+/// The text of the file at `path`: UTF-8, without a byte-order mark (which editors on Windows
+/// write, and which would otherwise be read as part of the first word); a byte that is not
+/// UTF-8 is an error naming its line and column.
+pub fn read_text(path: &Path) -> Result<String, DataError> {
+    let bytes = std::fs::read(path).map_err(|source| DataError::Io { path: path.to_path_buf(), source })?;
+    let bytes = bytes.strip_prefix(b"\xef\xbb\xbf").map(<[u8]>::to_vec).unwrap_or(bytes);
+    String::from_utf8(bytes).map_err(|e| {
+        let at = e.utf8_error().valid_up_to();
+        let before = &e.as_bytes()[..at];
+        let line = before.iter().filter(|&&b| b == b'\n').count() + 1;
+        let line_start = before.iter().rposition(|&b| b == b'\n').map_or(0, |i| i + 1);
+        // The column in characters, as an editor counts it.
+        let column = String::from_utf8_lossy(&before[line_start..]).chars().count() + 1;
+        DataError::NotUtf8 { path: path.to_path_buf(), line, column, byte: e.as_bytes()[at] }
+    })
 }
 
 fn read(path: &Path) -> Result<String, DataError> {
-    std::fs::read_to_string(path).map_err(|source| DataError::Io { path: path.to_path_buf(), source })
+    read_text(path)
 }
 
 fn read_json(path: &Path) -> Result<serde_json::Value, DataError> {

@@ -22,7 +22,7 @@
 //!   every shard). [`merge`] joins shard files of one configuration into the file an unsharded
 //!   run writes, in index order, and refuses mixed configurations and repeated tasks.
 
-use std::collections::BTreeSet;
+use std::collections::{BTreeMap, BTreeSet};
 use std::fs::{File, OpenOptions};
 use std::io::{Read, Seek, SeekFrom, Write};
 use std::path::{Path, PathBuf};
@@ -142,6 +142,9 @@ pub struct RecordFile {
     path: PathBuf,
     hash: String,
     records: Vec<Map<String, Value>>,
+    /// The line of each record, 1-based, and the lines of the file.
+    lines: Vec<usize>,
+    line_count: usize,
     done: BTreeSet<String>,
     file: File,
 }
@@ -193,8 +196,23 @@ impl RecordFile {
             eprintln!("{}: cut off a record cut short (a killed run); its task runs again", path.display());
         }
         let records = parse_records(&path, &text, Some(&hash))?;
+        let lines = text.lines().enumerate().filter(|(_, l)| !l.trim().is_empty()).map(|(n, _)| n + 1).collect();
         let done = records.iter().filter_map(|r| r.get("task").and_then(Value::as_str).map(str::to_string)).collect();
-        Ok(RecordFile { path, hash, records, done, file })
+        let line_count = text.lines().count();
+        Ok(RecordFile { path, hash, records, lines, line_count, done, file })
+    }
+
+    /// Refuses a record whose task is not among `tasks` (the run's list), naming its line: a
+    /// record no run of this configuration can have written, which a report would count.
+    pub fn check_tasks(&self, tasks: &BTreeSet<&str>) -> Result<(), RecordError> {
+        for (record, &line) in self.records.iter().zip(&self.lines) {
+            let task = record.get("task").and_then(Value::as_str).unwrap_or_default();
+            if !tasks.contains(task) {
+                let message = format!("task {task} is not one of the run's {} tasks", tasks.len());
+                return Err(RecordError::Bad { path: self.path.clone(), line, message });
+            }
+        }
+        Ok(())
     }
 
     pub fn path(&self) -> &Path {
@@ -230,6 +248,8 @@ impl RecordFile {
         self.file.write_all(line.as_bytes()).map_err(io(&self.path))?;
         self.file.sync_data().map_err(io(&self.path))?;
         self.done.insert(task);
+        self.line_count += 1;
+        self.lines.push(self.line_count);
         self.records.push(object);
         Ok(())
     }
@@ -304,7 +324,7 @@ pub struct Merged {
     pub records: usize,
     pub config: String,
     /// The run's task count from the configuration beside the shards; `None` when it gives
-    /// none (an older configuration, or none beside them), so completeness went unchecked.
+    /// none (a configuration written before the count was), so completeness went unchecked.
     pub expected: Option<u64>,
 }
 
@@ -312,10 +332,11 @@ pub struct Merged {
 /// `<stem>-<hash>.jsonl` beside them, records in `index` order. Refused: files of different
 /// configurations (by their names or their records), a record whose `index` is not its
 /// shard's, a task in two files, a shard of the run not given, a target file that already holds
-/// records, and, unless `partial`, a run short of tasks: where the configuration beside the
-/// files (`<stem>-<hash>.config.json`) gives the run's task count (`tasks.count`), fewer
-/// records than that are shards not run to their end (resume them, or merge a `--limit` run
-/// with `partial`).
+/// records, a record a report would refuse (`report::load`'s checks, naming the shard's line),
+/// shards without their run's configuration beside them (`<stem>-<hash>.config.json`, whose
+/// hash must be the records'), an index past the run's task count (`tasks.count`), and, unless
+/// `partial`, a run short of tasks: fewer records than that count are shards not run to their
+/// end (resume them, or merge a `--limit` run with `partial`).
 pub fn merge(shards: &[PathBuf], partial: bool) -> Result<Merged, RecordError> {
     let first = shards.first().ok_or_else(|| RecordError::Merge("no shard files given".into()))?;
     // Each file's `<stem>-<hash>` and shard, from its name.
@@ -330,7 +351,7 @@ pub fn merge(shards: &[PathBuf], partial: bool) -> Result<Merged, RecordError> {
         })
         .collect::<Result<_, _>>()?;
     let base = named[0].0.as_str();
-    let mut all: Vec<Map<String, Value>> = Vec::new();
+    let mut all: Vec<(PathBuf, Map<String, Value>)> = Vec::new();
     let mut config: Option<String> = None;
     // Every file is a shard of one run: the name's `<stem>-<hash>` is the first's.
     for (path, (file_base, shard)) in shards.iter().zip(&named) {
@@ -344,7 +365,11 @@ pub fn merge(shards: &[PathBuf], partial: bool) -> Result<Merged, RecordError> {
         if torn > 0 {
             return Err(RecordError::Merge(format!("{}: its last record is cut short; resume that shard first", path.display())));
         }
-        for record in parse_records(path, &text, None)? {
+        let lines: Vec<usize> = text.lines().enumerate().filter(|(_, l)| !l.trim().is_empty()).map(|(n, _)| n + 1).collect();
+        for (line, record) in lines.into_iter().zip(parse_records(path, &text, None)?) {
+            // What a report reads of it, checked here: a merged file passes on no record the
+            // report would refuse, and the error names the shard's line, not the merged file's.
+            crate::report::check_record(path, line, &record)?;
             let hash = record.get("config").and_then(Value::as_str).unwrap_or("none").to_string();
             match &config {
                 None => config = Some(hash),
@@ -367,7 +392,7 @@ pub fn merge(shards: &[PathBuf], partial: bool) -> Result<Merged, RecordError> {
                     shard.count
                 )));
             }
-            all.push(record);
+            all.push((path.clone(), record));
         }
     }
     let config = config.ok_or_else(|| RecordError::Merge("the shard files hold no records".into()))?;
@@ -387,20 +412,47 @@ pub fn merge(shards: &[PathBuf], partial: bool) -> Result<Merged, RecordError> {
             missing.join(", ")
         )));
     }
-    let mut seen = BTreeSet::new();
-    for record in &all {
+    let mut seen: BTreeMap<&str, &Path> = BTreeMap::new();
+    for (path, record) in &all {
         let task = record.get("task").and_then(Value::as_str).unwrap_or_default();
-        if !seen.insert(task.to_string()) {
-            return Err(RecordError::Merge(format!("task {task} is in two shard files")));
+        if let Some(other) = seen.insert(task, path) {
+            let files = if other == path.as_path() {
+                format!("{} is given twice", path.display())
+            } else {
+                format!("{} and {}", other.display(), path.display())
+            };
+            return Err(RecordError::Merge(format!("task {task} is in two shard files: {files}")));
         }
     }
-    // The run's task count, where its configuration gives one: fewer records are shards that
-    // did not finish, which a merged file would pass off as the whole run.
+    // The run's configuration beside the shards, as `eval` wrote it: the records' (its hash),
+    // and, where it gives one, the run's task count: fewer records are shards that did not
+    // finish, which a merged file would pass off as the whole run; an index past it is no
+    // task of the run.
     let config_path = first.with_file_name(format!("{base}.config.json"));
-    let expected = std::fs::read_to_string(&config_path)
-        .ok()
-        .and_then(|text| serde_json::from_str::<Value>(&text).ok())
-        .and_then(|v| v.pointer("/tasks/count").and_then(Value::as_u64));
+    let text = std::fs::read_to_string(&config_path).map_err(|e| {
+        RecordError::Merge(format!("{}: cannot read the run's configuration beside the shards: {e}", config_path.display()))
+    })?;
+    let written: Value = serde_json::from_str(&text)
+        .map_err(|e| RecordError::Merge(format!("{}:{}:{}: not JSON: {e}", config_path.display(), e.line(), e.column())))?;
+    if config_hash(&written) != config {
+        return Err(RecordError::Merge(format!(
+            "{}: the configuration {} beside the shards, whose records are of {config}",
+            config_path.display(),
+            config_hash(&written)
+        )));
+    }
+    let expected = written.pointer("/tasks/count").and_then(Value::as_u64);
+    if let Some(count) = expected
+        && let Some((path, record)) = all.iter().find(|(_, r)| r.get("index").and_then(Value::as_u64).is_some_and(|i| i >= count))
+    {
+        return Err(RecordError::Merge(format!(
+            "{}: task {} has index {}, past the run's {count} tasks",
+            path.display(),
+            record.get("task").and_then(Value::as_str).unwrap_or_default(),
+            record.get("index").unwrap_or(&Value::Null)
+        )));
+    }
+    let mut all: Vec<Map<String, Value>> = all.into_iter().map(|(_, record)| record).collect();
     if let Some(expected) = expected
         && (all.len() as u64) < expected
         && !partial

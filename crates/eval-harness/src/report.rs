@@ -47,6 +47,7 @@ use std::path::PathBuf;
 
 pub use figures::Figure;
 pub use html::{Page, escape};
+pub(crate) use load::check as check_record;
 pub use load::{Record, RecordSet, load, record_paths, without_merged_shards};
 
 use crate::records::RecordError;

@@ -134,14 +134,14 @@ fn shards_merge_into_what_one_run_writes() {
     let names = ["t0", "t1", "t2", "t3", "t4", "t5", "t6"];
     let mut whole = RecordFile::open(&dir.join("whole"), "run", &config, None, false).expect("opens");
     for (i, name) in names.iter().enumerate() {
-        whole.append(i, &json!({"task": name, "steps": i})).expect("appends");
+        whole.append(i, &json!({"task": name, "steps": i, "success": true})).expect("appends");
     }
     let mut shard_paths = Vec::new();
     for index in 1..=3 {
         let shard = Shard { index, count: 3 };
         let mut file = RecordFile::open(&dir.join("sharded"), "run", &config, Some(shard), false).expect("opens");
         for (i, name) in names.iter().enumerate().filter(|(i, _)| shard.selects(*i)) {
-            file.append(i, &json!({"task": name, "steps": i})).expect("appends");
+            file.append(i, &json!({"task": name, "steps": i, "success": true})).expect("appends");
         }
         shard_paths.push(file.path().to_path_buf());
     }
@@ -155,7 +155,7 @@ fn shards_merge_into_what_one_run_writes() {
     // Shards of another configuration do not merge.
     let other = RecordFile::open(&dir.join("sharded"), "run", &json!({"agent": "planner"}), Some(Shard { index: 1, count: 2 }), false);
     let mut other = other.expect("opens");
-    other.append(0, &json!({"task": "x"})).expect("appends");
+    other.append(0, &json!({"task": "x", "success": true})).expect("appends");
     std::fs::remove_file(&merged.path).expect("removes");
     let error = merge(&[shard_paths[0].clone(), other.path().to_path_buf()], false).expect_err("mixed");
     assert!(error.to_string().contains("different runs"), "{error}");
@@ -176,7 +176,7 @@ fn a_merge_refuses_unfinished_shards_and_misfiled_records() {
                 let shard = Shard { index, count: 2 };
                 let mut file = RecordFile::open(dir, "run", &config, Some(shard), false).expect("opens");
                 for (i, name) in names.iter().enumerate().take(upto).filter(|(i, _)| shard.selects(*i)) {
-                    file.append(i, &json!({"task": name})).expect("appends");
+                    file.append(i, &json!({"task": name, "success": false})).expect("appends");
                 }
                 file.path().to_path_buf()
             })
@@ -185,7 +185,7 @@ fn a_merge_refuses_unfinished_shards_and_misfiled_records() {
     // Shard 2 was killed after its first task (t1): t3 and t5 are missing.
     let short = shard_files(&dir.join("short"), 5);
     let mut file = RecordFile::open(&dir.join("short"), "run", &config, Some(Shard { index: 2, count: 2 }), true).expect("opens");
-    file.append(1, &json!({"task": "t1"})).expect("appends");
+    file.append(1, &json!({"task": "t1", "success": false})).expect("appends");
     drop(file);
     let error = merge(&short, false).expect_err("short");
     assert!(error.to_string().contains("4 of the run's 6 tasks recorded (shard 2 of 2 has 1 of its 3)"), "{error}");
@@ -205,6 +205,28 @@ fn a_merge_refuses_unfinished_shards_and_misfiled_records() {
     std::fs::rename(&renamed[1], &elsewhere).expect("renames");
     let error = merge(&[renamed[0].clone(), elsewhere], false).expect_err("renamed");
     assert!(error.to_string().contains("shards of different runs do not merge"), "{error}");
+    // A shard given twice, named; a record a report would refuse, named by the shard's line; an
+    // index past the run's tasks; shards without their configuration.
+    let whole = shard_files(&dir.join("checked"), 6);
+    let error = merge(&[whole[0].clone(), whole[0].clone(), whole[1].clone()], false).expect_err("twice");
+    assert!(error.to_string().contains(&format!("task t0 is in two shard files: {} is given twice", whole[0].display())), "{error}");
+    let text = std::fs::read_to_string(&whole[1]).expect("reads");
+    std::fs::write(&whole[1], text.replacen("\"success\":false", "\"success\":false,\"steps\":-1", 1)).expect("writes");
+    let error = merge(&whole, false).expect_err("a negative count");
+    assert_eq!(
+        error.to_string(),
+        format!("{}:1: `steps` is -1, not a count (a whole number from 0 to 9007199254740992)", whole[1].display())
+    );
+    std::fs::write(&whole[1], text.replace("\"index\":5,", "\"index\":7,")).expect("writes");
+    let error = merge(&whole, false).expect_err("past the tasks");
+    assert!(error.to_string().contains("task t5 has index 7, past the run's 6 tasks"), "{error}");
+    std::fs::write(&whole[1], &text).expect("writes");
+    std::fs::remove_file(
+        whole[0].with_file_name(whole[0].file_name().unwrap().to_str().unwrap().replace(".shard-1-of-2.jsonl", ".config.json")),
+    )
+    .expect("removes");
+    let error = merge(&whole, false).expect_err("no configuration");
+    assert!(error.to_string().contains("cannot read the run's configuration beside the shards"), "{error}");
 }
 
 #[test]

@@ -275,6 +275,19 @@ fn faults_in_the_input_name_the_file_and_line() {
     std::fs::write(&path, format!("{first}\n{first}\n")).unwrap();
     assert!(message(load(&path)).contains(":2: task "));
 
+    // The figures the tables and plots read: counts, a duration, fractions, the flags.
+    for (from, to, said) in [
+        ("\"steps\":4", "\"steps\":-1", "`steps` is -1, not a count"),
+        ("\"steps\":4", "\"steps\":1e30", "`steps` is 1e+30, not a count"),
+        ("\"millis\":20.0", "\"millis\":\"NaN\"", "`millis` is \"NaN\", not a duration"),
+        ("{", "{\"precision\":2.5,", "`precision` is 2.5, not null or a fraction from 0 to 1"),
+        ("{", "{\"episode\":\"oops\",", "`episode` is \"oops\", not an object"),
+        ("{", "{\"failure_response\":{\"recovers\":7},", "`failure_response.recovers` is 7, not a boolean"),
+    ] {
+        std::fs::write(&path, format!("{first}\n{}\n", second.replacen(from, to, 1))).unwrap();
+        assert!(message(load(&path)).starts_with(&format!("{shown}:2: {said}")), "{to}: {}", message(load(&path)));
+    }
+
     let config = dir.join(format!("{stem}.config.json"));
     assert!(message(load(&config)).starts_with(&format!("{}: not a record file", config.display())));
 
@@ -284,10 +297,12 @@ fn faults_in_the_input_name_the_file_and_line() {
     assert!(text.starts_with(&missing.display().to_string()) && text.contains("nothing-here-000000000000.config.json"), "{text}");
 
     let absent = dir.join("absent-000000000000.jsonl");
+    assert!(message(load(&absent)).contains("No such file"), "a missing records file is said to be missing, before its configuration");
     std::fs::write(dir.join("absent-000000000000.config.json"), "{\"agent\": \"expert\", \"benchmark\": \"alfworld-seen\"}\n").unwrap();
     assert!(message(load(&absent)).starts_with(&absent.display().to_string()));
 
     std::fs::write(dir.join("broken-000000000000.config.json"), "{\"agent\": \"expert\",\n").unwrap();
+    std::fs::write(dir.join("broken-000000000000.jsonl"), format!("{first}\n")).unwrap();
     let text = message(load(&dir.join("broken-000000000000.jsonl")));
     assert!(text.contains("broken-000000000000.config.json") && text.contains("line 2"), "{text}");
 

@@ -193,6 +193,23 @@ fn bad_task_files_name_the_field() {
     let bad_edge = scene(PLATE_IN_DISHWASHER).replace(r#""relation_type":"ON","to_id":20"#, r#""relation_type":"UNDER","to_id":20"#);
     assert!(err(bad_edge).contains("edges[6].relation_type"));
     assert!(matches!(VirtualhomeTask::from_json("{", "t.json"), Err(VirtualhomeError::Json { .. })));
+    // A file is named for its task, and its text is UTF-8 (the line of the first bad byte).
+    let dir = std::env::temp_dir().join(format!("vh-task-files-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("temporary folder");
+    let text = scene(PLATE_IN_DISHWASHER);
+    let renamed = dir.join("other_9.json");
+    std::fs::write(&renamed, &text).expect("writes");
+    let error = VirtualhomeTask::load(&renamed).expect_err("renamed").to_string();
+    assert!(error.contains("task_id") && error.contains("`t1`, but the file is named for task `other_9`"), "{error}");
+    let named = dir.join("t1.json");
+    std::fs::write(&named, &text).expect("writes");
+    VirtualhomeTask::load(&named).expect("the same task, named for itself");
+    let mut bytes = text.clone().into_bytes();
+    bytes.extend_from_slice(b"\n\n\xff");
+    std::fs::write(&named, bytes).expect("writes");
+    let error = VirtualhomeTask::load(&named).expect_err("not UTF-8").to_string();
+    std::fs::remove_dir_all(&dir).ok();
+    assert!(error.contains(&format!("not UTF-8 text at line {}", text.lines().count() + 2)), "{error}");
 }
 
 #[test]

@@ -1,7 +1,8 @@
 //! Reading record files for a report: each `<stem>-<hash>[.shard-i-of-n].jsonl` with the
 //! `<stem>-<hash>.config.json` beside it, every line checked (a record of that configuration,
-//! a string `task`, a boolean `success`, a known `terminal` and `attribution` where present),
-//! any fault an error naming the file and line.
+//! a string `task`, a boolean `success`, a known `terminal` and `attribution`, counts that are
+//! whole numbers, a duration, fractions and objects where present), any fault an error naming
+//! the file, the line and the field.
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -122,6 +123,8 @@ pub fn load(path: &Path) -> Result<RecordSet, ReportError> {
             path.display()
         )));
     }
+    // A records file that is not there is said so first (not its configuration's absence).
+    std::fs::metadata(path).map_err(|source| RecordError::Io { path: path.to_path_buf(), source })?;
     let config_path = path.with_file_name(format!("{}.config.json", record_stem(path)));
     let config_fault = |reason: String| ReportError::Config { path: path.to_path_buf(), config: config_path.clone(), reason };
     let config_text = std::fs::read_to_string(&config_path).map_err(|e| config_fault(format!("cannot read it: {e}")))?;
@@ -152,13 +155,32 @@ pub fn load(path: &Path) -> Result<RecordSet, ReportError> {
             return Err(RecordError::Bad { path: path.to_path_buf(), line, message }.into());
         }
         check(path, line, &fields)?;
+        // A record of a task outside the run's list (its configuration's `tasks.count`): not a
+        // record this run can have written.
+        if let (Some(count), Some(index)) = (task_count(&config), fields.get("index").and_then(Value::as_u64))
+            && index >= count
+        {
+            let message = format!("`index` is {index}, past the run's {count} tasks ({})", config_path.display());
+            return Err(RecordError::Bad { path: path.to_path_buf(), line, message }.into());
+        }
         records.push(Record { line, fields });
+    }
+    if let Some(count) = task_count(&config)
+        && records.len() as u64 > count
+    {
+        let message = format!("{} records of a run of {count} tasks ({})", records.len(), config_path.display());
+        return Err(RecordError::Bad { path: path.to_path_buf(), line: records.last().map_or(1, |r| r.line), message }.into());
     }
     Ok(RecordSet { path: path.to_path_buf(), config, hash: expected, records, warnings })
 }
 
-/// The fields a report reads from every record.
-fn check(path: &Path, line: usize, fields: &Map<String, Value>) -> Result<(), RecordError> {
+/// The run's task count, where its configuration gives one (`tasks.count`, from stop 53 on).
+pub(crate) fn task_count(config: &Map<String, Value>) -> Option<u64> {
+    config.get("tasks").and_then(|t| t.get("count")).and_then(Value::as_u64)
+}
+
+/// The fields a report reads from every record (`merge` checks them too).
+pub(crate) fn check(path: &Path, line: usize, fields: &Map<String, Value>) -> Result<(), RecordError> {
     let bad = |message: String| RecordError::Bad { path: path.to_path_buf(), line, message };
     if !fields.get("success").is_some_and(Value::is_boolean) {
         return Err(bad("no boolean `success`: every record says whether its task succeeded".into()));
@@ -173,5 +195,73 @@ fn check(path: &Path, line: usize, fields: &Map<String, Value>) -> Result<(), Re
     {
         return Err(bad(format!("`attribution` is {attribution}, not null or one of {}", ATTRIBUTIONS.join(", "))));
     }
+    // The figures the tables and plots read ([`super::metrics`]), each where present.
+    let at = |path: &str| {
+        let mut parts = path.split('.');
+        let mut value = fields.get(parts.next()?)?;
+        for part in parts {
+            value = value.get(part)?;
+        }
+        Some(value)
+    };
+    for path in COUNTS {
+        if let Some(value) = at(path)
+            && value.as_u64().is_none_or(|n| n > MAX_COUNT)
+        {
+            return Err(bad(format!("`{path}` is {value}, not a count (a whole number from 0 to {MAX_COUNT})")));
+        }
+    }
+    if let Some(value) = at("millis")
+        && !value.as_f64().is_some_and(|ms| ms.is_finite() && ms >= 0.0)
+    {
+        return Err(bad(format!("`millis` is {value}, not a duration (a number of milliseconds, at least 0)")));
+    }
+    for path in ["precision", "recall"] {
+        if let Some(value) = at(path)
+            && !(value.is_null() || value.as_f64().is_some_and(|x| (0.0..=1.0).contains(&x)))
+        {
+            return Err(bad(format!("`{path}` is {value}, not null or a fraction from 0 to 1")));
+        }
+    }
+    for path in ["episode", "failure_response"] {
+        if let Some(value) = at(path)
+            && !(value.is_object() || value.is_null())
+        {
+            return Err(bad(format!("`{path}` is {value}, not an object")));
+        }
+    }
+    if let Some(Value::Object(flags)) = at("failure_response")
+        && let Some((flag, value)) = flags.iter().find(|(_, v)| !v.is_boolean())
+    {
+        return Err(bad(format!("`failure_response.{flag}` is {value}, not a boolean")));
+    }
     Ok(())
 }
+
+/// The counts a report reads from a record (steps, tokens, calls, images, observations), by
+/// their paths; each must be a whole number from 0 to [`MAX_COUNT`] where present.
+const COUNTS: [&str; 20] = [
+    "steps",
+    "index",
+    "generated_tokens",
+    "tokens",
+    "prompt_tokens",
+    "model_calls",
+    "calls",
+    "images",
+    "observations",
+    "phase1_tokens",
+    "phase2_tokens",
+    "phase1_calls",
+    "phase2_calls",
+    "phase1_steps",
+    "episode.usage.generated_tokens",
+    "episode.usage.model_calls",
+    "episode.usage.images",
+    "episode.usage.observations",
+    "episode.phase1_usage.images",
+    "episode.phase1_usage.observations",
+];
+
+/// The largest count a record may hold (2^53: counts beyond it are not exact as JSON numbers).
+const MAX_COUNT: u64 = 1 << 53;

@@ -78,16 +78,32 @@ impl VirtualhomeTask {
     pub fn load(path: &Path) -> Result<VirtualhomeTask, VirtualhomeError> {
         let origin = path.display().to_string();
         let bytes = std::fs::read(path).map_err(|source| VirtualhomeError::Io { path: origin.clone(), source })?;
-        let text = if bytes.starts_with(&[0x1f, 0x8b]) {
-            let mut text = String::new();
+        let bytes = if bytes.starts_with(&[0x1f, 0x8b]) {
+            let mut text = Vec::new();
             flate2::read::GzDecoder::new(&bytes[..])
-                .read_to_string(&mut text)
+                .read_to_end(&mut text)
                 .map_err(|e| VirtualhomeError::Json { origin: origin.clone(), message: format!("bad gzip data: {e}") })?;
             text
         } else {
-            String::from_utf8(bytes).map_err(|e| VirtualhomeError::Json { origin: origin.clone(), message: e.to_string() })?
+            bytes
         };
-        VirtualhomeTask::from_json(&text, &origin)
+        let text = String::from_utf8(bytes).map_err(|e| {
+            let at = e.utf8_error().valid_up_to();
+            let line = e.as_bytes()[..at].iter().filter(|&&b| b == b'\n').count() + 1;
+            VirtualhomeError::Json { origin: origin.clone(), message: format!("not UTF-8 text at line {line} (byte {at})") }
+        })?;
+        let task = VirtualhomeTask::from_json(&text, &origin)?;
+        // A task file is named by its task: another id inside is a file renamed or mixed up.
+        if let Some(stem) = path.file_name().and_then(|n| n.to_str()).and_then(|n| n.strip_suffix(".json.gz").or(n.strip_suffix(".json")))
+            && stem != task.task_id
+        {
+            return Err(VirtualhomeError::BadGraph {
+                origin,
+                field: "task_id".into(),
+                message: format!("`{}`, but the file is named for task `{stem}`", task.task_id),
+            });
+        }
+        Ok(task)
     }
 
     /// Parses a task file's JSON; `origin` names it in errors.
