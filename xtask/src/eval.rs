@@ -589,6 +589,7 @@ fn plan(args: &EvalArgs) -> anyhow::Result<Vec<Planned>> {
     if let Some(twice) = suites.iter().enumerate().find(|(i, s)| suites[..*i].contains(s)).map(|(_, s)| s.name()) {
         return Err(InputError(format!("--benchmark names {twice} twice")).into());
     }
+    crate::input::folder_to_write(&args.out, "--out")?;
     if args.agent == AgentName::Expert && suites.contains(&Suite::VirtualhomeRearrange) {
         return Err(InputError("--agent expert: the rearrangement set has no expert plans in the benchmark's own form".into()).into());
     }

@@ -44,6 +44,15 @@ pub fn read_text(path: &Path) -> anyhow::Result<String> {
     })
 }
 
+/// Refuses `path` as a folder to write into when something else is there (a file): bad input
+/// named by its option, before any work.
+pub fn folder_to_write(path: &Path, option: &str) -> anyhow::Result<()> {
+    if path.exists() && !path.is_dir() {
+        return Err(InputError(format!("{option} {}: a file is there, not a folder", path.display())).into());
+    }
+    Ok(())
+}
+
 /// Whether `step` is one PDDL action, `(name arg ...)`: one parenthesised group, nothing
 /// nested, nothing before or after it.
 pub fn one_action(step: &str) -> bool {
@@ -54,15 +63,19 @@ pub fn one_action(step: &str) -> bool {
 impl TaskArgs {
     pub fn load(&self) -> anyhow::Result<TaskFiles> {
         match (&self.domain, &self.problem, &self.game) {
-            (Some(domain), Some(problem), None) => Ok(TaskFiles {
-                id: problem.display().to_string(),
-                benchmark: Benchmark::Ipc,
-                domain: read(domain)?,
-                problem: read(problem)?,
-                domain_path: domain.clone(),
-                problem_path: problem.clone(),
-                extra: Extra::None,
-            }),
+            (Some(domain), Some(problem), None) => {
+                let files = TaskFiles {
+                    id: problem.display().to_string(),
+                    benchmark: Benchmark::Ipc,
+                    domain: read(domain)?,
+                    problem: read(problem)?,
+                    domain_path: domain.clone(),
+                    problem_path: problem.clone(),
+                    extra: Extra::None,
+                };
+                warn(&files);
+                Ok(files)
+            }
             (None, None, Some(game)) => benchmark_data::load_alfworld_game(game, Benchmark::AlfworldSeen, game.display().to_string())
                 .map_err(|e| InputError(e.to_string()).into()),
             _ => bail!(InputError("give either --domain D --problem P, or --game G".into())),
@@ -71,6 +84,23 @@ impl TaskArgs {
 
     pub fn is_game(&self) -> bool {
         self.game.is_some()
+    }
+}
+
+/// The checker's warnings on the user's own PDDL files (a problem for another domain, an object
+/// declared twice, a type its own ancestor), each `file:line:column: warning[kind]: ...` on
+/// standard error: they do not stop the command, but are not dropped. Errors are [`ground`]'s.
+fn warn(files: &TaskFiles) {
+    let (Ok(domain), Ok(problem)) = (pddl_syntax::parse_domain(&files.domain), pddl_syntax::parse_problem(&files.problem)) else {
+        return;
+    };
+    let report = pddl_syntax::check(&domain, Some(&problem));
+    let domain_path = files.domain_path.display().to_string();
+    let problem_path = files.problem_path.display().to_string();
+    for (diagnostics, path, source) in [(&report.domain, &domain_path, &files.domain), (&report.problem, &problem_path, &files.problem)] {
+        for warning in diagnostics.iter().filter(|d| !d.is_error()) {
+            eprintln!("{}", warning.render(path, source));
+        }
     }
 }
 

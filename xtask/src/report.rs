@@ -40,6 +40,7 @@ fn write(path: &Path, text: &str) -> anyhow::Result<()> {
 }
 
 pub fn run(args: ReportArgs) -> anyhow::Result<ExitCode> {
+    crate::input::folder_to_write(&args.out, "--out")?;
     println!("{}", write_report(&args.records, &args.out, args.replicates, args.seed)?);
     Ok(ExitCode::SUCCESS)
 }

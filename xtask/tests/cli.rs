@@ -40,6 +40,26 @@ fn ground_prints_one_json_object() {
     assert!(value["millis"].as_f64().is_some());
 }
 
+/// The checker's warnings on the user's files are shown, not dropped: a problem written for
+/// another domain, an object declared twice.
+#[test]
+fn pddl_warnings_name_file_line_and_column() {
+    let tmp = scratch_dir("xtask-cli-");
+    let text =
+        std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/../fixtures/ipc/blocks/instance-1.pddl")).expect("the fixture");
+    let problem = scratch(
+        &tmp,
+        "other.pddl",
+        &text.replace("(:domain BLOCKS)", "(:domain blocksworld)").replace("D B A C - block", "D B A C D - block"),
+    );
+    let output = xtask(&["ground", "--domain", "fixtures/ipc/blocks/domain.pddl", "--problem", &problem.display().to_string()]);
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert_eq!(output.status.code(), Some(0), "warnings do not stop the command: {stderr}");
+    let shown = problem.display().to_string();
+    assert!(stderr.lines().any(|l| l.starts_with(&format!("{shown}:2:")) && l.contains(": warning[")), "{stderr}");
+    assert!(stderr.lines().any(|l| l.starts_with(&format!("{shown}:3:")) && l.contains(": warning[")), "{stderr}");
+}
+
 #[test]
 fn validate_reports_valid_invalid_and_bad_input_with_exit_codes() {
     let tmp = scratch_dir("xtask-cli-");
@@ -81,7 +101,10 @@ fn validate_reports_valid_invalid_and_bad_input_with_exit_codes() {
     assert_eq!(output.status.code(), Some(1));
     assert!(stdout(&output).trim().ends_with("is not an action of this task (`grab` takes 2 arguments)"), "{}", stdout(&output));
     // A line that is not one action is malformed input: exit 2, naming the file and line.
-    for (name, text) in [("unclosed.plan", "(grab wineglass kitchentable)\n(walk kitchentable dishwasher\n"), ("two.plan", "(grab wineglass kitchentable)\n(walk a b) (walk b a)\n")] {
+    for (name, text) in [
+        ("unclosed.plan", "(grab wineglass kitchentable)\n(walk kitchentable dishwasher\n"),
+        ("two.plan", "(grab wineglass kitchentable)\n(walk a b) (walk b a)\n"),
+    ] {
         let malformed = scratch(&tmp, name, text);
         let output = xtask(&["validate", "--domain", &domain, "--problem", &problem, "--plan", &malformed.display().to_string()]);
         assert_eq!(output.status.code(), Some(2), "{name}");
@@ -98,7 +121,11 @@ fn validate_reports_valid_invalid_and_bad_input_with_exit_codes() {
     let unknown = scratch(&tmp, "unknown.plan", "(grab wineglass kitchentable)\n(teleport dishwasher)\n");
     let output = xtask(&["validate", "--domain", &domain, "--problem", &problem, "--plan", &unknown.display().to_string()]);
     assert_eq!(output.status.code(), Some(1));
-    assert!(stdout(&output).starts_with(&format!("invalid: step 2 ({}:2): `(teleport dishwasher)`", unknown.display())), "{}", stdout(&output));
+    assert!(
+        stdout(&output).starts_with(&format!("invalid: step 2 ({}:2): `(teleport dishwasher)`", unknown.display())),
+        "{}",
+        stdout(&output)
+    );
 
     let broken = fixtures().join("pddl-invalid/unclosed-paren.domain.pddl");
     let output =

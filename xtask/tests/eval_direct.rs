@@ -190,6 +190,14 @@ fn a_run_of_nothing_or_of_a_benchmark_twice_is_refused_before_any_file() {
     let output = xtask(&["eval", "--limit", "0", "--out", dir.to_str().unwrap()]);
     assert_eq!(output.status.code(), Some(2), "{}", String::from_utf8_lossy(&output.stderr));
     assert!(!dir.exists());
+    // A file where the records folder or the report's folder would go.
+    std::fs::write(&dir, "").expect("writes");
+    for command in [&["eval", "--agent", "expert", "--limit", "1", "--out"][..], &["report", "fixtures", "--out"]] {
+        let output = xtask(&[command, &[dir.to_str().unwrap()]].concat());
+        let stderr = String::from_utf8_lossy(&output.stderr);
+        assert_eq!(output.status.code(), Some(2), "{command:?}: {stderr}");
+        assert!(stderr.contains("a file is there, not a folder"), "{command:?}: {stderr}");
+    }
 }
 
 /// A record of a task outside the run's list (an edited file) is refused on resume, naming its
