@@ -119,7 +119,12 @@ pub fn run(args: EnvArgs) -> anyhow::Result<ExitCode> {
             .map(str::to_string)
             .collect(),
         (None, Some(_)) => Vec::new(),
-        (None, None) => env.walkthrough().to_vec(),
+        (None, None) => {
+            if env.walkthrough().is_empty() {
+                eprintln!("{}: no walkthrough in the game file; give --commands FILE or --random N to play", game.display());
+            }
+            env.walkthrough().to_vec()
+        }
     };
     let show = |step: usize, command: Option<&str>, observation: &str, env: &AlfworldEnv| {
         let admissible = env.admissible_commands().unwrap_or_default();

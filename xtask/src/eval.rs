@@ -597,6 +597,16 @@ fn plan(args: &EvalArgs) -> anyhow::Result<Vec<Planned>> {
         return Err(InputError("--agent direct needs a chat model: --explorer smollm2, a GGUF path, or openai:URL".into()).into());
     }
     if let Some(cache) = &args.episode.chat_cache {
+        // The reply file keeps Phase I's model replies: with no model exploring (the sweep), or
+        // for the direct agent (which has no Phase I), nothing would be kept or replayed.
+        if args.episode.explorer == crate::model_spec::ModelSpec::Systematic || matches!(args.agent, AgentName::Direct | AgentName::Expert)
+        {
+            return Err(InputError(format!(
+                "--chat-cache {}: keeps the replies of a Phase I chat model (--explorer smollm2, a GGUF path, openai:URL) for `ours` or `planner`; this run asks none",
+                cache.display()
+            ))
+            .into());
+        }
         // `report` reads every `*.jsonl` of a records folder as records.
         let folder = |p: &Path| std::fs::canonicalize(p).unwrap_or_else(|_| p.to_path_buf());
         let parent = cache.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new("."));

@@ -478,6 +478,16 @@ fn env_prints_the_engines_lines_byte_for_byte() {
     let output = xtask(&["env", "--game", "no/such/game", "--json"]);
     assert_eq!(output.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&output.stderr).contains("no/such/game"));
+    // A walkthrough that is not a list of commands is bad input naming the field.
+    let tmp = scratch_dir("xtask-cli-");
+    let mut json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(std::path::Path::new(&dir).join("game.tw-pddl")).expect("the game")).expect("JSON");
+    json["walkthrough"] = serde_json::json!(5);
+    let bad = scratch(&tmp, "game.tw-pddl", &json.to_string());
+    let output = xtask(&["env", "--game", &bad.display().to_string(), "--json"]);
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert_eq!(output.status.code(), Some(2), "{stderr}");
+    assert!(stderr.contains("the game's `walkthrough` field is not a list of strings"), "{stderr}");
 }
 
 #[test]

@@ -59,6 +59,13 @@ fn a_reply_cache_inside_the_records_folder_is_refused() {
     let cache = dir.join("phase1-replies.jsonl");
     let stderr = refused(&["--explorer", "no-such-model.gguf", "--chat-cache", cache.to_str().unwrap()], &dir);
     assert!(stderr.contains("keep the reply file out of the records folder"), "{stderr}");
+    // A reply file no model would fill: the sweep explores, or the direct agent (no Phase I).
+    let elsewhere = dir.with_extension("replies.jsonl");
+    for args in [&["--explorer", "systematic"][..], &["--agent", "direct", "--explorer", "smollm2"]] {
+        let stderr = refused(&[args, &["--chat-cache", elsewhere.to_str().unwrap()]].concat(), &dir);
+        assert!(stderr.contains("this run asks none"), "{args:?}: {stderr}");
+    }
+    assert!(!elsewhere.exists());
     assert!(!dir.exists(), "no records, no reply file");
 }
 

@@ -15,6 +15,8 @@ pub enum EnvError {
     Json { path: String, line: usize, column: usize, message: String },
     #[error("{path}: the game has no string field `{key}`")]
     MissingKey { path: String, key: String },
+    #[error("{path}: the game's `{key}` field is not {expected}")]
+    BadField { path: String, key: String, expected: String },
     #[error("{path}: the `{field}` field is not valid PDDL:\n{diagnostics}")]
     Pddl { path: String, field: String, diagnostics: String },
     /// `message` names the game file, its field and the line and column there.

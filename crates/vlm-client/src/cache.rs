@@ -155,7 +155,7 @@ impl CachedChat {
         // A last line without its newline was cut off by a killed writer: drop it, so the next
         // append starts a line of its own.
         file.lock().map_err(io)?;
-        let read = cut_torn_tail(&file).and_then(|()| file.read_to_end(&mut bytes));
+        let read = cut_torn_tail(&file, path).and_then(|()| file.read_to_end(&mut bytes));
         file.unlock().and(read).map_err(io)?;
         let mut replies = BTreeMap::new();
         for (i, line) in bytes.split(|&b| b == b'\n').enumerate() {
@@ -234,7 +234,8 @@ impl ChatModel for CachedChat {
         // or torn at the end, and a torn end (this process's or another's) is dropped on the next
         // open or before the next append.
         let written = self.file.lock().and_then(|()| {
-            let result = cut_torn_tail(&self.file).and_then(|()| self.file.write_all(line.as_bytes())).and_then(|()| self.file.flush());
+            let result =
+                cut_torn_tail(&self.file, &self.path).and_then(|()| self.file.write_all(line.as_bytes())).and_then(|()| self.file.flush());
             self.file.unlock().and(result)
         });
         written.map_err(|e| ChatError {
@@ -263,20 +264,26 @@ impl ChatModel for CachedChat {
 
 /// Cuts a last line without its newline (a writer killed mid-line) off the file, so the next
 /// append starts a line of its own; reads backwards from the end until a newline.
-fn cut_torn_tail(file: &File) -> std::io::Result<()> {
+fn cut_torn_tail(file: &File, path: &Path) -> std::io::Result<()> {
     use std::os::unix::fs::FileExt;
     let len = file.metadata()?.len();
     let mut end = len;
     let mut block = [0u8; 4096];
+    let mut whole = 0;
     while end > 0 {
         let start = end.saturating_sub(block.len() as u64);
         let part = &mut block[..(end - start) as usize];
         file.read_exact_at(part, start)?;
         if let Some(i) = part.iter().rposition(|&b| b == b'\n') {
-            let whole = start + i as u64 + 1;
-            return if whole < len { file.set_len(whole) } else { Ok(()) };
+            whole = start + i as u64 + 1;
+            break;
         }
         end = start;
     }
-    if len > 0 { file.set_len(0) } else { Ok(()) }
+    if whole < len {
+        // Said, as a records file's torn line is: the reply it held is asked again.
+        eprintln!("{}: cut off a reply cut short (a killed run); its request is asked again", path.display());
+        file.set_len(whole)?;
+    }
+    Ok(())
 }

@@ -84,17 +84,44 @@ pub fn first_object(text: &str) -> Result<Value, String> {
 const TYPES: [&str; 7] = ["object", "array", "string", "number", "integer", "boolean", "null"];
 
 /// Checks that `schema` is a JSON schema this module can apply: an object (or `true`/`false`)
-/// whose keywords have the right shapes, recursively.
+/// whose keywords have the right shapes, recursively; its root allows an object (the reply is
+/// read as one, [`first_object`]); every `$ref` points within it (`#/...`) at something there.
 pub fn check_schema(schema: &Value) -> Result<(), String> {
-    check_schema_at(schema, "#")
+    check_schema_at(schema, "#", schema)?;
+    if let Some(kind) = schema.get("type") {
+        let names: Vec<&Value> = match kind {
+            Value::Array(names) => names.iter().collect(),
+            single => vec![single],
+        };
+        if !names.iter().any(|n| n.as_str() == Some("object")) {
+            return Err(format!("#/type: {kind}, but the reply is read as a JSON object: the root must allow \"object\""));
+        }
+    }
+    Ok(())
 }
 
-fn check_schema_at(schema: &Value, at: &str) -> Result<(), String> {
+fn check_schema_at(schema: &Value, at: &str, root: &Value) -> Result<(), String> {
     let object = match schema {
         Value::Bool(_) => return Ok(()),
         Value::Object(object) => object,
         other => return Err(format!("{at}: a schema must be an object or a boolean, found {other}")),
     };
+    if let Some(reference) = object.get("$ref") {
+        let target = reference.as_str().and_then(|r| r.strip_prefix('#'));
+        match target {
+            Some(pointer) if root.pointer(pointer).is_some() => {}
+            Some(_) => return Err(format!("{at}/$ref: {reference} points at nothing in the schema")),
+            None => return Err(format!("{at}/$ref: {reference}: only references within the schema (\"#/...\") are followed")),
+        }
+    }
+    for key in ["$defs", "definitions"] {
+        if let Some(defs) = object.get(key) {
+            let defs = defs.as_object().ok_or_else(|| format!("{at}/{key}: expected an object"))?;
+            for (name, sub) in defs {
+                check_schema_at(sub, &format!("{at}/{key}/{name}"), root)?;
+            }
+        }
+    }
     if let Some(kind) = object.get("type") {
         let names: Vec<&Value> = match kind {
             Value::Array(names) => names.iter().collect(),
@@ -109,7 +136,7 @@ fn check_schema_at(schema: &Value, at: &str) -> Result<(), String> {
     if let Some(properties) = object.get("properties") {
         let properties = properties.as_object().ok_or_else(|| format!("{at}/properties: expected an object"))?;
         for (name, sub) in properties {
-            check_schema_at(sub, &format!("{at}/properties/{name}"))?;
+            check_schema_at(sub, &format!("{at}/properties/{name}"), root)?;
         }
     }
     if let Some(required) = object.get("required")
@@ -124,14 +151,14 @@ fn check_schema_at(schema: &Value, at: &str) -> Result<(), String> {
     }
     for key in ["items", "additionalProperties"] {
         if let Some(sub) = object.get(key) {
-            check_schema_at(sub, &format!("{at}/{key}"))?;
+            check_schema_at(sub, &format!("{at}/{key}"), root)?;
         }
     }
     for key in ["anyOf", "oneOf", "allOf"] {
         if let Some(subs) = object.get(key) {
             let subs = subs.as_array().filter(|s| !s.is_empty()).ok_or_else(|| format!("{at}/{key}: expected a non-empty array"))?;
             for (i, sub) in subs.iter().enumerate() {
-                check_schema_at(sub, &format!("{at}/{key}/{i}"))?;
+                check_schema_at(sub, &format!("{at}/{key}/{i}"), root)?;
             }
         }
     }
@@ -328,5 +355,14 @@ mod tests {
         check(json!({"required": "a"}), "#/required: expected an array of property names");
         check(json!({"anyOf": []}), "#/anyOf: expected a non-empty array");
         check(json!({"maxLength": -1}), "#/maxLength: expected a non-negative integer");
+        check(json!({"type": "string"}), r#"#/type: "string", but the reply is read as a JSON object: the root must allow "object""#);
+        // References within the schema, to something there.
+        let referring = |to: &str| json!({"type": "object", "properties": {"skill": {"$ref": to}}, "$defs": {"skill": {"enum": ["Done"]}}});
+        assert_eq!(check_schema(&referring("#/$defs/skill")), Ok(()));
+        check(referring("#/definitions/skill"), r##"#/properties/skill/$ref: "#/definitions/skill" points at nothing in the schema"##);
+        check(
+            referring("other.json#/a"),
+            r##"#/properties/skill/$ref: "other.json#/a": only references within the schema ("#/...") are followed"##,
+        );
     }
 }

@@ -193,11 +193,19 @@ impl AlfworldEnv {
                 .and_then(serde_json::Value::as_str)
                 .ok_or_else(|| EnvError::MissingKey { path: source.into(), key: key.to_string() })
         };
-        let walkthrough: Vec<String> = json
-            .get("walkthrough")
-            .and_then(serde_json::Value::as_array)
-            .map(|steps| steps.iter().filter_map(|s| s.as_str().map(str::to_string)).collect())
-            .unwrap_or_default();
+        // A game may come without its expert's walkthrough (none is then played); one that is
+        // there is a list of commands.
+        let walkthrough: Vec<String> = match json.get("walkthrough") {
+            None | Some(serde_json::Value::Null) => Vec::new(),
+            Some(value) => value
+                .as_array()
+                .and_then(|steps| steps.iter().map(|s| s.as_str().map(str::to_string)).collect::<Option<Vec<String>>>())
+                .ok_or_else(|| EnvError::BadField {
+                    path: source.into(),
+                    key: "walkthrough".into(),
+                    expected: "a list of strings".into(),
+                })?,
+        };
         let domain_text = field("pddl_domain")?;
         let problem_text = field("pddl_problem")?;
         let grammar_text = field("grammar")?;
