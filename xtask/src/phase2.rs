@@ -396,11 +396,12 @@ pub fn plan_one(
     out: Option<&Path>,
     json: bool,
 ) -> anyhow::Result<ExitCode> {
+    // The settings that make this plan, hashed as a run's records are (the task is the set),
+    // asked of a server before the search, so that a server that cannot say loses no search.
+    let config = RunConfig::new(files.benchmark.name(), &files.id, lm_args, args, time_limit)?;
     let mut lm = load_lm(lm_args)?;
     let vocab = Arc::new(mcts::constraint_vocabulary(lm.vocabulary()).context("the model's vocabulary")?);
     let (mut record, outcome, model) = solve(files, lm.as_mut(), &lm_args.lm.to_string(), &vocab, args, time_limit)?;
-    // The settings that made this plan, hashed as a run's records are (the task is the set).
-    let config = RunConfig::new(files.benchmark.name(), &files.id, lm_args, args, time_limit)?;
     record.config = eval_harness::records::config_hash(&config);
     // The plan is checked once more by the validator, from the text as written.
     let spelling = spelling_for(files, &model)?;

@@ -405,7 +405,15 @@ pub fn merge(shards: &[PathBuf], partial: bool) -> Result<Merged, RecordError> {
     if let Some(other) = numbers.iter().find(|s| s.count != count) {
         return Err(RecordError::Merge(format!("shards of {count} and of {} given: one run's shards all have the same n", other.count)));
     }
-    let missing: Vec<String> = (1..=count).filter(|i| !numbers.iter().any(|s| s.index == *i)).map(|i| i.to_string()).collect();
+    // A shard that selects none of the run's tasks (where its configuration gives their
+    // number) ran nothing and wrote no file: it is not missing.
+    let task_count = std::fs::read_to_string(first.with_file_name(format!("{base}.config.json")))
+        .ok()
+        .and_then(|text| serde_json::from_str::<Value>(&text).ok())
+        .and_then(|v| v.pointer("/tasks/count").and_then(Value::as_u64));
+    let selects_any = |index: usize| task_count.is_none_or(|n| (0..n as usize).any(|i| Shard { index, count }.selects(i)));
+    let missing: Vec<String> =
+        (1..=count).filter(|i| !numbers.iter().any(|s| s.index == *i) && selects_any(*i)).map(|i| i.to_string()).collect();
     if !missing.is_empty() {
         return Err(RecordError::Merge(format!(
             "shard(s) {} of {count} not given: the merged file is the whole run's, so every shard is needed",

@@ -227,6 +227,17 @@ fn a_merge_refuses_unfinished_shards_and_misfiled_records() {
     .expect("removes");
     let error = merge(&whole, false).expect_err("no configuration");
     assert!(error.to_string().contains("cannot read the run's configuration beside the shards"), "{error}");
+    // Shards that select none of the run's tasks ran nothing and are not asked for: a run of 3
+    // tasks in 4 shards merges from the first 3.
+    let config = json!({"agent": "expert", "benchmark": "ipc", "tasks": {"count": 3}});
+    let three: Vec<PathBuf> = (1..=3)
+        .map(|index| {
+            let mut file = RecordFile::open(&dir.join("few"), "run", &config, Some(Shard { index, count: 4 }), false).expect("opens");
+            file.append(index - 1, &json!({"task": names[index - 1], "success": true})).expect("appends");
+            file.path().to_path_buf()
+        })
+        .collect();
+    assert_eq!(merge(&three, false).expect("merges").records, 3);
 }
 
 #[test]

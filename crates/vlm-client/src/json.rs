@@ -85,7 +85,9 @@ const TYPES: [&str; 7] = ["object", "array", "string", "number", "integer", "boo
 
 /// Checks that `schema` is a JSON schema this module can apply: an object (or `true`/`false`)
 /// whose keywords have the right shapes, recursively; its root allows an object (the reply is
-/// read as one, [`first_object`]); every `$ref` points within it (`#/...`) at something there.
+/// read as one, [`first_object`]); every `$ref` points within it (`#/...`) at something there
+/// (a server that decodes under the schema follows it; [`validate`] checks the core keywords
+/// and does not).
 pub fn check_schema(schema: &Value) -> Result<(), String> {
     check_schema_at(schema, "#", schema)?;
     if let Some(kind) = schema.get("type") {
@@ -111,7 +113,7 @@ fn check_schema_at(schema: &Value, at: &str, root: &Value) -> Result<(), String>
         match target {
             Some(pointer) if root.pointer(pointer).is_some() => {}
             Some(_) => return Err(format!("{at}/$ref: {reference} points at nothing in the schema")),
-            None => return Err(format!("{at}/$ref: {reference}: only references within the schema (\"#/...\") are followed")),
+            None => return Err(format!("{at}/$ref: {reference}: only references within the schema (\"#/...\") are accepted")),
         }
     }
     for key in ["$defs", "definitions"] {
@@ -362,7 +364,7 @@ mod tests {
         check(referring("#/definitions/skill"), r##"#/properties/skill/$ref: "#/definitions/skill" points at nothing in the schema"##);
         check(
             referring("other.json#/a"),
-            r##"#/properties/skill/$ref: "other.json#/a": only references within the schema ("#/...") are followed"##,
+            r##"#/properties/skill/$ref: "other.json#/a": only references within the schema ("#/...") are accepted"##,
         );
     }
 }
