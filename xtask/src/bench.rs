@@ -264,8 +264,7 @@ fn time_ours(files: &TaskFiles, runs: usize) -> anyhow::Result<(f64, grounding::
         times.push(start.elapsed().as_secs_f64());
         task = Some(grounded);
     }
-    times.sort_by(f64::total_cmp);
-    Ok((times[times.len() / 2], task.context("no run")?))
+    Ok((crate::input::median(times), task.context("no run")?))
 }
 
 fn ground(benchmarks: &str, limit: Option<usize>, runs: usize, no_reference: bool, json: bool) -> anyhow::Result<ExitCode> {
@@ -695,8 +694,7 @@ fn heuristic(
                     }
                     passes.push(start.elapsed().as_secs_f64() / states.len().max(1) as f64);
                 }
-                passes.sort_by(f64::total_cmp);
-                let ours = passes[passes.len() / 2];
+                let ours = crate::input::median(passes);
                 let mut entry = json!({"ours_seconds_per_evaluation": ours, "values": values});
                 let mut line =
                     format!("{:<34} {:>6} {:>6}  {:<6} {:>12.2}", files.id, states.len(), model.task().facts.len(), name, ours * 1e6);

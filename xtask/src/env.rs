@@ -164,11 +164,6 @@ pub fn run(args: EnvArgs) -> anyhow::Result<ExitCode> {
     Ok(if env.goal_reached() { ExitCode::SUCCESS } else { ExitCode::from(1) })
 }
 
-fn median(mut xs: Vec<f64>) -> f64 {
-    xs.sort_by(f64::total_cmp);
-    xs[xs.len() / 2]
-}
-
 /// Per game: ours (load + first reset, reset alone, mean step over the walkthrough; medians
 /// of `runs`) and the real engine (its reset, which reloads the game, and its mean step over
 /// the same walkthrough), measured one after the other in the same run.
@@ -201,9 +196,9 @@ pub fn bench(subset: &str, limit: usize, runs: usize, no_reference: bool, json: 
         rows.push(serde_json::json!({
             "game": files.id,
             "steps": steps,
-            "ours_load_reset_ms": median(load) * 1e3,
-            "ours_reset_us": median(reset) * 1e6,
-            "ours_step_us": median(step) * 1e6,
+            "ours_load_reset_ms": crate::input::median(load) * 1e3,
+            "ours_reset_us": crate::input::median(reset) * 1e6,
+            "ours_step_us": crate::input::median(step) * 1e6,
         }));
     }
     let mut engine_note = None;
@@ -345,8 +340,8 @@ fn bench_virtualhome(runs: usize, no_reference: bool) -> anyhow::Result<serde_js
         }
         rows.push(serde_json::json!({
             "task": task_id, "steps": lines.len(),
-            "ours_load_reset_ms": median(load) * 1e3, "ours_reset_us": median(reset) * 1e6, "ours_step_us": median(step) * 1e6,
-            "ours_execute_us": median(execute) * 1e6,
+            "ours_load_reset_ms": crate::input::median(load) * 1e3, "ours_reset_us": crate::input::median(reset) * 1e6, "ours_step_us": crate::input::median(step) * 1e6,
+            "ours_execute_us": crate::input::median(execute) * 1e6,
         }));
     }
     let mut note = None;

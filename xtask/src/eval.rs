@@ -191,13 +191,13 @@ fn tasks(suite: Suite, agent: AgentName, task_dir: Option<&Path>, subset: Option
     Ok(ids.into_iter().map(|id| EvalTask::Virtualhome { id }).collect())
 }
 
-/// The expert's record: the benchmark's plan validated through the symbolic pipeline.
 /// The version of what [`expert`] finds: raised whenever grounding, the transition model's
 /// validation or a benchmark's spelling of plans changes a verdict or a figure it records, so
 /// that a resumed replay never takes the old records as the new code's. 1: the first with a
 /// version (its configuration had none before).
 pub const EXPERT_REPLAY_VERSION: u32 = 1;
 
+/// The expert's record: the benchmark's plan validated through the symbolic pipeline.
 fn expert(files: &TaskFiles) -> anyhow::Result<Value> {
     let start = Instant::now();
     let model = TransitionModel::new(crate::input::ground(files)?);
@@ -570,6 +570,13 @@ struct Planned {
     tasks: Vec<EvalTask>,
 }
 
+impl Planned {
+    /// The tasks a run takes of the list: the first `--limit` of them.
+    fn total(&self, limit: Option<usize>) -> usize {
+        self.tasks.len().min(limit.unwrap_or(usize::MAX))
+    }
+}
+
 /// The suites of a run and their tasks, after every check of the input that needs no model.
 fn plan(args: &EvalArgs) -> anyhow::Result<Vec<Planned>> {
     let suites: Vec<Suite> = if args.benchmark == "all" {
@@ -623,29 +630,28 @@ fn plan(args: &EvalArgs) -> anyhow::Result<Vec<Planned>> {
         .into_iter()
         .map(|suite| {
             let subset = suite_subset(&args.subset, suite, args.agent)?;
-            let tasks = tasks(suite, args.agent, args.task_dir.as_deref(), subset.as_deref())?;
+            let planned = Planned { suite, tasks: tasks(suite, args.agent, args.task_dir.as_deref(), subset.as_deref())? };
             // Nothing to run is said before any file is made (a record file of no task would
             // stand in the records folder as a run).
-            let total = tasks.len().min(args.limit.unwrap_or(usize::MAX));
-            if total == 0 {
+            if planned.total(args.limit) == 0 {
                 let listed = subset.as_deref().map_or_else(|| "its task folder".to_string(), |s| format!("the subset {s}"));
                 return Err(InputError(format!("{}: no task to run ({listed} holds none)", suite.name())).into());
             }
-            Ok(Planned { suite, tasks })
+            Ok(planned)
         })
         .collect::<anyhow::Result<Vec<Planned>>>()
         .and_then(|planned| {
             // A shard that selects none of a benchmark's tasks has nothing to run there (no
             // file: `merge` asks for no such shard); none of any is a shard of nothing.
             let Some(shard) = args.shard else { return Ok(planned) };
-            let selects = |p: &Planned| (0..p.tasks.len().min(args.limit.unwrap_or(usize::MAX))).any(|i| shard.selects(i));
+            let selects = |p: &Planned| (0..p.total(args.limit)).any(|i| shard.selects(i));
             let (kept, empty): (Vec<Planned>, Vec<Planned>) = planned.into_iter().partition(selects);
             for p in &empty {
                 eprintln!(
                     "--shard {}/{}: none of the {} tasks of {} (it has fewer than {}); nothing to run there",
                     shard.index,
                     shard.count,
-                    p.tasks.len().min(args.limit.unwrap_or(usize::MAX)),
+                    p.total(args.limit),
                     p.suite.name(),
                     shard.index
                 );
@@ -672,13 +678,13 @@ fn run_once(args: &EvalArgs, planned: &[Planned]) -> anyhow::Result<(serde_json:
     let agent_name = serde_json::to_value(args.agent)?.as_str().unwrap_or_default().to_string();
     let mut summaries = serde_json::Map::new();
     let mut written = Vec::new();
-    for Planned { suite, tasks } in planned {
-        let suite = *suite;
+    for one in planned {
+        let (suite, tasks) = (one.suite, &one.tasks);
         let stem = format!("{}-{agent_name}", suite.name());
         let mut records = RecordFile::open(&args.out, &stem, &config(args, suite, tasks)?, args.shard, args.fresh)
             .map_err(|e| InputError(e.to_string()))?;
         records.check_tasks(&tasks.iter().map(EvalTask::id).collect()).map_err(|e| InputError(e.to_string()))?;
-        let total = tasks.len().min(args.limit.unwrap_or(usize::MAX));
+        let total = one.total(args.limit);
         let selected = (0..total).filter(|&i| args.shard.is_none_or(|s| s.selects(i))).count();
         let bar = crate::input::progress_bar(format!("{} {agent_name}", suite.name()), selected);
         let mut ids = Vec::new();

@@ -31,10 +31,6 @@ impl std::fmt::Display for InputError {
 
 impl std::error::Error for InputError {}
 
-fn read(path: &Path) -> anyhow::Result<String> {
-    read_text(path)
-}
-
 /// The text of a file the command line names: UTF-8 without a byte-order mark; an unreadable
 /// file, or a byte that is not UTF-8 (named by line and column), is bad input.
 pub fn read_text(path: &Path) -> anyhow::Result<String> {
@@ -42,6 +38,12 @@ pub fn read_text(path: &Path) -> anyhow::Result<String> {
         benchmark_data::DataError::Io { source, .. } => InputError(format!("{}: cannot read: {source}", path.display())).into(),
         other => InputError(other.to_string()).into(),
     })
+}
+
+/// The median of timings (the upper one of an even count); `xs` is not empty.
+pub fn median(mut xs: Vec<f64>) -> f64 {
+    xs.sort_by(f64::total_cmp);
+    xs[xs.len() / 2]
 }
 
 /// Refuses `path` as a folder to write into when something else is there (a file): bad input
@@ -67,8 +69,8 @@ impl TaskArgs {
                 let files = TaskFiles {
                     id: problem.display().to_string(),
                     benchmark: Benchmark::Ipc,
-                    domain: read(domain)?,
-                    problem: read(problem)?,
+                    domain: read_text(domain)?,
+                    problem: read_text(problem)?,
                     domain_path: domain.clone(),
                     problem_path: problem.clone(),
                     extra: Extra::None,

@@ -233,11 +233,6 @@ fn finite(x: f64) -> serde_json::Value {
     if x.is_finite() { json!(x) } else { serde_json::Value::Null }
 }
 
-fn median(mut xs: Vec<f64>) -> f64 {
-    xs.sort_by(f64::total_cmp);
-    xs[xs.len() / 2]
-}
-
 /// A deterministic prompt of exactly `n` tokens (English household text, repeated).
 fn bench_prompt(model: &LocalModel, n: usize) -> anyhow::Result<Vec<u32>> {
     let text = "You are in the middle of a kitchen. Looking quickly around you, you see a cabinet 4, a cabinet 3, \
@@ -313,7 +308,7 @@ pub fn bench(args: BenchLmArgs) -> anyhow::Result<ExitCode> {
                 bail!("the sibling recomputed {} tokens for a {k}-token suffix", cost.tokens_prefilled);
             }
         }
-        let ms = median(times);
+        let ms = crate::input::median(times);
         if k == 1 {
             rewind_1 = ms;
         }
@@ -327,9 +322,11 @@ pub fn bench(args: BenchLmArgs) -> anyhow::Result<ExitCode> {
         model.next_logprobs(&b)?;
         full.push(start.elapsed().as_secs_f64() * 1e3);
     }
-    let full_ms = median(full);
+    let full_ms = crate::input::median(full);
 
-    let tok_s = |tokens: usize, seconds: &[f64]| if seconds.is_empty() { None } else { Some(tokens as f64 / median(seconds.to_vec())) };
+    let tok_s = |tokens: usize, seconds: &[f64]| {
+        if seconds.is_empty() { None } else { Some(tokens as f64 / crate::input::median(seconds.to_vec())) }
+    };
     let features: Vec<&str> = [
         ("avx2", cfg!(target_feature = "avx2")),
         ("fma", cfg!(target_feature = "fma")),

@@ -206,29 +206,19 @@ fn run(command: Command) -> anyhow::Result<ExitCode> {
                     Ok(ExitCode::SUCCESS)
                 }
                 Err(error) => {
-                    let mut said = error.describe(model.task());
-                    // The step's line in the plan file, and for an action named with the
+                    // Each step at its line in the plan file, and for an action named with the
                     // wrong number of arguments, how many its schema takes.
-                    if let transition_model::PlanError::UnknownAction { step, text }
-                    | transition_model::PlanError::Inapplicable { step, text, .. } = &error
+                    let mut said = error.describe_located(model.task(), |step| Some(format!("{}:{}", plan.display(), lines[step - 1])));
+                    if let transition_model::PlanError::UnknownAction { text, .. } = &error
+                        && language == SurfaceLanguage::Pddl
                     {
-                        let at = format!("invalid: step {step}");
-                        said = said.replacen(&format!("{at}:"), &format!("{at} ({}:{}):", plan.display(), lines[step - 1]), 1);
-                        if let transition_model::PlanError::UnknownAction { .. } = &error
-                            && language == SurfaceLanguage::Pddl
+                        let words: Vec<&str> = text.trim_matches(|c| c == '(' || c == ')').split_whitespace().collect();
+                        if let Some(schema) =
+                            words.first().and_then(|name| model.task().schemas.iter().find(|s| s.name.eq_ignore_ascii_case(name)))
+                            && schema.params.len() != words.len() - 1
                         {
-                            let words: Vec<&str> = text.trim_matches(|c| c == '(' || c == ')').split_whitespace().collect();
-                            if let Some(schema) =
-                                words.first().and_then(|name| model.task().schemas.iter().find(|s| s.name.eq_ignore_ascii_case(name)))
-                                && schema.params.len() != words.len() - 1
-                            {
-                                said.push_str(&format!(
-                                    " (`{}` takes {} argument{})",
-                                    schema.name,
-                                    schema.params.len(),
-                                    if schema.params.len() == 1 { "" } else { "s" }
-                                ));
-                            }
+                            let plural = if schema.params.len() == 1 { "" } else { "s" };
+                            said.push_str(&format!(" (`{}` takes {} argument{plural})", schema.name, schema.params.len()));
                         }
                     }
                     println!("{said}");

@@ -195,8 +195,7 @@ impl RecordFile {
             file.seek(SeekFrom::End(0)).map_err(io(&path))?;
             eprintln!("{}: cut off a record cut short (a killed run); its task runs again", path.display());
         }
-        let records = parse_records(&path, &text, Some(&hash))?;
-        let lines = text.lines().enumerate().filter(|(_, l)| !l.trim().is_empty()).map(|(n, _)| n + 1).collect();
+        let (lines, records): (Vec<usize>, Vec<Map<String, Value>>) = parse_records(&path, &text, Some(&hash))?.into_iter().unzip();
         let done = records.iter().filter_map(|r| r.get("task").and_then(Value::as_str).map(str::to_string)).collect();
         let line_count = text.lines().count();
         Ok(RecordFile { path, hash, records, lines, line_count, done, file })
@@ -275,8 +274,6 @@ fn write_whole(path: &Path, bytes: &[u8]) -> Result<(), RecordError> {
     Ok(())
 }
 
-/// The records of a JSONL file: every non-empty line an object with a `task`, and, with
-/// `hash`, that configuration.
 /// The whole lines of a records file's `bytes` as text, and the length in bytes of a last line
 /// cut short (0 when the file ends with a newline). The cut is made on the bytes: a record cut
 /// short by a killed run can end inside a character, which must not make the whole lines
@@ -293,7 +290,12 @@ pub(crate) fn whole_lines(path: &Path, mut bytes: Vec<u8>) -> Result<(String, us
     Ok((text, torn))
 }
 
-pub(crate) fn parse_records(path: &Path, text: &str, hash: Option<&str>) -> Result<Vec<Map<String, Value>>, RecordError> {
+/// A record and the line (1-based) it was read from.
+pub(crate) type LineRecord = (usize, Map<String, Value>);
+
+/// The records of a JSONL file, each with its line (1-based): every non-empty line an object
+/// with a `task`, and, with `hash`, that configuration.
+pub(crate) fn parse_records(path: &Path, text: &str, hash: Option<&str>) -> Result<Vec<LineRecord>, RecordError> {
     let mut records = Vec::new();
     let mut seen = BTreeSet::new();
     for (number, line) in text.lines().enumerate() {
@@ -312,7 +314,7 @@ pub(crate) fn parse_records(path: &Path, text: &str, hash: Option<&str>) -> Resu
         if !seen.insert(task.to_string()) {
             return Err(bad(format!("task {task} is recorded twice")));
         }
-        records.push(record);
+        records.push((number + 1, record));
     }
     Ok(records)
 }
@@ -365,8 +367,7 @@ pub fn merge(shards: &[PathBuf], partial: bool) -> Result<Merged, RecordError> {
         if torn > 0 {
             return Err(RecordError::Merge(format!("{}: its last record is cut short; resume that shard first", path.display())));
         }
-        let lines: Vec<usize> = text.lines().enumerate().filter(|(_, l)| !l.trim().is_empty()).map(|(n, _)| n + 1).collect();
-        for (line, record) in lines.into_iter().zip(parse_records(path, &text, None)?) {
+        for (line, record) in parse_records(path, &text, None)? {
             // What a report reads of it, checked here: a merged file passes on no record the
             // report would refuse, and the error names the shard's line, not the merged file's.
             crate::report::check_record(path, line, &record)?;
@@ -405,13 +406,25 @@ pub fn merge(shards: &[PathBuf], partial: bool) -> Result<Merged, RecordError> {
     if let Some(other) = numbers.iter().find(|s| s.count != count) {
         return Err(RecordError::Merge(format!("shards of {count} and of {} given: one run's shards all have the same n", other.count)));
     }
-    // A shard that selects none of the run's tasks (where its configuration gives their
-    // number) ran nothing and wrote no file: it is not missing.
-    let task_count = std::fs::read_to_string(first.with_file_name(format!("{base}.config.json")))
-        .ok()
-        .and_then(|text| serde_json::from_str::<Value>(&text).ok())
-        .and_then(|v| v.pointer("/tasks/count").and_then(Value::as_u64));
-    let selects_any = |index: usize| task_count.is_none_or(|n| (0..n as usize).any(|i| Shard { index, count }.selects(i)));
+    // The run's configuration beside the shards, as `eval` wrote it: the records' (its hash),
+    // and, where it gives one, the run's task count: fewer records are shards that did not
+    // finish, which a merged file would pass off as the whole run; an index past it is no
+    // task of the run; a shard that selects none of its tasks ran nothing and wrote no file.
+    let config_path = first.with_file_name(format!("{base}.config.json"));
+    let text = std::fs::read_to_string(&config_path).map_err(|e| {
+        RecordError::Merge(format!("{}: cannot read the run's configuration beside the shards: {e}", config_path.display()))
+    })?;
+    let written: Value = serde_json::from_str(&text)
+        .map_err(|e| RecordError::Merge(format!("{}:{}:{}: not JSON: {e}", config_path.display(), e.line(), e.column())))?;
+    if config_hash(&written) != config {
+        return Err(RecordError::Merge(format!(
+            "{}: the configuration {} beside the shards, whose records are of {config}",
+            config_path.display(),
+            config_hash(&written)
+        )));
+    }
+    let expected = written.pointer("/tasks/count").and_then(Value::as_u64);
+    let selects_any = |index: usize| expected.is_none_or(|n| (0..n as usize).any(|i| Shard { index, count }.selects(i)));
     let missing: Vec<String> =
         (1..=count).filter(|i| !numbers.iter().any(|s| s.index == *i) && selects_any(*i)).map(|i| i.to_string()).collect();
     if !missing.is_empty() {
@@ -432,24 +445,6 @@ pub fn merge(shards: &[PathBuf], partial: bool) -> Result<Merged, RecordError> {
             return Err(RecordError::Merge(format!("task {task} is in two shard files: {files}")));
         }
     }
-    // The run's configuration beside the shards, as `eval` wrote it: the records' (its hash),
-    // and, where it gives one, the run's task count: fewer records are shards that did not
-    // finish, which a merged file would pass off as the whole run; an index past it is no
-    // task of the run.
-    let config_path = first.with_file_name(format!("{base}.config.json"));
-    let text = std::fs::read_to_string(&config_path).map_err(|e| {
-        RecordError::Merge(format!("{}: cannot read the run's configuration beside the shards: {e}", config_path.display()))
-    })?;
-    let written: Value = serde_json::from_str(&text)
-        .map_err(|e| RecordError::Merge(format!("{}:{}:{}: not JSON: {e}", config_path.display(), e.line(), e.column())))?;
-    if config_hash(&written) != config {
-        return Err(RecordError::Merge(format!(
-            "{}: the configuration {} beside the shards, whose records are of {config}",
-            config_path.display(),
-            config_hash(&written)
-        )));
-    }
-    let expected = written.pointer("/tasks/count").and_then(Value::as_u64);
     if let Some(count) = expected
         && let Some((path, record)) = all.iter().find(|(_, r)| r.get("index").and_then(Value::as_u64).is_some_and(|i| i >= count))
     {

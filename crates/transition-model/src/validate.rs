@@ -64,11 +64,23 @@ pub enum PlanError {
 impl PlanError {
     /// One line, starting `invalid: step K` (or `invalid: goal`), naming what failed.
     pub fn describe(&self, task: &Task) -> String {
+        self.describe_located(task, |_| None)
+    }
+
+    /// [`PlanError::describe`], with where step K is written after its number where `located`
+    /// says (`invalid: step 2 (plan.txt:4): ...`).
+    pub fn describe_located(&self, task: &Task, located: impl Fn(usize) -> Option<String>) -> String {
+        let at = |step: usize| located(step).map_or_else(String::new, |place| format!(" ({place})"));
         match self {
-            PlanError::UnknownAction { step, text } => format!("invalid: step {step}: `{text}` is not an action of this task"),
+            PlanError::UnknownAction { step, text } => format!("invalid: step {step}{}: `{text}` is not an action of this task", at(*step)),
             PlanError::Inapplicable { step, text, action, unmet: parts } => {
                 let parts: Vec<String> = parts.iter().map(|u| u.describe(task)).collect();
-                format!("invalid: step {step}: `{text}` ({}) is not applicable: unmet {}", task.action_name(*action), parts.join(", "))
+                format!(
+                    "invalid: step {step}{}: `{text}` ({}) is not applicable: unmet {}",
+                    at(*step),
+                    task.action_name(*action),
+                    parts.join(", ")
+                )
             }
             PlanError::GoalNotReached { steps, unmet: parts } if parts.is_empty() => {
                 format!("invalid: goal: after {steps} step{} the goal does not hold, and no reachable state satisfies it", plural(*steps))

@@ -134,22 +134,18 @@ fn jitter() -> f64 {
 }
 
 fn attempt(agent: &ureq::Agent, url: &str, body: Option<&[u8]>, bearer: Option<&str>, timeout: Duration) -> Result<Vec<u8>, ChatErrorKind> {
-    let authorization = bearer.map(|token| format!("Bearer {token}"));
+    // The key, on a POST or a GET alike (ureq types the two builders apart).
+    fn authorized<B>(request: ureq::RequestBuilder<B>, bearer: Option<&str>) -> ureq::RequestBuilder<B> {
+        match bearer {
+            Some(token) => request.header("Authorization", &format!("Bearer {token}")),
+            None => request,
+        }
+    }
     let sent = match body {
         Some(body) => {
-            let mut request = agent.post(url).header("Content-Type", "application/json").header("Accept", "application/json");
-            if let Some(value) = &authorization {
-                request = request.header("Authorization", value);
-            }
-            request.send(body)
+            authorized(agent.post(url).header("Content-Type", "application/json"), bearer).header("Accept", "application/json").send(body)
         }
-        None => {
-            let mut request = agent.get(url).header("Accept", "application/json");
-            if let Some(value) = &authorization {
-                request = request.header("Authorization", value);
-            }
-            request.call()
-        }
+        None => authorized(agent.get(url), bearer).header("Accept", "application/json").call(),
     };
     let mut response = sent.map_err(|e| classify(e, timeout))?;
     let status = response.status().as_u16();

@@ -145,10 +145,9 @@ pub fn load(path: &Path) -> Result<RecordSet, ReportError> {
         warnings.push(format!("{}:{line}: a record cut short (a run in progress, or killed) is left out", path.display()));
     }
     let text = text.as_str();
-    let lines: Vec<usize> = text.lines().enumerate().filter(|(_, l)| !l.trim().is_empty()).map(|(n, _)| n + 1).collect();
-    let fields = parse_records(path, text, None)?;
-    let mut records = Vec::with_capacity(fields.len());
-    for (line, fields) in lines.into_iter().zip(fields) {
+    let parsed = parse_records(path, text, None)?;
+    let mut records = Vec::with_capacity(parsed.len());
+    for (line, fields) in parsed {
         let found = fields.get("config").and_then(Value::as_str).unwrap_or("none");
         if found != expected {
             let message = format!("a record of configuration {found}, beside the configuration {} ({expected})", config_path.display());
@@ -196,14 +195,7 @@ pub(crate) fn check(path: &Path, line: usize, fields: &Map<String, Value>) -> Re
         return Err(bad(format!("`attribution` is {attribution}, not null or one of {}", ATTRIBUTIONS.join(", "))));
     }
     // The figures the tables and plots read ([`super::metrics`]), each where present.
-    let at = |path: &str| {
-        let mut parts = path.split('.');
-        let mut value = fields.get(parts.next()?)?;
-        for part in parts {
-            value = value.get(part)?;
-        }
-        Some(value)
-    };
+    let at = |path: &str| super::metrics::field_at(fields, path);
     for path in COUNTS {
         if let Some(value) = at(path)
             && value.as_u64().is_none_or(|n| n > MAX_COUNT)

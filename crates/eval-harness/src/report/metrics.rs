@@ -7,13 +7,18 @@ use serde_json::Value;
 
 use super::load::Record;
 
-fn at<'a>(record: &'a Record, path: &str) -> Option<&'a Value> {
+/// The value at a dotted `path` (`episode.usage.images`) of a record's fields, if there.
+pub(crate) fn field_at<'a>(fields: &'a serde_json::Map<String, Value>, path: &str) -> Option<&'a Value> {
     let mut parts = path.split('.');
-    let mut value = record.fields.get(parts.next()?)?;
+    let mut value = fields.get(parts.next()?)?;
     for part in parts {
         value = value.get(part)?;
     }
     Some(value)
+}
+
+fn at<'a>(record: &'a Record, path: &str) -> Option<&'a Value> {
+    field_at(&record.fields, path)
 }
 
 fn first_number(record: &Record, paths: &[&str]) -> Option<f64> {

@@ -89,8 +89,9 @@ impl VirtualhomeTask {
         };
         let text = String::from_utf8(bytes).map_err(|e| {
             let at = e.utf8_error().valid_up_to();
-            let line = e.as_bytes()[..at].iter().filter(|&&b| b == b'\n').count() + 1;
-            VirtualhomeError::Json { origin: origin.clone(), message: format!("not UTF-8 text at line {line} (byte {at})") }
+            let before = std::str::from_utf8(&e.as_bytes()[..at]).unwrap_or_default();
+            let (line, column) = pddl_syntax::line_column(before, at);
+            VirtualhomeError::Json { origin: origin.clone(), message: format!("not UTF-8 text at line {line}, column {column}") }
         })?;
         let task = VirtualhomeTask::from_json(&text, &origin)?;
         // A task file is named by its task: another id inside is a file renamed or mixed up.
