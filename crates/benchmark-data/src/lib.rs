@@ -7,6 +7,21 @@
 //!
 //! Subsets (`fixtures/subsets/*.txt`, one task id per line) name fixed samples of a
 //! benchmark; [`stratified_subset`] is the rule that made them, [`load_subset`] reads one.
+//!
+//! ```
+//! use benchmark_data::{Benchmark, Extra, Fixtures, stratified_subset};
+//! let fixtures = Fixtures::checkout();
+//! let games = fixtures.load_subset(Benchmark::AlfworldSeen, "alfworld-seen-12")?;
+//! assert_eq!(games.len(), 12);
+//! let Extra::Alfworld(game) = &games[0].extra else { panic!("an ALFWorld game") };
+//! assert!(games[0].problem.contains("(:goal") && !game.walkthrough.is_empty());
+//! // The subset is the stratified rule's sample of the whole set: two games per task type.
+//! let all = fixtures.load(Benchmark::AlfworldSeen)?;
+//! let sample: Vec<&str> = stratified_subset(&all, 12).iter().map(|t| t.id.as_str()).collect();
+//! assert_eq!(sample, games.iter().map(|t| t.id.as_str()).collect::<Vec<_>>());
+//! assert_eq!(sample.iter().filter(|id| id.starts_with("pick_two_obj")).count(), 2);
+//! # Ok::<(), benchmark_data::DataError>(())
+//! ```
 
 use std::path::{Path, PathBuf};
 

@@ -5,6 +5,28 @@
 //! [`Observation`]s and [`Event`]s, and may ask whether the goal holds. The hidden state is
 //! reachable only through the [`Judge`] trait, which evaluation uses after an episode (failure
 //! attribution, precision and recall of beliefs) and which no agent is handed.
+//!
+//! An ALFWorld game from `fixtures/`, played with its expert's walkthrough:
+//!
+//! ```
+//! use household_sim::{AlfworldEnv, Environment};
+//! let game = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+//!     .join("../../fixtures/alfworld/valid_seen/look_at_obj_in_light-AlarmClock-None-DeskLamp-323")
+//!     .join("trial_T20190909_044715_250790/game.tw-pddl");
+//! let mut env = AlfworldEnv::from_game_file(&game)?;
+//! let first = env.reset();
+//! assert!(first.text.contains("Your task is to: look at alarmclock under the desklamp."));
+//! // A command the engine cannot carry out changes nothing, and still counts as a step.
+//! let refused = env.step("take the moon");
+//! assert!(!refused.event.executed());
+//! assert_eq!(refused.observation.text, household_sim::NOTHING_HAPPENS);
+//! for command in env.walkthrough().to_vec() {
+//!     assert!(env.step(&command).event.executed(), "{command}");
+//! }
+//! assert!(env.goal_reached());
+//! assert_eq!(env.steps_taken(), 1 + env.walkthrough().len());
+//! # Ok::<(), household_sim::EnvError>(())
+//! ```
 
 mod alfworld;
 mod env;
