@@ -50,6 +50,8 @@ pub enum RecordError {
     Merge(String),
     #[error("a record must be a JSON object with a string `task`: {0}")]
     NotARecord(String),
+    #[error("{path}: task {task} is recorded already (a file holding a task twice cannot be resumed or reported)")]
+    Duplicate { path: PathBuf, task: String },
 }
 
 fn io(path: &Path) -> impl FnOnce(std::io::Error) -> RecordError + '_ {
@@ -102,8 +104,8 @@ pub fn config_hash(config: &impl Serialize) -> String {
     Sha256::digest(canonical_json(config).as_bytes()).iter().take(6).map(|b| format!("{b:02x}")).collect()
 }
 
-/// One of `count` shards (1-based `index`): the tasks whose position is `index - 1` modulo
-/// `count`.
+/// One of `count` shards (1-based `index`, `1 <= index <= count`, as [`str::parse`] checks):
+/// the tasks whose position is `index - 1` modulo `count`.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct Shard {
     pub index: usize,
@@ -111,9 +113,10 @@ pub struct Shard {
 }
 
 impl Shard {
-    /// Whether the task at `position` (0-based, in the run's task list) is this shard's.
+    /// Whether the task at `position` (0-based, in the run's task list) is this shard's; a
+    /// shard outside `1 <= index <= count` selects none.
     pub fn selects(&self, position: usize) -> bool {
-        position % self.count == self.index - 1
+        self.count > 0 && self.index.checked_sub(1).is_some_and(|i| position % self.count == i)
     }
 
     fn suffix(&self) -> String {
@@ -160,11 +163,14 @@ impl RecordFile {
         let config_path = dir.join(format!("{name}.config.json"));
         let config_text = serde_json::to_string_pretty(&serde_json::to_value(config).unwrap_or(Value::Null)).unwrap_or_default() + "\n";
         match std::fs::read_to_string(&config_path) {
-            Ok(existing) if existing != config_text => {
+            // Compared as the hash compares them (canonical JSON): the text's key order depends
+            // on serde_json's `preserve_order`, which another build of the same code may lack.
+            Ok(existing) => {
                 let found = serde_json::from_str::<Value>(&existing).map(|v| config_hash(&v)).unwrap_or_else(|_| "unreadable".into());
-                return Err(RecordError::ConfigMismatch { path: config_path, expected: hash, found });
+                if found != hash {
+                    return Err(RecordError::ConfigMismatch { path: config_path, expected: hash, found });
+                }
             }
-            Ok(_) => {}
             // Written whole or not at all (a file cut short by a crash would refuse every
             // later open as a mismatch): a synced temporary file renamed into place.
             Err(e) if e.kind() == std::io::ErrorKind::NotFound => write_whole(&config_path, config_text.as_bytes())?,
@@ -234,12 +240,17 @@ impl RecordFile {
     }
 
     /// Appends `record` (a JSON object with a string `task`), adding `index` (the task's
-    /// position in the run's task list) and `config` (the hash), in one write, synced.
+    /// position in the run's task list) and `config` (the hash), in one write, synced. A task
+    /// recorded already is refused ([`RecordError::Duplicate`]) and nothing is written: a file
+    /// holding a task twice is refused by every later open and report.
     pub fn append(&mut self, index: usize, record: &impl Serialize) -> Result<(), RecordError> {
         let Value::Object(mut object) = serde_json::to_value(record).map_err(|e| RecordError::NotARecord(e.to_string()))? else {
             return Err(RecordError::NotARecord("not an object".into()));
         };
         let task = object.get("task").and_then(Value::as_str).ok_or_else(|| RecordError::NotARecord("no `task`".into()))?.to_string();
+        if self.done.contains(&task) {
+            return Err(RecordError::Duplicate { path: self.path.clone(), task });
+        }
         object.insert("index".into(), Value::from(index));
         object.insert("config".into(), Value::from(self.hash.clone()));
         let mut line = Value::Object(object.clone()).to_string();

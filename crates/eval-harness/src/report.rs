@@ -14,8 +14,9 @@
 //!   table and as stacked bars); mean generated tokens, images, observations and model calls
 //!   per task (Figure 2). Every number goes through [`crate::stats`]. A table with nothing to
 //!   show says so.
-//! - Episode pages show what the record holds. The Phase II search tree is not recorded
-//!   (records keep `phase2_detail`, the planner's summary), so the pages show that summary.
+//! - Episode pages show what the record holds: Phase I's steps, the hand-over, the plan, each
+//!   executed step, the verdict, the planner's summary (`phase2_detail`) and, for MCTS, the
+//!   top of its search tree (`search_tree`: the actions tried with visits, values and priors).
 //!
 //! ```
 //! use eval_harness::report::{Record, RecordSet, ReportOptions, build};

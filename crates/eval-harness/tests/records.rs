@@ -39,9 +39,36 @@ fn records_resume_and_carry_their_configuration() {
     let other = json!({"agent": "expert", "benchmark": "alfworld-seen", "seed": 42});
     assert_ne!(config_hash(&other), config_hash(&config));
     assert!(RecordFile::open(&dir, "alfworld-seen-expert", &other, None, false).expect("opens").records().is_empty());
+    // A task recorded already is refused, and nothing is written.
+    let mut reopened = reopened;
+    assert!(matches!(reopened.append(2, &json!({"task": "a", "success": true})), Err(RecordError::Duplicate { task, .. }) if task == "a"));
+    drop(reopened);
+    let reopened = RecordFile::open(&dir, "alfworld-seen-expert", &config, None, false).expect("reopens");
+    assert_eq!(tasks(&reopened), ["a", "b"]);
     // --fresh starts this configuration over (once the run that has it open is done).
     drop(reopened);
     assert!(RecordFile::open(&dir, "alfworld-seen-expert", &config, None, true).expect("opens").records().is_empty());
+}
+
+/// The configuration file beside the records is compared as the hash compares configurations:
+/// the same settings written with the keys in another order (a build without serde_json's
+/// `preserve_order`) are the same run; another setting is refused.
+#[test]
+fn a_configuration_file_is_compared_by_its_content_not_its_text() {
+    let (_tmp_dir, dir) = scratch("config-text");
+    let config = json!({"agent": "ours", "benchmark": "alfworld-seen", "seed": 0});
+    let mut file = RecordFile::open(&dir, "run", &config, None, false).expect("opens");
+    file.append(0, &json!({"task": "a", "success": true})).expect("appends");
+    drop(file);
+    let config_path = dir.join(format!("run-{}.config.json", config_hash(&config)));
+    std::fs::write(&config_path, "{\"seed\":0,\n \"benchmark\": \"alfworld-seen\", \"agent\": \"ours\"}").expect("rewrites");
+    assert_eq!(tasks(&RecordFile::open(&dir, "run", &config, None, false).expect("the same run")), ["a"]);
+    std::fs::write(&config_path, r#"{"seed": 1, "benchmark": "alfworld-seen", "agent": "ours"}"#).expect("rewrites");
+    let error = RecordFile::open(&dir, "run", &config, None, false).expect_err("another run's configuration");
+    assert!(
+        matches!(&error, RecordError::ConfigMismatch { expected, found, .. } if *expected == config_hash(&config) && found != expected),
+        "{error}"
+    );
 }
 
 #[test]
@@ -248,6 +275,10 @@ fn shards_are_given_as_i_of_n() {
     }
     let shard = Shard { index: 2, count: 3 };
     assert_eq!((0..9).filter(|&i| shard.selects(i)).collect::<Vec<_>>(), [1, 4, 7]);
+    // Built by hand outside 1 <= index <= count: selects nothing, without dividing by zero.
+    for shard in [Shard { index: 0, count: 3 }, Shard { index: 1, count: 0 }, Shard { index: 4, count: 3 }] {
+        assert!(!(0..9).any(|i| shard.selects(i)), "{shard:?}");
+    }
 }
 
 /// The hash is of the keys sorted at every level, whatever order serde_json's map keeps (it

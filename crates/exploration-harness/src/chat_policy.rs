@@ -9,7 +9,7 @@
 //! `action` (one of the valid skills, an enum) and `done`.
 
 use serde_json::{Value, json};
-use vlm_client::{ChatModel, ChatRequest, Image, Message, Sampling, chat_json};
+use vlm_client::{ChatErrorKind, ChatModel, ChatRequest, Image, Message, Sampling, chat_json};
 
 use crate::evidence::Fact;
 use crate::phase1::{Policy, PolicyError, PolicyInput, PolicyReply, PolicyUsage, RunError, Skill};
@@ -114,16 +114,23 @@ impl Policy for ChatPolicy {
             .with_thinking(false)
             .with_json_schema(reply_schema(&input.skills.list));
         self.last_prompt = text;
-        let reply = chat_json(self.model.as_mut(), &request).map_err(|e| {
-            if e.kind.is_unavailable() {
-                PolicyError::Run(RunError(format!("the chat model is unavailable: {e}")))
-            } else {
-                PolicyError::Unreadable(e.to_string())
+        // Counted as the direct policy counts them (`direct::DirectUsage`): every request, a
+        // repair turn and a reply that could not be read included, and the tokens the model
+        // spent on all of them.
+        let before = self.model.usage();
+        let answer = chat_json(self.model.as_mut(), &request);
+        let after = self.model.usage();
+        self.usage.prompt_tokens += after.prompt_tokens.saturating_sub(before.prompt_tokens);
+        self.usage.generated_tokens += after.completion_tokens.saturating_sub(before.completion_tokens);
+        let reply = match answer {
+            Ok(reply) => reply,
+            Err(e) if e.kind.is_unavailable() => return Err(PolicyError::Run(RunError(format!("the chat model is unavailable: {e}")))),
+            Err(e) => {
+                self.usage.calls += if matches!(e.kind, ChatErrorKind::InvalidJson { .. }) { 2 } else { 1 };
+                return Err(PolicyError::Unreadable(e.to_string()));
             }
-        })?;
-        self.usage.calls += 1;
-        self.usage.prompt_tokens += reply.usage.prompt_tokens;
-        self.usage.generated_tokens += reply.usage.completion_tokens;
+        };
+        self.usage.calls += 1 + u64::from(reply.repaired);
         self.usage.cached_calls += u64::from(reply.reply.cached);
         read_reply(&reply.value).map_err(PolicyError::Unreadable)
     }

@@ -79,8 +79,10 @@
 /// prompt past the model's context are no plan); Phase I and the direct policy ask for thinking
 /// off, and Phase II's prompt is rendered thinking off (the paper's decoding settings; a
 /// template without a thinking mode, SmolLM2's, renders as before); a skill the step budget
-/// cuts short is `cut`, not `success`.
-pub const HARNESS_VERSION: u32 = 14;
+/// cuts short is `cut`, not `success`; 15: Phase I's usage counts requests as the direct
+/// policy's does (a repair turn is a second call, a reply that could not be read is a call and
+/// its tokens count; before, the first was one call and the second none).
+pub const HARNESS_VERSION: u32 = 15;
 
 pub mod alfworld;
 pub mod chat_planner;

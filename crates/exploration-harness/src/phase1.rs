@@ -200,11 +200,17 @@ pub struct PolicyReply {
     pub done: bool,
 }
 
-/// What a policy spent.
+/// What a policy spent, counted as the direct policy's [`crate::DirectUsage`] is: every chat
+/// request (a repair turn is a second one, a reply that could not be read counts too), and the
+/// tokens the model read and wrote in all of them. Zero for the systematic sweep.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize)]
 pub struct PolicyUsage {
+    /// Chat requests.
     pub calls: u64,
+    /// Prompt tokens over those requests, as the model counts them (an image's tokens
+    /// included where a server counts them).
     pub prompt_tokens: u64,
+    /// Tokens the model generated over those requests.
     pub generated_tokens: u64,
     /// Observations shown to the model, and of them those with a picture.
     pub observations: u64,

@@ -177,6 +177,65 @@ fn an_unreachable_model_stops_the_run_and_an_unreadable_reply_is_refused() {
     );
 }
 
+/// Answers in prose, except every `valid_every`-th request (never when 0), which the scripted
+/// model answers; counts every request in `asked`.
+struct Prose {
+    valid_every: usize,
+    asked: std::rc::Rc<std::cell::Cell<u64>>,
+    inner: Scripted,
+}
+
+impl ChatModel for Prose {
+    fn chat(&mut self, request: &ChatRequest) -> Result<ChatReply, ChatError> {
+        self.asked.set(self.asked.get() + 1);
+        if self.valid_every > 0 && self.asked.get().is_multiple_of(self.valid_every as u64) {
+            return self.inner.chat(request);
+        }
+        reply("I will look in the fridge first.".into(), &mut self.inner.usage)
+    }
+
+    fn endpoint(&self) -> String {
+        "prose".into()
+    }
+
+    fn usage(&self) -> Usage {
+        self.inner.usage
+    }
+}
+
+/// Phase I counts what the model spent as the direct policy counts it: every request, a repair
+/// turn and a reply that could not be read included, with their tokens.
+#[test]
+fn phase_one_counts_every_request_a_repair_and_an_unreadable_reply_included() {
+    use exploration_harness::Policy;
+    use exploration_harness::phase1::explore;
+    let (ontology, domain, grammar) = alfworld_parts();
+    let game = fixtures()
+        .join("alfworld/valid_seen/pick_clean_then_place_in_recep-Mug-None-CoffeeMachine-26/trial_T20190907_233056_022802/game.tw-pddl");
+    // Every first answer prose and every repair read (two calls a decision), then none read.
+    for valid_every in [2, 0] {
+        let asked = std::rc::Rc::new(std::cell::Cell::new(0));
+        let model = Prose { valid_every, asked: asked.clone(), inner: Scripted { usage: Usage::default(), prompts: Vec::new() } };
+        let mut policy = ChatPolicy::new(Box::new(model), "prose");
+        let mut env = AlfworldEnv::from_game_file(&game).unwrap();
+        let goal = parse_goal(env.goal()).unwrap();
+        let mut adapter = AlfworldAdapter::new(ontology.clone(), domain.clone(), grammar.clone(), env.goal());
+        let first = env.reset();
+        let exploration = explore(&mut env, &mut adapter, &mut policy, &goal, &first, 10, None).expect("the run goes on");
+        let usage = policy.usage();
+        let decisions = exploration.record.decisions.len() as u64;
+        assert!(asked.get() >= 2 && asked.get().is_multiple_of(2), "{valid_every}: {} requests", asked.get());
+        assert_eq!(usage.calls, asked.get(), "{valid_every}: {:?}", exploration.record.decisions);
+        assert_eq!((usage.prompt_tokens, usage.generated_tokens), (100 * asked.get(), 20 * asked.get()), "{valid_every}");
+        let errors = exploration.record.decisions.iter().filter(|d| d.outcome == "error").count() as u64;
+        if valid_every == 0 {
+            assert_eq!(errors, decisions, "no reply was read");
+        } else {
+            assert_eq!(errors, 0, "every repair was read");
+        }
+    }
+}
+
 /// Proposes random facts (over names from the prompt and made-up ones) and a random valid skill.
 struct Random {
     rng: household_sim::PythonRandom,

@@ -2,11 +2,14 @@
 //!
 //! Heuristics: [`Blind`], [`GoalCount`], [`HMax`], [`HAdd`], [`HFF`] (with its relaxed plan
 //! and preferred operators), [`LmCut`], [`RemainingPlanCost`], and a [`WeightedMix`] of any of
-//! them, as the paper's MCTS value uses. All honour action costs and every goal the grounder
-//! produces: the delete relaxation ([`relaxed`]) compiles the goal — a disjunction of
-//! conditions — into one auxiliary goal fact reached by zero-cost operators, one per
-//! disjunct, as Fast Downward compiles complex goals. A [`Heuristic`] keeps its buffers
-//! between calls: evaluating allocates nothing. `None` is a dead end (h = ∞).
+//! them, as the paper's MCTS value uses. All take every goal the grounder produces, and all but
+//! [`GoalCount`] (unmet goal literals, costs aside) honour action costs: the delete relaxation
+//! ([`relaxed`]) compiles the goal — a disjunction of conditions — into one auxiliary goal
+//! fact reached by zero-cost operators, one per disjunct, as Fast Downward compiles complex
+//! goals. h_max, h_add, h_FF and LM-cut keep their buffers between calls: evaluating
+//! allocates nothing ([`GoalCount`] collects each disjunct's unmet literals,
+//! [`RemainingPlanCost`] runs a search, [`Memo`] keeps each new state). `None` is a dead end
+//! (h = ∞).
 //!
 //! Search ([`search`]): A*, eager and lazy greedy best-first search with optional
 //! preferred operators, over a compact [`search::StateRegistry`].

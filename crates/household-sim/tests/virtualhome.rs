@@ -220,3 +220,20 @@ fn the_judge_sees_the_hidden_state_the_agent_does_not() {
     assert_eq!(e.goal().family, "Tiny");
     assert_eq!(e.admissible_commands(), None);
 }
+
+/// A script line built by hand with the wrong number of objects is the executor's failure, as
+/// `ScriptLine::parse` refuses it, not a panic; the world is unchanged.
+#[test]
+fn a_hand_built_line_of_the_wrong_arity_fails_without_a_change() {
+    use household_sim::{ScriptLine, VhAction};
+    let task = VirtualhomeTask::from_json(&scene(PLATE_IN_DISHWASHER), "tiny.json").expect("tiny scene parses");
+    let mut world = task.init.clone();
+    let before = format!("{world:?}");
+    let short = ScriptLine { action: VhAction::PutIn, objects: vec![("plate".into(), 21)] };
+    assert_eq!(world.execute(&short), Err("Wrong number of parameters for \"PUTIN\". Got 1, expected 2".to_string()));
+    let none = ScriptLine { action: VhAction::Walk, objects: Vec::new() };
+    assert!(world.execute(&none).is_err());
+    assert_eq!(format!("{world:?}"), before);
+    let parsed = ScriptLine::parse("[PUTIN] <plate> (21)").expect_err("the parser refuses it too");
+    assert_eq!(parsed, "Wrong number of parameters for \"PUTIN\". Got 1, expected 2");
+}

@@ -109,7 +109,8 @@ pub struct Budget {
     pub wall_clock: Option<Duration>,
     /// Next-token distributions requested from the model (tokens it generates).
     pub model_calls: Option<u64>,
-    /// Tokens of one greedy or sampled plan (the paper: 512).
+    /// Tokens of one plan (the paper: 512): greedy and sampled decoding stop there, and MCTS
+    /// makes a prefix of this many tokens a leaf (closed, valued where it stands).
     pub max_tokens: usize,
     /// Actions in one plan: a longer prefix is a leaf of the search.
     pub max_actions: usize,

@@ -6,7 +6,9 @@
 
 use crate::diagnostic::Span;
 
-/// A lowercased name with where it was written.
+/// A name with where it was written. The parser lowercases names (PDDL is case-insensitive);
+/// [`Name::new`] keeps the text as given, so a tree built in code with capitals prints text
+/// that parses back to the lowercased tree.
 #[derive(Debug, Clone, PartialEq, Eq, Hash)]
 pub struct Name {
     pub text: String,

@@ -5,7 +5,8 @@
 //! [`Diagnostic::render`] turns into `file:line:column`. The strict [`parse_domain`] and
 //! [`parse_problem`] wrap them and fail on the first error-level diagnostic. [`check`]
 //! resolves names (predicates, functions, types, objects, variables) and arities. The
-//! `Display` impls print a tree back as PDDL that parses to an equal tree.
+//! `Display` impls print a tree back as PDDL that parses to an equal tree (names lowercased, as
+//! the parser writes them).
 //!
 //! Supported: `:strips`, `:typing` (with `either`), `:negative-preconditions`,
 //! `:disjunctive-preconditions`, `:equality`, `:existential-preconditions`,

@@ -86,8 +86,10 @@ pub fn load_tokenizer(path: &Path) -> Result<Tokenizer, HfError> {
     Tokenizer::from_file(path).map_err(|e| HfError::Read { path: path.display().to_string(), message: e.to_string() })
 }
 
-/// The byte vocabulary of `tokenizer`; `eos` names the end-of-sequence tokens (those absent
-/// from the vocabulary are skipped; at least one must be present).
+/// The byte vocabulary of `tokenizer`; `eos` names the end-of-sequence tokens. Only names of
+/// the tokenizer's added special tokens count (Qwen3's ordinary `</s>` does not end a
+/// sequence); the others, and names absent from the vocabulary, are skipped; at least one must
+/// remain ([`HfError::NoEos`]).
 pub fn vocabulary(tokenizer: &Tokenizer, eos: &[&str], path: &Path) -> Result<Vocabulary, HfError> {
     let path_text = || path.display().to_string();
     let decoding = decoding(tokenizer.get_decoder()).map_err(|decoder| HfError::UnsupportedDecoder { path: path_text(), decoder })?;

@@ -38,6 +38,7 @@ pub fn chat_json(model: &mut dyn ChatModel, request: &ChatRequest) -> Result<Jso
         attempts: 0,
         elapsed: Default::default(),
     })?;
+    let started = std::time::Instant::now();
     let first = model.chat(request)?;
     let mut usage = first.usage;
     let error = match read_json(&first.text, &schema) {
@@ -57,7 +58,7 @@ pub fn chat_json(model: &mut dyn ChatModel, request: &ChatRequest) -> Result<Jso
             kind: ChatErrorKind::InvalidJson { error, reply: second.text.chars().take(500).collect() },
             url: model.endpoint(),
             attempts: first.attempts + second.attempts,
-            elapsed: Default::default(),
+            elapsed: started.elapsed(),
         }),
     }
 }

@@ -332,8 +332,14 @@ impl World {
         self.has_state(self.character, NodeState::Sitting) || self.has_state(self.character, NodeState::Lying)
     }
 
-    /// Executes one line; on failure nothing changes and the executor's message comes back.
+    /// Executes one line; on failure nothing changes and the executor's message comes back. A
+    /// line built by hand with the wrong number of objects fails as [`ScriptLine::parse`]
+    /// refuses it.
     pub fn execute(&mut self, line: &ScriptLine) -> Result<(), Failure> {
+        if line.objects.len() != line.action.arity() {
+            let (name, got, expected) = (line.action.name(), line.objects.len(), line.action.arity());
+            return Err(format!("Wrong number of parameters for \"{name}\". Got {got}, expected {expected}"));
+        }
         let mut nodes = Vec::with_capacity(line.objects.len());
         for (name, id) in &line.objects {
             match self.graph.index_of(*id) {
@@ -342,7 +348,7 @@ impl World {
             }
         }
         let first = nodes.first().copied();
-        let node = || first.expect("arity checked by ScriptLine::parse");
+        let node = || first.expect("arity checked above");
         match line.action {
             Action::Walk | Action::Run => self.walk(node()),
             Action::Find => self.find(node()),

@@ -293,6 +293,10 @@ pub struct VirtualhomeEnv {
 }
 
 impl VirtualhomeEnv {
+    /// The environment of `task`, announced as `benchmark`'s ([`GoalAnnotation::benchmark`]):
+    /// `virtualhome-eai` or `virtualhome-rearrange`, the names the agent's goal parser and the
+    /// direct policy's action list read (`exploration_harness::parse_goal` refuses a name
+    /// that does not start with `virtualhome`).
     pub fn new(task: VirtualhomeTask, benchmark: &str) -> VirtualhomeEnv {
         let annotation = GoalAnnotation {
             benchmark: benchmark.to_string(),

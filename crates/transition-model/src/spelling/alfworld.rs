@@ -13,7 +13,7 @@
 //! `sink_bar_..._bar_sinkbasin` is a `sinkbasin`). Within a key, entities are numbered
 //! `n, n-1, ..., 1` in ascending byte order of their ids: the smallest id is `alarmclock n`,
 //! the largest `alarmclock 1`. Ids without `_bar_` (agents, type constants) are never
-//! spelled. Checked against all 340 walkthroughs in `fixtures/` (`tests/walkthroughs.rs`).
+//! spelled. Checked against all 340 walkthroughs in `fixtures/` (`tests/real_plans.rs`).
 
 use grounding::{ObjectId, Task};
 use rustc_hash::FxHashMap;
@@ -153,8 +153,8 @@ impl Spelling {
     }
 
     /// TextWorld commands from the game's grammar, objects written by `names` (indexed by
-    /// object; an action with an unnamed object has no spelling). An agent whose problem names
-    /// objects as it perceived them passes those names.
+    /// object; an action with an unnamed object, `None` or past the end of `names`, has no
+    /// spelling). An agent whose problem names objects as it perceived them passes those names.
     pub fn alfworld_with_names(task: &Task, grammar: &str, names: Vec<Option<String>>) -> Result<Spelling, SpellingError> {
         let templates = templates(grammar)?;
         let mut compiled = Vec::with_capacity(task.schemas.len());
@@ -168,7 +168,7 @@ impl Spelling {
             for piece in &compiled[action.schema.index()] {
                 match piece {
                     Piece::Text(text) => out.push_str(text),
-                    Piece::Param(index) => out.push_str(names[action.args[*index].index()].as_deref()?),
+                    Piece::Param(index) => out.push_str(names.get(action.args[*index].index())?.as_deref()?),
                 }
             }
             Some(out)
