@@ -6,7 +6,7 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 
 use clap::Args;
-use household_sim::{AlfworldEnv, Environment, PythonRandom};
+use household_sim::{AlfworldEnv, Environment, Judge, PythonRandom};
 
 use crate::input::InputError;
 

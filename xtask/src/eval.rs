@@ -84,7 +84,8 @@ impl Suite {
 pub struct EvalArgs {
     /// Benchmarks: alfworld-seen, alfworld-train, virtualhome-eai, virtualhome-rearrange
     /// (comma-separated), or all [expert: the first three; ours, planner, direct: alfworld-seen
-    /// and virtualhome-rearrange].
+    /// and virtualhome-rearrange]. Not alfworld-train for ours and planner: ALFWorld's F_str is
+    /// derived from its games.
     #[arg(long, default_value = "all")]
     benchmark: String,
     /// The agent.
@@ -599,6 +600,16 @@ fn plan(args: &EvalArgs) -> anyhow::Result<Vec<Planned>> {
     crate::input::folder_to_write(&args.out, "--out")?;
     if args.agent == AgentName::Expert && suites.contains(&Suite::VirtualhomeRearrange) {
         return Err(InputError("--agent expert: the rearrangement set has no expert plans in the benchmark's own form".into()).into());
+    }
+    // ALFWorld's F_str (fixtures/ontology/alfworld.txt) is read off valid_train's problem files
+    // (`cargo xtask ontology`): an agent with Phase I would start a valid_train game knowing
+    // facts of that game's own problem file.
+    if matches!(args.agent, AgentName::Ours | AgentName::Planner) && suites.contains(&Suite::AlfworldTrain) {
+        return Err(InputError(format!(
+            "--agent {}: alfworld-train is the set ALFWorld's F_str is derived from (fixtures/ontology/alfworld.txt), so Phase I would know its games' own facts; evaluate on alfworld-seen",
+            format!("{:?}", args.agent).to_lowercase()
+        ))
+        .into());
     }
     if args.agent == AgentName::Direct && args.episode.explorer == crate::model_spec::ModelSpec::Systematic {
         return Err(InputError("--agent direct needs a chat model: --explorer smollm2, a GGUF path, or openai:URL".into()).into());

@@ -39,6 +39,21 @@ fn an_unknown_model_is_bad_input() {
     assert!(!dir.exists(), "no records for a run that never started");
 }
 
+/// ALFWorld's F_str is read off valid_train's problem files: an agent with Phase I is not
+/// evaluated there (it would know facts of each game's own problem); the expert and the direct
+/// policy, which use no F_str, are.
+#[test]
+fn agents_with_phase_one_are_not_evaluated_on_the_set_f_str_comes_from() {
+    let (_tmp_dir, dir) = out("train");
+    for agent in ["ours", "planner"] {
+        let stderr = refused(&["--agent", agent, "--explorer", "systematic", "--benchmark", "alfworld-train"], &dir);
+        assert!(stderr.contains(&format!("--agent {agent}: alfworld-train is the set ALFWorld's F_str is derived from")), "{stderr}");
+        assert!(!dir.exists(), "no records for a run that never started");
+    }
+    let output = xtask(&["eval", "--agent", "expert", "--benchmark", "alfworld-train", "--limit", "1", "--out", dir.to_str().unwrap()]);
+    assert_eq!(output.status.code(), Some(0), "{}", String::from_utf8_lossy(&output.stderr));
+}
+
 #[test]
 fn the_direct_agent_needs_a_chat_model() {
     let (_tmp_dir, dir) = out("systematic");

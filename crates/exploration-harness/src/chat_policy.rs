@@ -65,13 +65,17 @@ pub fn system_prompt(benchmark: &str) -> String {
     )
 }
 
+/// The example fact Phase I's VirtualHome prompt shows: ids no scene of EAI's or the
+/// rearrangement set's holds (theirs stay below 2,100).
+pub const VIRTUALHOME_EXAMPLE: &str = "INSIDE(plate (9001), cabinet (9002))";
+
 /// The user message's text (the prompt figure's sections).
 pub fn user_prompt(input: &PolicyInput<'_>) -> String {
     let list = |items: &[String], empty: &str| if items.is_empty() { empty.to_string() } else { items.join("\n") };
     let skills: Vec<String> = input.skills.list.iter().map(|s| format!("- {s}")).collect();
-    // A fact in the benchmark's own vocabulary, as its perceiver reads it back.
-    let example =
-        if input.benchmark.starts_with("virtualhome") { "INSIDE(plate (1001), cabinet (5))" } else { "inReceptacle(mug 2, countertop 1)" };
+    // A fact in the benchmark's own vocabulary, as its perceiver reads it back. VirtualHome's
+    // names no node of any scene (a real id, such as 1001, is a goal's plate in some EAI tasks).
+    let example = if input.benchmark.starts_with("virtualhome") { VIRTUALHOME_EXAMPLE } else { "inReceptacle(mug 2, countertop 1)" };
     format!(
         "Task:\n{task}\nFind each listed object and determine where it is.\n\n\
          Objects to find and locate:\n{objects}\n\n\

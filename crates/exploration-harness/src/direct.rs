@@ -390,6 +390,8 @@ pub fn run_direct<E: Environment + Judge>(
     let mut model_millis = 0.0;
     let mut done_reply = None;
     let end = loop {
+        // The paper's direct policies end on the simulator's success (Appendix: Direct Visual
+        // Interaction), in both benchmarks: the harness asks the goal check, not the model.
         if env.goal_reached() {
             break DirectEnd::Success;
         }

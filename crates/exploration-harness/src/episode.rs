@@ -252,9 +252,9 @@ pub fn run_episode<E: Environment + Judge>(
     let mut explored_out = false;
     let mut not_executed = false;
     loop {
-        // The environment's goal check holds (Phase I's steps or an earlier plan's reached it):
-        // the episode is over, as the benchmark's engine ends it.
-        if env.goal_reached() {
+        // The engine has ended the episode (ALFWorld's game, won by Phase I's steps or an
+        // earlier plan's).
+        if env.done() {
             break;
         }
         episode.handovers += 1;
@@ -353,21 +353,20 @@ pub fn run_episode<E: Environment + Judge>(
                 not_executed = true;
                 break;
             }
-            // The rest of the plan is not sent: the engine ends the episode at the goal.
-            if env.goal_reached() {
+            // The rest of the plan is not sent where the engine has ended the episode (ALFWorld's
+            // game once won); EAI's executor runs the whole script and judges its end.
+            if env.done() {
                 break;
             }
         }
         episode.plan_invalid = false;
-        if let Some(step) =
-            phase2.invalid_step.as_ref().filter(|_| !not_executed && episode.steps.len() < config.budget && !env.goal_reached())
-        {
+        if let Some(step) = phase2.invalid_step.as_ref().filter(|_| !not_executed && episode.steps.len() < config.budget && !env.done()) {
             episode.failure = Some(format!("plan step {} cannot be grounded: {step}", episode.plan.len() + 1));
             episode.plan_invalid = true;
             not_executed = true;
         }
         episode.execute_ms += t.elapsed().as_secs_f64() * 1e3;
-        if !(not_executed && config.closed_loop && episode.steps.len() < config.budget) || env.goal_reached() {
+        if !(not_executed && config.closed_loop && episode.steps.len() < config.budget) || env.done() {
             break;
         }
     }

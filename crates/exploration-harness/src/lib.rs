@@ -79,9 +79,14 @@
 /// prompt past the model's context are no plan); Phase I and the direct policy ask for thinking
 /// off, and Phase II's prompt is rendered thinking off (the paper's decoding settings; a
 /// template without a thinking mode, SmolLM2's, renders as before); a skill the step budget
-/// cuts short is `cut`, not `success`; 15: Phase I's usage counts requests as the direct
-/// policy's does (a repair turn is a second call, a reply that could not be read is a call and
-/// its tokens count; before, the first was one call and the second none).
+/// cuts short is `cut`, not `success`; 15: the episode ends where the benchmark's engine ends
+/// it ([`household_sim::Environment::done`]): an ALFWorld game once won, as in 11, but no
+/// VirtualHome episode, since EAI's executor runs a whole script and judges its end (11 ended
+/// Phase I and the plan at the first line after which EAI's goal held, a bit of the hidden
+/// state the agent cannot see; the direct policy still ends on success, as the paper has its
+/// direct policies do); Phase I's usage counts requests as the direct policy's does (a repair
+/// turn is a second call, a reply that could not be read is a call and its tokens count;
+/// before, the first was one call and the second none).
 pub const HARNESS_VERSION: u32 = 15;
 
 pub mod alfworld;

@@ -397,8 +397,8 @@ pub fn resume(
     // The frontier's width now (it narrows as `Frontier` says).
     let mut width = frontier.map(|f| f.width);
     let stop = loop {
-        // The environment's own goal check ends the episode (ALFWorld's game is done once won).
-        if env.goal_reached() {
+        // The engine has ended the episode (ALFWorld's game is done once won).
+        if env.done() {
             break "goal".to_string();
         }
         if adapter.ready(goal, &belief, &record) {
@@ -528,7 +528,7 @@ pub fn resume(
             steps.push(record.steps.len());
             record.steps.push(StepRecord { phase: "explore", command, executed, observation: result.observation.text.clone() });
             observation = result.observation;
-            if env.goal_reached() {
+            if env.done() {
                 break;
             }
             // A recovery that executes makes up for the failure it answered, not for others.

@@ -393,9 +393,32 @@ fn the_example_fact_is_in_the_benchmark_s_vocabulary() {
         })
     };
     let virtualhome = prompt("virtualhome-rearrange");
-    assert!(virtualhome.contains("e.g. INSIDE(plate (1001), cabinet (5))") && !virtualhome.contains("inReceptacle"), "{virtualhome}");
+    assert!(virtualhome.contains("e.g. INSIDE(plate (9001), cabinet (9002))") && !virtualhome.contains("inReceptacle"), "{virtualhome}");
     assert!(prompt("alfworld").contains("e.g. inReceptacle(mug 2, countertop 1)"));
     // The example reads back as a fact in VirtualHome's vocabulary.
-    let fact = exploration_harness::Fact::parse("INSIDE(plate (1001), cabinet (5))").expect("a fact");
+    let fact = exploration_harness::Fact::parse(exploration_harness::chat_policy::VIRTUALHOME_EXAMPLE).expect("a fact");
     assert_eq!((fact.predicate.as_str(), fact.args.len()), ("INSIDE", 2));
+    // Its ids are no node's of any scene in fixtures/ (EAI's and the rearrangement set's), so
+    // the prompt names no instance the agent has not perceived.
+    let mut scenes = 0;
+    for folder in ["virtualhome-eai/graphs", "virtualhome-rearrange"] {
+        for file in std::fs::read_dir(fixtures().join(folder)).expect("scenes") {
+            let path = file.expect("entry").path();
+            if !path.to_string_lossy().ends_with(".json.gz") {
+                continue;
+            }
+            let mut text = String::new();
+            std::io::Read::read_to_string(&mut flate2::read::GzDecoder::new(std::fs::File::open(&path).expect("opens")), &mut text)
+                .expect("gzip");
+            for id in ["9001", "9002"] {
+                assert!(
+                    !text.contains(&format!("\"id\": {id}")) && !text.contains(&format!("\"id\":{id}")),
+                    "{}: node {id}",
+                    path.display()
+                );
+            }
+            scenes += 1;
+        }
+    }
+    assert!(scenes > 200, "{scenes} scenes read");
 }

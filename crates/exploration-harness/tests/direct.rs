@@ -300,14 +300,14 @@ impl Environment for Pictured {
     fn goal_reached(&self) -> bool {
         self.0.goal_reached()
     }
+    fn done(&self) -> bool {
+        self.0.done()
+    }
     fn steps_taken(&self) -> usize {
         self.0.steps_taken()
     }
     fn goal(&self) -> &GoalAnnotation {
         self.0.goal()
-    }
-    fn admissible_commands(&self) -> Option<Vec<String>> {
-        self.0.admissible_commands()
     }
 }
 
@@ -320,6 +320,9 @@ impl Judge for Pictured {
     }
     fn engine_script(&self) -> Vec<EngineLine> {
         self.0.engine_script()
+    }
+    fn admissible_commands(&self) -> Option<Vec<String>> {
+        self.0.admissible_commands()
     }
 }
 

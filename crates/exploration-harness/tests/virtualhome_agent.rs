@@ -8,7 +8,7 @@ use std::path::{Path, PathBuf};
 use exploration_harness::virtualhome::VirtualhomeAdapter;
 mod common;
 
-use common::{Restless, assert_ends_at_the_win, assert_no_target_repeats};
+use common::{Restless, assert_ends_where_the_engine_does, assert_no_target_repeats};
 use exploration_harness::{Attribution, Episode, EpisodeConfig, Grounded, Ontology, PhaseTwo, Systematic, parse_goal, run_episode};
 use household_sim::{Environment, VirtualhomeEnv, VirtualhomeTask};
 
@@ -82,7 +82,7 @@ fn play_set(dir: &Path, benchmark: &str) -> (usize, usize, BTreeMap<String, usiz
         let sent: Vec<(&str, bool)> = episode.steps.iter().map(|s| (s.command.as_str(), s.executed)).collect();
         assert_eq!(script, sent, "{}", path.display());
         let mut replay = VirtualhomeEnv::new(VirtualhomeTask::load(path).unwrap(), benchmark);
-        assert_ends_at_the_win(&mut replay, &episode, &path.display().to_string());
+        assert_ends_where_the_engine_does(&mut replay, &episode, &path.display().to_string());
         // Plans are executable by construction: a step the environment refuses from a state
         // Phase I got right would be a soundness bug of the hand-over.
         assert_ne!(episode.attribution, Some(Attribution::Grounding), "{}: {:?}", path.display(), episode.failure);
@@ -183,6 +183,23 @@ fn the_objects_the_task_sentence_names_decide_which_instance_is_meant() {
 /// EAI's scene of 1004_2 with `goal` as its `vh_goal`.
 fn scene_1004_2_with_goal(goal: serde_json::Value) -> VirtualhomeTask {
     scene_1004_2_edited(|task| task["vh_goal"] = goal)
+}
+
+/// EAI's executor ends no episode (it judges the state at the end of a whole script), so the
+/// goal holding already does not end Phase I: the agent explores until Ready, hands over the
+/// state it perceived, and the plan from it is empty. (Until HARNESS_VERSION 15 Phase I stopped
+/// at `goal` before its first step, on a bit of hidden state the agent never sees.)
+#[test]
+fn a_goal_that_holds_from_the_start_does_not_end_a_virtualhome_episode() {
+    let task = scene_1004_2_with_goal(serde_json::json!({"actions": [], "goal": [{"id": 417, "class_name": "computer", "state": "OFF"}]}));
+    let mut env = VirtualhomeEnv::new(task.clone(), "virtualhome-eai");
+    env.reset();
+    assert!(env.goal_reached() && !env.done(), "the goal holds and the engine has not ended the episode");
+    let episode = play_task(task, Path::new("1004_2 edited"), "virtualhome-eai", &ontology());
+    assert!(episode.success, "{:?}", episode.failure);
+    assert_ne!(episode.phase1_stop, "goal");
+    assert!(episode.phase1_steps > 0, "Phase I took no step");
+    assert!(episode.plan.is_empty(), "plan {:?}", episode.plan);
 }
 
 /// EAI's scene of 1004_2 (its task file as JSON), edited.

@@ -72,9 +72,11 @@ pub struct GoalAnnotation {
 
 /// A partially observable household: the only view of the world an agent gets.
 ///
-/// The true state stays inside; the agent sees observations and events. The goal check is
-/// the environment's own (the benchmark's engine decides success), so an agent can ask
-/// whether it has won but not what is missing: that is the [`Judge`]'s.
+/// The true state stays inside; the agent sees observations and events, and whether the engine
+/// has ended the episode ([`Environment::done`]), as the benchmark's engine tells its agents.
+/// The goal check is the environment's own (the benchmark's engine decides success): an
+/// episode is judged by it, and a harness the paper lets end on success (its direct policies)
+/// may ask it; what is missing is the [`Judge`]'s.
 pub trait Environment {
     /// Starts the episode over from the task's initial state; the first observation.
     fn reset(&mut self) -> Observation;
@@ -83,13 +85,15 @@ pub trait Environment {
     fn step(&mut self, command: &str) -> StepResult;
     /// Whether the task's goal holds now (the benchmark's own success check).
     fn goal_reached(&self) -> bool;
+    /// Whether the engine has ended the episode, as it tells its agents: TextWorld ends an
+    /// ALFWorld game once it is won (its `done`); EAI's VirtualHome executor runs every line
+    /// of a script and ends none (it judges the final state). An agent's loop stops here; a
+    /// command sent after it is not the benchmark's.
+    fn done(&self) -> bool;
     /// Steps sent since the last reset.
     fn steps_taken(&self) -> usize;
     /// The task as the benchmark states it.
     fn goal(&self) -> &GoalAnnotation;
-    /// The commands the engine lists as admissible now, where the benchmark shows such a
-    /// list to agents (ALFWorld does); `None` where it does not.
-    fn admissible_commands(&self) -> Option<Vec<String>>;
 }
 
 /// One true atom of the hidden state, with arguments spelled as the agent could perceive
@@ -136,4 +140,8 @@ pub trait Judge {
     /// only: a grounded line names the instance the environment picked, which the agent may
     /// not have perceived.
     fn engine_script(&self) -> Vec<EngineLine>;
+    /// The commands the engine lists as admissible now, where it computes such a list
+    /// (ALFWorld's TextWorld does); `None` where it does not. For tools and tests: the paper
+    /// shows its agents no such list, so it is not on [`Environment`].
+    fn admissible_commands(&self) -> Option<Vec<String>>;
 }

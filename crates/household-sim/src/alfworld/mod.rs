@@ -595,6 +595,11 @@ impl Environment for AlfworldEnv {
         self.model.is_goal(&self.state)
     }
 
+    /// TextWorld ends a game once it is won (ALFWorld's games have no other end).
+    fn done(&self) -> bool {
+        self.goal_reached()
+    }
+
     fn steps_taken(&self) -> usize {
         self.steps
     }
@@ -602,13 +607,13 @@ impl Environment for AlfworldEnv {
     fn goal(&self) -> &GoalAnnotation {
         &self.goal
     }
-
-    fn admissible_commands(&self) -> Option<Vec<String>> {
-        Some(self.admissible.clone())
-    }
 }
 
 impl Judge for AlfworldEnv {
+    fn admissible_commands(&self) -> Option<Vec<String>> {
+        Some(self.admissible.clone())
+    }
+
     fn hidden_atoms(&self) -> Vec<JudgeAtom> {
         let task = self.model.task();
         let mut atoms: Vec<JudgeAtom> = self.state.facts().map(|f| self.describe_fact(f)).collect();

@@ -490,6 +490,12 @@ impl Environment for VirtualhomeEnv {
         self.task.goals.iter().all(|g| self.goal_holds(g)) && self.unmet_action_goals().is_empty()
     }
 
+    /// EAI's executor runs every line of a script and judges the state at its end: no line
+    /// ends the episode, not even one after which the goal holds.
+    fn done(&self) -> bool {
+        false
+    }
+
     fn steps_taken(&self) -> usize {
         self.steps
     }
@@ -497,13 +503,13 @@ impl Environment for VirtualhomeEnv {
     fn goal(&self) -> &GoalAnnotation {
         &self.annotation
     }
-
-    fn admissible_commands(&self) -> Option<Vec<String>> {
-        None
-    }
 }
 
 impl Judge for VirtualhomeEnv {
+    fn admissible_commands(&self) -> Option<Vec<String>> {
+        None
+    }
+
     fn hidden_atoms(&self) -> Vec<JudgeAtom> {
         let g = &self.world.graph;
         let name = |ix: NodeIx| format!("{} ({})", g.node(ix).class_name, g.node(ix).id);

@@ -6,7 +6,7 @@
 use std::io::BufRead;
 use std::path::{Path, PathBuf};
 
-use household_sim::{AlfworldEnv, Environment};
+use household_sim::{AlfworldEnv, Environment, Judge};
 use serde_json::Value;
 
 pub fn fixtures() -> PathBuf {
