@@ -446,6 +446,16 @@ pub fn run(args: AgentArgs) -> anyhow::Result<ExitCode> {
     let mut phase2 = PhaseTwoRunner::new(&args.planner, &args.episode)?;
     let (ep, name) = if let Some(game) = &args.which.game {
         let (mut env, mut adapter, goal) = alfworld(game)?;
+        // `eval` refuses this set for agents with Phase I; one game is for looking at, so a warning.
+        let train = benchmark_data::fixtures_dir().join("alfworld/valid_train");
+        if let (Ok(game), Ok(train)) = (std::fs::canonicalize(game), std::fs::canonicalize(train))
+            && game.starts_with(train)
+        {
+            eprintln!(
+                "warning: {}: a valid_train game, the set ALFWorld's F_str is derived from (fixtures/ontology/alfworld.txt): Phase I knows facts of its own problem file",
+                game.display()
+            );
+        }
         let config = EpisodeConfig {
             budget: args.episode.budget.unwrap_or(55),
             closed_loop: args.episode.closed_loop,

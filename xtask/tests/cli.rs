@@ -806,3 +806,24 @@ fn grounding_errors_name_the_file_they_are_about() {
     assert!(stderr.contains(&format!("{}:2:65: ", domain.display())) && stderr.contains("`burn`"), "{stderr}");
     assert!(!stderr.contains("fuel-problem.pddl"), "{stderr}");
 }
+
+/// `agent` on a valid_train game warns that ALFWorld's F_str comes from that set (`eval`
+/// refuses it for agents with Phase I); a valid_seen game plays without the warning.
+#[test]
+fn an_agent_on_a_game_f_str_comes_from_is_warned() {
+    let first = |split: &str| {
+        let mut games: Vec<PathBuf> = std::fs::read_dir(fixtures().join("alfworld").join(split))
+            .expect("split")
+            .flat_map(|family| std::fs::read_dir(family.expect("family").path()).expect("trials").map(|t| t.expect("trial").path()))
+            .collect();
+        games.sort();
+        games.remove(0)
+    };
+    for (split, warned) in [("valid_train", true), ("valid_seen", false)] {
+        let game = first(split);
+        let output = xtask(&["agent", "--game", game.to_str().unwrap(), "--explorer", "systematic", "--planner", "astar"]);
+        let stderr = String::from_utf8_lossy(&output.stderr);
+        assert!(output.status.code().is_some_and(|c| c <= 1), "{split}: {stderr}");
+        assert_eq!(stderr.contains("a valid_train game, the set ALFWorld's F_str is derived from"), warned, "{split}: {stderr}");
+    }
+}
