@@ -9,7 +9,7 @@
 //! `action` (one of the valid skills, an enum) and `done`.
 
 use serde_json::{Value, json};
-use vlm_client::{ChatErrorKind, ChatModel, ChatRequest, Image, Message, Sampling, chat_json};
+use vlm_client::{ChatError, ChatErrorKind, ChatModel, ChatRequest, Image, JsonReply, Message, Sampling, chat_json};
 
 use crate::evidence::Fact;
 use crate::phase1::{Policy, PolicyError, PolicyInput, PolicyReply, PolicyUsage, RunError, Skill};
@@ -65,6 +65,35 @@ pub fn system_prompt(benchmark: &str) -> String {
     )
 }
 
+/// What one [`chat_json`] cost, counted one way for Phase I and the direct policy
+/// (`DirectUsage`), so that their figures compare: every request (a repair turn is a second
+/// one, a reply that could not be read counts too) and the tokens the model read and wrote in
+/// all of them, as its usage says.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub(crate) struct Spent {
+    pub calls: u64,
+    pub prompt_tokens: u64,
+    pub generated_tokens: u64,
+}
+
+/// [`chat_json`], and what it cost.
+pub(crate) fn chat_json_counted(model: &mut dyn ChatModel, request: &ChatRequest) -> (Result<JsonReply, ChatError>, Spent) {
+    let before = model.usage();
+    let answer = chat_json(model, request);
+    let after = model.usage();
+    let calls = match &answer {
+        Ok(reply) => 1 + u64::from(reply.repaired),
+        Err(e) if matches!(e.kind, ChatErrorKind::InvalidJson { .. }) => 2,
+        Err(_) => 1,
+    };
+    let spent = Spent {
+        calls,
+        prompt_tokens: after.prompt_tokens.saturating_sub(before.prompt_tokens),
+        generated_tokens: after.completion_tokens.saturating_sub(before.completion_tokens),
+    };
+    (answer, spent)
+}
+
 /// The example fact Phase I's VirtualHome prompt shows: ids no scene of EAI's or the
 /// rearrangement set's holds (theirs stay below 2,100).
 pub const VIRTUALHOME_EXAMPLE: &str = "INSIDE(plate (9001), cabinet (9002))";
@@ -118,23 +147,17 @@ impl Policy for ChatPolicy {
             .with_thinking(false)
             .with_json_schema(reply_schema(&input.skills.list));
         self.last_prompt = text;
-        // Counted as the direct policy counts them (`direct::DirectUsage`): every request, a
-        // repair turn and a reply that could not be read included, and the tokens the model
-        // spent on all of them.
-        let before = self.model.usage();
-        let answer = chat_json(self.model.as_mut(), &request);
-        let after = self.model.usage();
-        self.usage.prompt_tokens += after.prompt_tokens.saturating_sub(before.prompt_tokens);
-        self.usage.generated_tokens += after.completion_tokens.saturating_sub(before.completion_tokens);
-        let reply = match answer {
-            Ok(reply) => reply,
-            Err(e) if e.kind.is_unavailable() => return Err(PolicyError::Run(RunError(format!("the chat model is unavailable: {e}")))),
-            Err(e) => {
-                self.usage.calls += if matches!(e.kind, ChatErrorKind::InvalidJson { .. }) { 2 } else { 1 };
-                return Err(PolicyError::Unreadable(e.to_string()));
+        let (answer, spent) = chat_json_counted(self.model.as_mut(), &request);
+        self.usage.calls += spent.calls;
+        self.usage.prompt_tokens += spent.prompt_tokens;
+        self.usage.generated_tokens += spent.generated_tokens;
+        let reply = answer.map_err(|e| {
+            if e.kind.is_unavailable() {
+                PolicyError::Run(RunError(format!("the chat model is unavailable: {e}")))
+            } else {
+                PolicyError::Unreadable(e.to_string())
             }
-        };
-        self.usage.calls += 1 + u64::from(reply.repaired);
+        })?;
         self.usage.cached_calls += u64::from(reply.reply.cached);
         read_reply(&reply.value).map_err(PolicyError::Unreadable)
     }

@@ -47,7 +47,7 @@ use std::time::Instant;
 use household_sim::{EngineLine, Environment, Event, Judge, Observation};
 use serde::Serialize;
 use serde_json::{Value, json};
-use vlm_client::{ChatErrorKind, ChatModel, ChatRequest, Image, Message, Sampling, chat_json};
+use vlm_client::{ChatErrorKind, ChatModel, ChatRequest, Image, Message, Sampling};
 
 use crate::episode::Attribution;
 use crate::goal::ClassGoal;
@@ -420,27 +420,19 @@ pub fn run_direct<E: Environment + Judge>(
             // Thinking off (the paper's direct interactive setting).
             .with_thinking(false)
             .with_json_schema(reply_schema());
-        let before = model.usage();
         let asked = Instant::now();
-        let answer = chat_json(model, &request);
+        let (answer, spent) = crate::chat_policy::chat_json_counted(model, &request);
         model_millis += asked.elapsed().as_secs_f64() * 1e3;
-        let after = model.usage();
-        usage.prompt_tokens += after.prompt_tokens.saturating_sub(before.prompt_tokens);
-        usage.generated_tokens += after.completion_tokens.saturating_sub(before.completion_tokens);
+        usage.model_calls += spent.calls;
+        usage.prompt_tokens += spent.prompt_tokens;
+        usage.generated_tokens += spent.generated_tokens;
         let (reply_text, reply) = match answer {
-            Ok(json) => {
-                usage.model_calls += 1 + u64::from(json.repaired);
-                (json.reply.text.clone(), read_reply(&json.value))
-            }
+            Ok(json) => (json.reply.text.clone(), read_reply(&json.value)),
             Err(error) if error.kind.is_unavailable() => return Err(DirectError::Unavailable(error)),
-            Err(error) => {
-                let (calls, text, message) = match &error.kind {
-                    ChatErrorKind::InvalidJson { error, reply } => (2, reply.clone(), error.clone()),
-                    kind => (1, String::new(), kind.to_string()),
-                };
-                usage.model_calls += calls;
-                (text, Err(message))
-            }
+            Err(error) => match &error.kind {
+                ChatErrorKind::InvalidJson { error, reply } => (reply.clone(), Err(error.clone())),
+                kind => (String::new(), Err(kind.to_string())),
+            },
         };
         let step = match reply {
             Ok(DirectReply::Done) => {
