@@ -169,15 +169,18 @@ impl ScriptLine {
             objects.push((object.to_lowercase().replace(' ', "_"), id));
             rest = &paren[end_paren + 1..];
         }
-        if objects.len() != action.arity() {
-            return Err(format!(
-                "Wrong number of parameters for \"{}\". Got {}, expected {}",
-                action.name(),
-                objects.len(),
-                action.arity()
-            ));
+        let line = ScriptLine { action, objects };
+        line.check_arity()?;
+        Ok(line)
+    }
+
+    /// The executor's message when the number of objects is not the action's arity.
+    fn check_arity(&self) -> Result<(), String> {
+        let (got, expected) = (self.objects.len(), self.action.arity());
+        if got == expected {
+            return Ok(());
         }
-        Ok(ScriptLine { action, objects })
+        Err(format!("Wrong number of parameters for \"{}\". Got {got}, expected {expected}", self.action.name()))
     }
 }
 
@@ -336,10 +339,7 @@ impl World {
     /// line built by hand with the wrong number of objects fails as [`ScriptLine::parse`]
     /// refuses it.
     pub fn execute(&mut self, line: &ScriptLine) -> Result<(), Failure> {
-        if line.objects.len() != line.action.arity() {
-            let (name, got, expected) = (line.action.name(), line.objects.len(), line.action.arity());
-            return Err(format!("Wrong number of parameters for \"{name}\". Got {got}, expected {expected}"));
-        }
+        line.check_arity()?;
         let mut nodes = Vec::with_capacity(line.objects.len());
         for (name, id) in &line.objects {
             match self.graph.index_of(*id) {
