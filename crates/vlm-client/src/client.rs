@@ -5,7 +5,8 @@ use std::time::Duration;
 
 use crate::error::{ChatError, ChatErrorKind};
 use crate::reply::{ChatReply, Usage, parse_reply};
-use crate::request::{ChatRequest, JsonMode};
+use crate::message::Message;
+use crate::request::{ChatRequest, JsonMode, Sampling};
 use crate::transport::{self, RetryPolicy};
 
 /// A chat model: messages in, one reply out. A request with a `json_schema` asks the model to
@@ -31,7 +32,8 @@ pub struct ClientConfig {
     pub retry: RetryPolicy,
     /// The strongest way of asking for JSON to try first; a server that refuses a
     /// `response_format` with a 400 is asked again the next weaker way, which is kept for that
-    /// schema.
+    /// schema (or for every schema, where a probe shows the server takes none: see
+    /// [`ChatClient`]).
     pub json_mode: JsonMode,
 }
 
@@ -59,6 +61,13 @@ pub struct ChatClient {
     /// another, and a request's mode must not depend on which requests came before it (a
     /// resumed run asks as an uninterrupted one does).
     weakened: std::collections::BTreeMap<String, JsonMode>,
+    /// Whether the server takes `response_format: json_schema` at all, learnt from one probe
+    /// (the plainest schema, `{"type": "object"}`, one output token) the first time a schema
+    /// is refused. A server that refuses the probe too takes no schema, which is a property of
+    /// the server, like `no_template_kwargs`: every later request starts one mode weaker, and
+    /// Phase I, whose schema changes with its skills, stops paying a refused request a turn. A
+    /// server that takes the probe refused that schema only, which is weakened alone.
+    schema_support: SchemaSupport,
     /// The server refused `chat_template_kwargs` by name (a hosted API that takes no template
     /// arguments): requests go without them from then on. A property of the server, the same
     /// for every request, so it does not make one request depend on another.
@@ -80,6 +89,7 @@ impl ChatClient {
             endpoint: format!("{}/chat/completions", config.base_url),
             agent: transport::agent(config.retry.timeout),
             weakened: std::collections::BTreeMap::new(),
+            schema_support: SchemaSupport::Unknown,
             no_template_kwargs: false,
             api_key,
             usage: Usage::default(),
@@ -94,8 +104,59 @@ impl ChatClient {
     /// How JSON is asked for with `schema` now: as configured, or weaker after the server
     /// refused that schema in a stronger mode and took it in this one.
     pub fn json_mode(&self, schema: &serde_json::Value) -> JsonMode {
-        self.weakened.get(&schema.to_string()).copied().unwrap_or(self.config.json_mode)
+        self.weakened.get(&schema.to_string()).copied().unwrap_or(self.first_mode())
     }
+
+    /// The mode a schema is first asked in: as configured, or without `json_schema` where the
+    /// probe showed the server takes none.
+    fn first_mode(&self) -> JsonMode {
+        match (self.config.json_mode, self.schema_support) {
+            (JsonMode::Schema, SchemaSupport::Refused) => JsonMode::Object,
+            (mode, _) => mode,
+        }
+    }
+
+    /// Asks the plainest schema request there is, once, to tell a server that takes no
+    /// `json_schema` from one that refused a particular schema. Returns the attempts it took;
+    /// its tokens count in the client's usage. A failure other than a 400/422 (the server
+    /// gone) teaches nothing: the question stays open for the next refusal.
+    fn probe_schema_support(&mut self) -> u32 {
+        let probe = ChatRequest::new(vec![Message::user("Reply with an empty JSON object.")])
+            .with_sampling(Sampling::greedy(1))
+            .with_json_schema(serde_json::json!({ "type": "object" }));
+        let body = probe.body(&self.config.model, JsonMode::Schema).to_string();
+        let result = transport::post_json(&self.agent, &self.endpoint, body.as_bytes(), self.api_key.as_deref(), &self.config.retry);
+        let attempts = match result {
+            Ok(delivered) => {
+                self.schema_support = SchemaSupport::Taken;
+                if let Ok(reply) = parse_reply(&delivered.body) {
+                    let mut counted = reply.usage;
+                    counted.requests = 0;
+                    self.usage.add(&counted);
+                }
+                delivered.attempts
+            }
+            Err(error) => {
+                if matches!(error.kind, ChatErrorKind::Status { status: 400 | 422, .. }) {
+                    self.schema_support = SchemaSupport::Refused;
+                }
+                error.attempts
+            }
+        };
+        self.usage.requests += u64::from(attempts);
+        attempts
+    }
+}
+
+/// What the schema probe found ([`ChatClient::probe_schema_support`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum SchemaSupport {
+    /// No schema refused yet, or the probe failed for another reason.
+    Unknown,
+    /// The server took the probe: a refusal is about the schema it refused.
+    Taken,
+    /// The server refused the probe: it takes no `json_schema`.
+    Refused,
 }
 
 impl ChatModel for ChatClient {
@@ -106,7 +167,7 @@ impl ChatModel for ChatClient {
         // image): a weaker mode is tried, and kept only once a request in it succeeds, so an
         // error of another kind never weakens the requests after it.
         let key = request.json_schema.as_ref().map(|schema| schema.to_string());
-        let mut mode = key.as_ref().and_then(|k| self.weakened.get(k)).copied().unwrap_or(self.config.json_mode);
+        let mut mode = key.as_ref().and_then(|k| self.weakened.get(k)).copied().unwrap_or(self.first_mode());
         let without_kwargs;
         let mut request = request;
         if self.no_template_kwargs && request.chat_template_kwargs.is_some() {
@@ -138,8 +199,11 @@ impl ChatModel for ChatClient {
                     let refused_format = matches!(error.kind, ChatErrorKind::Status { status: 400 | 422, .. });
                     match mode.weaker() {
                         Some(weaker) if refused_format && request.json_schema.is_some() => {
-                            mode = weaker;
                             extra_attempts += error.attempts;
+                            if mode == JsonMode::Schema && self.schema_support == SchemaSupport::Unknown {
+                                extra_attempts += self.probe_schema_support();
+                            }
+                            mode = weaker;
                             continue;
                         }
                         _ => return Err(ChatError { attempts: error.attempts + extra_attempts, ..error }),
@@ -147,7 +211,7 @@ impl ChatModel for ChatClient {
                 }
             };
             if let Some(key) = &key
-                && mode != self.config.json_mode
+                && mode != self.first_mode()
             {
                 self.weakened.insert(key.clone(), mode);
             }

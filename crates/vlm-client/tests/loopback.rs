@@ -212,10 +212,14 @@ fn two_bad_replies_are_an_invalid_json_error() {
     assert_eq!(error.attempts, 2);
 }
 
+/// A server that takes no `response_format` at all: the first refusal of a schema is followed by
+/// one probe (the plainest schema), which it refuses too, so the server takes no schema; then
+/// `json_object`, refused as well, then plain text. Later requests start without a schema.
 #[test]
 fn a_server_refusing_response_format_is_asked_more_plainly() {
     let refusal = "{\"error\": {\"message\": \"response_format json_schema is not supported\"}}";
     let (address, seen) = serve(vec![
+        status(400, Vec::new(), refusal),
         status(400, Vec::new(), refusal),
         status(400, Vec::new(), refusal),
         ok(completion("{\"skill\": \"Done\"}")),
@@ -223,11 +227,41 @@ fn a_server_refusing_response_format_is_asked_more_plainly() {
     ]);
     let mut client = client(address);
     let reply = chat_json(&mut client, &skill_request()).expect("json");
-    assert_eq!((reply.value, reply.reply.json_mode, reply.reply.attempts), (json!({ "skill": "Done" }), Some(JsonMode::Text), 3));
+    assert_eq!((reply.value, reply.reply.json_mode, reply.reply.attempts), (json!({ "skill": "Done" }), Some(JsonMode::Text), 4));
     // The weaker mode is kept for later requests.
     assert_eq!(chat_json(&mut client, &skill_request()).expect("json").reply.attempts, 1);
+    let bodies = seen.all();
+    let formats: Vec<Value> = bodies.iter().map(|(_, body)| body["response_format"]["type"].clone()).collect();
+    assert_eq!(formats, [json!("json_schema"), json!("json_schema"), json!("json_object"), Value::Null, Value::Null]);
+    // The probe: the plainest schema, one output token.
+    assert_eq!(bodies[1].1["response_format"]["json_schema"]["schema"], json!({ "type": "object" }));
+    assert_eq!(bodies[1].1["max_tokens"], 1);
+    assert_eq!(client.usage().requests, 5);
+}
+
+/// A server that takes no `json_schema` but does take `json_object` (the probe is refused):
+/// every schema is asked as a JSON object from then on, a new schema included, so a run whose
+/// schema changes every turn (Phase I's skills) pays one refused request and one probe in all,
+/// not one refusal a turn.
+#[test]
+fn a_server_that_takes_no_schema_is_asked_for_json_objects_from_then_on() {
+    let refusal = "{\"error\": {\"message\": \"Invalid parameter: 'response_format' of type 'json_schema' is not supported with this model.\"}}";
+    let (address, seen) = serve(vec![
+        status(400, Vec::new(), refusal),
+        status(400, Vec::new(), refusal),
+        ok(completion("{\"skill\": \"Done\"}")),
+        ok(completion("{\"skill\": \"Done\"}")),
+    ]);
+    let mut client = client(address);
+    let first = chat_json(&mut client, &skill_request()).expect("json");
+    assert_eq!((first.reply.json_mode, first.reply.attempts), (Some(JsonMode::Object), 3));
+    let mut other = skill_request();
+    other.json_schema = Some(json!({"type": "object", "properties": {"skill": {"enum": ["Done"]}}, "required": ["skill"]}));
+    assert_eq!(client.json_mode(other.json_schema.as_ref().unwrap()), JsonMode::Object);
+    let second = chat_json(&mut client, &other).expect("json");
+    assert_eq!((second.reply.json_mode, second.reply.attempts), (Some(JsonMode::Object), 1));
     let formats: Vec<Value> = seen.all().into_iter().map(|(_, body)| body["response_format"]["type"].clone()).collect();
-    assert_eq!(formats, [json!("json_schema"), json!("json_object"), Value::Null, Value::Null]);
+    assert_eq!(formats, [json!("json_schema"), json!("json_schema"), json!("json_object"), json!("json_object")]);
 }
 
 /// A server that refuses one schema and takes another: the weaker mode is kept for the schema it
@@ -238,6 +272,8 @@ fn a_weaker_mode_is_kept_for_the_schema_that_needed_it() {
     let refusal = "{\"error\": {\"message\": \"this schema is not supported\"}}";
     let (address, seen) = serve(vec![
         status(400, Vec::new(), refusal),
+        // The probe, which the server takes: the refusal was about that schema.
+        ok(completion("{}")),
         ok(completion("{\"skill\": \"Done\"}")),
         ok(completion("{\"skill\": \"Done\"}")),
         ok(completion("{\"skill\": \"Done\"}")),
@@ -250,7 +286,7 @@ fn a_weaker_mode_is_kept_for_the_schema_that_needed_it() {
     assert_eq!(chat_json(&mut client, &other).expect("json").reply.json_mode, Some(JsonMode::Schema));
     assert_eq!(chat_json(&mut client, &refused).expect("json").reply.attempts, 1);
     let formats: Vec<Value> = seen.all().into_iter().map(|(_, body)| body["response_format"]["type"].clone()).collect();
-    assert_eq!(formats, [json!("json_schema"), json!("json_object"), json!("json_schema"), json!("json_object")]);
+    assert_eq!(formats, [json!("json_schema"), json!("json_schema"), json!("json_object"), json!("json_schema"), json!("json_object")]);
 }
 
 /// A hosted API that takes no template arguments refuses `chat_template_kwargs` by name: the
@@ -275,6 +311,8 @@ fn an_error_of_another_kind_does_not_weaken_later_requests() {
     let too_long = "{\"error\": {\"message\": \"the request exceeds the available context size\"}}";
     let (address, seen) = serve(vec![
         status(400, Vec::new(), too_long),
+        // The probe, short enough to be taken.
+        ok(completion("{}")),
         status(400, Vec::new(), too_long),
         status(400, Vec::new(), too_long),
         ok(completion("{\"skill\": \"Done\"}")),
@@ -286,7 +324,7 @@ fn an_error_of_another_kind_does_not_weaken_later_requests() {
     let reply = chat_json(&mut client, &skill_request()).expect("json");
     assert_eq!((reply.reply.json_mode, reply.reply.attempts), (Some(JsonMode::Schema), 1));
     let formats: Vec<Value> = seen.all().into_iter().map(|(_, body)| body["response_format"]["type"].clone()).collect();
-    assert_eq!(formats, [json!("json_schema"), json!("json_object"), Value::Null, json!("json_schema")]);
+    assert_eq!(formats, [json!("json_schema"), json!("json_schema"), json!("json_object"), Value::Null, json!("json_schema")]);
 }
 
 #[test]
