@@ -123,6 +123,17 @@ impl EpisodeArgs {
         (self.frontier > 0 && self.explorer != ModelSpec::Systematic)
             .then_some(Frontier { width: self.frontier, narrowing: self.narrowing })
     }
+
+    /// The episode's settings; `default_budget` is the benchmark's interaction limit
+    /// (Appendix A.1: 55 ALFWorld, 20 VirtualHome) where `--budget` is not given.
+    pub fn config(&self, default_budget: usize) -> EpisodeConfig {
+        EpisodeConfig {
+            budget: self.budget.unwrap_or(default_budget),
+            closed_loop: self.closed_loop,
+            frontier: self.frontier(),
+            reexplore: self.reexplore,
+        }
+    }
 }
 
 /// Phase I's policy, named as `--explorer` names it: `systematic` or a chat model, behind the
@@ -456,22 +467,12 @@ pub fn run(args: AgentArgs) -> anyhow::Result<ExitCode> {
                 game.display()
             );
         }
-        let config = EpisodeConfig {
-            budget: args.episode.budget.unwrap_or(55),
-            closed_loop: args.episode.closed_loop,
-            frontier: args.episode.frontier(),
-            reexplore: args.episode.reexplore,
-        };
+        let config = args.episode.config(55);
         (episode(&mut env, &mut adapter, policy.as_mut(), &goal, config, &mut phase2)?, game.display().to_string())
     } else {
         let (benchmark, task) = (args.which.benchmark.as_deref().unwrap_or_default(), args.which.task.as_deref().unwrap_or_default());
         let (mut env, mut adapter, goal) = virtualhome(benchmark, task, args.which.task_dir.as_deref())?;
-        let config = EpisodeConfig {
-            budget: args.episode.budget.unwrap_or(20),
-            closed_loop: args.episode.closed_loop,
-            frontier: args.episode.frontier(),
-            reexplore: args.episode.reexplore,
-        };
+        let config = args.episode.config(20);
         (episode(&mut env, &mut adapter, policy.as_mut(), &goal, config, &mut phase2)?, format!("{benchmark}/{task}"))
     };
     if let Some(path) = &args.commands_out {

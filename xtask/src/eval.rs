@@ -27,7 +27,6 @@ use std::time::Instant;
 use benchmark_data::{Benchmark, Extra, TaskFiles};
 use eval_harness::behaviour::{agent_terminal, failure_response, terminal};
 use eval_harness::records::{RecordFile, Shard};
-use exploration_harness::EpisodeConfig;
 use exploration_harness::direct::{DirectConfig, MAX_REPLY_TOKENS, run_direct};
 use serde::Serialize;
 use serde_json::{Value, json};
@@ -236,26 +235,14 @@ impl Embodied<'_> {
         let (ep, budget) = match task {
             EvalTask::Game { path, .. } => {
                 let (mut env, mut adapter, goal) = alfworld(path)?;
-                let budget = args.episode.budget.unwrap_or(55);
-                let config = EpisodeConfig {
-                    budget,
-                    closed_loop: args.episode.closed_loop,
-                    frontier: args.episode.frontier(),
-                    reexplore: args.episode.reexplore,
-                };
-                (episode(&mut env, &mut adapter, self.policy.as_mut(), &goal, config, &mut self.phase2)?, budget)
+                let config = args.episode.config(55);
+                (episode(&mut env, &mut adapter, self.policy.as_mut(), &goal, config, &mut self.phase2)?, config.budget)
             }
             EvalTask::Virtualhome { id } => {
                 let dir = if suite == Suite::VirtualhomeEai { args.task_dir.as_deref() } else { None };
                 let (mut env, mut adapter, goal) = virtualhome(suite.name(), id, dir)?;
-                let budget = args.episode.budget.unwrap_or(20);
-                let config = EpisodeConfig {
-                    budget,
-                    closed_loop: args.episode.closed_loop,
-                    frontier: args.episode.frontier(),
-                    reexplore: args.episode.reexplore,
-                };
-                (episode(&mut env, &mut adapter, self.policy.as_mut(), &goal, config, &mut self.phase2)?, budget)
+                let config = args.episode.config(20);
+                (episode(&mut env, &mut adapter, self.policy.as_mut(), &goal, config, &mut self.phase2)?, config.budget)
             }
             EvalTask::Files(files) => anyhow::bail!("{}: not an environment task", files.id),
         };
