@@ -4,8 +4,8 @@
 use std::time::Duration;
 
 use crate::error::{ChatError, ChatErrorKind};
-use crate::reply::{ChatReply, Usage, parse_reply};
 use crate::message::Message;
+use crate::reply::{ChatReply, Usage, parse_reply};
 use crate::request::{ChatRequest, JsonMode, Sampling};
 use crate::transport::{self, RetryPolicy};
 

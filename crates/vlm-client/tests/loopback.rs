@@ -245,7 +245,8 @@ fn a_server_refusing_response_format_is_asked_more_plainly() {
 /// not one refusal a turn.
 #[test]
 fn a_server_that_takes_no_schema_is_asked_for_json_objects_from_then_on() {
-    let refusal = "{\"error\": {\"message\": \"Invalid parameter: 'response_format' of type 'json_schema' is not supported with this model.\"}}";
+    let refusal =
+        "{\"error\": {\"message\": \"Invalid parameter: 'response_format' of type 'json_schema' is not supported with this model.\"}}";
     let (address, seen) = serve(vec![
         status(400, Vec::new(), refusal),
         status(400, Vec::new(), refusal),
