@@ -4,6 +4,14 @@
 //! why not the remaining plan cost) and with h_FF alone (the search's own cost). Each iteration starts a fresh decoder,
 //! so heuristic values are computed, not cached from the previous iteration; the decoder's
 //! one-time encoding of the task's action texts (`Decoder::prepare`) is outside the timing.
+//!
+//! No reference system runs beside it: no registry carries a token-level MCTS decoder under a
+//! planning constraint to compare with (PPL-MCTS and the LLM-planning searches are research
+//! code on GitHub; `mctx` on PyPI is batched MuZero search over a learned model in JAX, which
+//! cannot call a PDDL transition model). Its costly parts are compared where they have one:
+//! masks beside llguidance (`cargo xtask bench mask`), the value's heuristics beside Fast
+//! Downward and pyperplan (`cargo xtask bench plan`, `bench heuristic`), the model's forward
+//! pass beside llama.cpp (`cargo xtask bench lm`).
 
 use std::sync::Arc;
 
