@@ -111,6 +111,9 @@ fn write_tasks(dataset: &Path, resources: &Path, out: &Path) -> anyhow::Result<u
         let init = graph.get("init_graph").with_context(|| format!("{}: no init_graph", graph_path.display()))?;
         let program = dataset.join("executable_programs").join(SCENE).join(format!("file{id}.txt"));
         let text = std::fs::read_to_string(&program).with_context(|| format!("cannot read {}", program.display()))?;
+        // The task's sentence is the program file's second line, where EAI's own prompts take
+        // it (`virtualhome_eval.simulation.evolving_graph.eval_utils.extract_script`:
+        // `task_description = lines[1]`).
         let description = text.lines().nth(1).unwrap_or_default().trim();
         let vh_goal = goals
             .pointer(&format!("/scene_1/{}/{}/vh_goal", name.replace('~', "~0").replace('/', "~1"), id))
