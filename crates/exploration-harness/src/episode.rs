@@ -1,9 +1,13 @@
 //! One episode of the paper's agent (Fig. 1): Phase I ([`crate::phase1::explore`]), the
 //! hand-over (Eq. 4: ŝ0 as a PDDL problem and β), Phase II (the caller's planner on ŝ0's
 //! transition model: constrained MCTS, any other mode, or A*), the plan bound back through β and
-//! run open-loop in the environment, whose own goal check is the verdict. The episode ends the
-//! moment that check holds, in Phase I or mid-plan: the rest of the plan is not sent (ALFWorld's
-//! engine ends the game once won; the direct policy ends the same way).
+//! run open-loop in the environment, whose own goal check is the verdict. The open-loop pass
+//! sends every step of the plan, in order, whatever the environment answers (the paper's "single
+//! open-loop pass": Phase II gets no feedback, and the engines go on after a refused command:
+//! TextWorld answers "Nothing happens.", a refused EAI line leaves the graph as it was); a
+//! refused step is the episode's failure unless a later step wins it. The episode ends where the
+//! benchmark's engine ends it ([`household_sim::Environment::done`]: an ALFWorld game once won,
+//! the rest of the plan then not sent) or at the step budget.
 //!
 //! The driver is the evaluation side: it takes an environment that is also a [`Judge`], hands
 //! the agent's parts only `&mut dyn Environment`, and after Phase I asks the judge for the
@@ -18,7 +22,7 @@
 //!   ended early, or re-exploration set the only one seen aside);
 //! - `search`: the state is right but Phase II returned no plan within its budget;
 //! - `grounding`: the state is right, yet a plan step was not executed by the environment
-//!   (binding or domain semantics);
+//!   (binding or domain semantics) and the steps after it did not reach the goal;
 //! - `goal`: every step executed and the goal check still fails.
 //!
 //! Precision is over F_τ's positive facts (in the judge's vocabulary) whose first argument is an
@@ -26,9 +30,9 @@
 //! counted as often as the goal names it) for which F_τ locates that many distinct instances of
 //! the class correctly.
 //!
-//! `closed_loop` (beyond the paper): when a plan step is not executed, the observations of
-//! the plan's steps have been read into F all along; the agent hands over again from there
-//! and replans, within the same step budget.
+//! `closed_loop` (beyond the paper): when a plan step is not executed, the rest of the plan is
+//! not sent; the observations of the plan's steps have been read into F all along, and the
+//! agent hands over again from there and replans, within the same step budget.
 //!
 //! `reexplore` (beyond the paper): a hand-over whose ŝ0 cannot reach the goal because a goal
 //! fact about a bound instance can never hold ([`unreachable_goal_instances`]: grounding keeps
@@ -320,21 +324,30 @@ pub fn run_episode<E: Environment + Judge>(
         let t = Instant::now();
         episode.plan.clear();
         not_executed = false;
+        // The pass stopped before the plan's end: a step with no command, or a refusal that
+        // closed loop replans from.
+        let mut cut = false;
         for &action in &phase2.actions {
             let command = match adapter.command(&grounded, action) {
                 Ok(Some(c)) => c,
                 Ok(None) => continue,
                 Err(e) => {
-                    episode.failure = Some(e);
+                    if !not_executed {
+                        episode.failure = Some(e);
+                    }
                     not_executed = true;
+                    cut = true;
                     break;
                 }
             };
             episode.plan.push(command.clone());
             if episode.steps.len() >= config.budget {
-                // The plan needs more steps than exploration left (planners are told how many).
-                episode.failure = Some("step budget spent".into());
-                explored_out = first_plan;
+                // The plan needs more steps than exploration left (planners are told how many);
+                // after a refused step, that refusal is the earlier cause.
+                if !not_executed {
+                    episode.failure = Some("step budget spent".into());
+                    explored_out = first_plan;
+                }
                 break;
             }
             let result = env.step(&command);
@@ -349,9 +362,16 @@ pub fn run_episode<E: Environment + Judge>(
             });
             exploration.observation = result.observation;
             if !executed {
-                episode.failure = Some(format!("step {} not executed: {command}", episode.steps.len()));
-                not_executed = true;
-                break;
+                // The first refusal is the episode's failure unless a later step wins it.
+                if !not_executed {
+                    episode.failure = Some(format!("step {} not executed: {command}", episode.steps.len()));
+                    not_executed = true;
+                }
+                // Closed loop replans from here; the open-loop pass sends the rest regardless.
+                if config.closed_loop {
+                    cut = true;
+                    break;
+                }
             }
             // The rest of the plan is not sent where the engine has ended the episode (ALFWorld's
             // game once won); EAI's executor runs the whole script and judges its end.
@@ -360,8 +380,10 @@ pub fn run_episode<E: Environment + Judge>(
             }
         }
         episode.plan_invalid = false;
-        if let Some(step) = phase2.invalid_step.as_ref().filter(|_| !not_executed && episode.steps.len() < config.budget && !env.done()) {
-            episode.failure = Some(format!("plan step {} cannot be grounded: {step}", episode.plan.len() + 1));
+        if let Some(step) = phase2.invalid_step.as_ref().filter(|_| !cut && episode.steps.len() < config.budget && !env.done()) {
+            if !not_executed {
+                episode.failure = Some(format!("plan step {} cannot be grounded: {step}", episode.plan.len() + 1));
+            }
             episode.plan_invalid = true;
             not_executed = true;
         }

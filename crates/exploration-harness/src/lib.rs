@@ -86,8 +86,14 @@
 /// state the agent cannot see; the direct policy still ends on success, as the paper has its
 /// direct policies do); Phase I's usage counts requests as the direct policy's does (a repair
 /// turn is a second call, a reply that could not be read is a call and its tokens count;
-/// before, the first was one call and the second none).
-pub const HARNESS_VERSION: u32 = 15;
+/// before, the first was one call and the second none); 16: the open-loop pass sends every
+/// step of the plan whatever the environment answers, as the paper's "single open-loop pass"
+/// and the engines do (TextWorld answers a refused command "Nothing happens." and takes the
+/// next; a refused EAI line leaves the graph as it was); until 15 it stopped at the first
+/// refused step, so a plan whose refused step changed nothing lost (ALFWorld's
+/// `pick_cool_then_place_in_recep-Pan-None-StoveBurner-18` with SmolLM2: a `go to` a place
+/// sharing the agent's location). Closed loop still replans at the first refusal.
+pub const HARNESS_VERSION: u32 = 16;
 
 pub mod alfworld;
 pub mod chat_planner;

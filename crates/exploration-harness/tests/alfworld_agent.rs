@@ -169,20 +169,23 @@ fn no_phase_one_skill_of_the_controller_repeats_a_target() {
     }
 }
 
-/// `closed_loop`: a plan whose first step the game refuses is replanned from a new hand-over
+/// `closed_loop`: a plan whose only step the game refuses is replanned from a new hand-over
 /// and the episode is won; open-loop, the same episode fails and is attributed to grounding.
+/// A plan whose refused step is followed by the steps that win: the open-loop pass sends them
+/// all (TextWorld goes on after "Nothing happens.") and wins in one hand-over.
 #[test]
 fn closed_loop_replans_after_a_refused_step() {
     let ontology = ontology();
     let (domain, grammar) = domain_and_grammar();
     let game = fixtures()
         .join("alfworld/valid_seen/pick_clean_then_place_in_recep-Mug-None-CoffeeMachine-26/trial_T20190907_233056_022802/game.tw-pddl");
-    for closed_loop in [false, true] {
+    for (closed_loop, then_plan) in [(false, false), (true, false), (false, true), (true, true)] {
         let mut env = AlfworldEnv::from_game_file(&game).unwrap();
         let goal = parse_goal(env.goal()).unwrap();
         let mut adapter = AlfworldAdapter::new(ontology.clone(), domain.clone(), grammar.clone(), env.goal());
         let mut calls = 0;
-        // First call: a put, which the game refuses (nothing is held), then A*'s plan.
+        // First call: a put, which the game refuses (nothing is held), then A*'s plan or
+        // nothing; later calls: A*'s plan.
         let mut planner = |g: &Grounded| {
             calls += 1;
             let plan = a_star(&g.model).expect("A* plans the hand-over");
@@ -194,7 +197,8 @@ fn closed_loop_replans_after_a_refused_step() {
                 .map(grounding::ActionId::from_index)
                 .find(|&a| task.schemas[task.action(a).schema.index()].name.starts_with("put"))
                 .expect("a put action");
-            Ok(PhaseTwo { actions: std::iter::once(put).chain(plan).collect(), ..PhaseTwo::default() })
+            let rest = if then_plan { plan } else { Vec::new() };
+            Ok(PhaseTwo { actions: std::iter::once(put).chain(rest).collect(), ..PhaseTwo::default() })
         };
         let episode = run_episode(
             &mut env,
@@ -205,12 +209,23 @@ fn closed_loop_replans_after_a_refused_step() {
             &mut planner,
         )
         .expect("the run goes on");
+        let plan_steps: Vec<_> = episode.steps.iter().filter(|s| s.phase == "plan").collect();
+        assert!(!plan_steps[0].executed, "{plan_steps:?}");
         if closed_loop {
             assert!(episode.success, "{:?}", episode.failure);
             assert_eq!(episode.handovers, 2);
+            // The refused put ended the first pass: the rest of that plan was not sent.
+            assert!(plan_steps[1..].iter().all(|s| s.executed), "{plan_steps:?}");
+        } else if then_plan {
+            assert!(episode.success, "{:?}", episode.failure);
+            assert_eq!((episode.handovers, episode.failure.as_deref(), episode.attribution), (1, None, None));
+            assert!(plan_steps.len() > 1 && plan_steps[1..].iter().all(|s| s.executed), "{plan_steps:?}");
         } else {
             assert!(!episode.success);
+            assert_eq!(plan_steps.len(), 1);
             assert_eq!(episode.attribution, Some(exploration_harness::Attribution::Grounding), "{:?}", episode.failure);
+            let refused = format!("step {} not executed: {}", episode.steps.len(), plan_steps[0].command);
+            assert_eq!(episode.failure.as_deref(), Some(refused.as_str()));
         }
     }
 }
