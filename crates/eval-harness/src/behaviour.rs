@@ -2,7 +2,8 @@
 //! computed from the requests it sent and whether the environment executed each.
 //!
 //! - **Terminal mechanism** ([`Terminal`]): success; the grounding layer refused a request
-//!   (the step could not be executed, and the episode ended there or ran out of plan); the
+//!   (the step could not be executed, and the episode ended there, or the agent's open-loop plan
+//!   ran to its end short of the goal); the
 //!   interaction limit (the step budget); the model's own `DONE`; for the agent, also Phase II's
 //!   search budget (no plan) ([`agent_terminal`]).
 //! - **Failure response** ([`FailureResponse`]), over the sequence of requests:
@@ -18,7 +19,8 @@ use serde::Serialize;
 #[serde(rename_all = "kebab-case")]
 pub enum Terminal {
     Success,
-    /// A request the environment refused ended the episode (or left the plan unfinished).
+    /// A request the environment refused ended the episode (or, for the agent, the open-loop
+    /// plan with a refused step ran to its end short of the goal).
     Grounding,
     /// The step budget ran out.
     InteractionLimit,

@@ -593,8 +593,8 @@ fn terminal_table(study: &Study<'_>) -> Result<Table, ReportError> {
         "Terminal mechanism (Table 11)",
         "How each episode ended, as a percentage of all tasks (the designated run: seed 0 of a condition run with several \
          seeds, as the paper's Table 11): success; grounding (a refused request ended the \
-         episode or left the plan unfinished); the interaction limit; the model's own Done (for `ours`, also a plan that ran to \
-         its end short of the goal); Phase II's search budget (`ours` only: no plan).",
+         episode, or for `ours` a plan with a refused step ran to its end short of the goal); the interaction limit; the \
+         model's own Done (for `ours`, also a plan that ran to its end, every step executed, short of the goal); Phase II's search budget (`ours` only: no plan).",
         "No records carry a terminal mechanism (`terminal`): the expert's records do not.",
     );
     let rows = environment_rows(study, true, |r| metrics::terminal(r).is_some());
