@@ -12,6 +12,7 @@ use common::{scratch_dir, xtask};
 
 use serde_json::{Value, json};
 use tempfile::TempDir;
+use vlm_client::{Image, ImageFormat};
 
 fn scratch(dir: &TempDir, name: &str, bytes: &[u8]) -> String {
     let path = dir.path().join(name);
@@ -58,7 +59,8 @@ fn a_local_model_replies_with_schema_valid_json() {
     assert!(summary["usage"]["prompt_tokens"].as_u64().expect("count") > 0);
 
     // A local model reads text only.
-    let image = scratch(&tmp, "pixel.png", b"\x89PNG\r\n\x1a\n\0\0\0\rIHDR");
+    let pixel = Image::encode_rgb8(ImageFormat::Png, 1, 1, &[200, 30, 30]).expect("png");
+    let image = scratch(&tmp, "pixel.png", pixel.bytes());
     let output = xtask(&["chat", "--model", &model.display().to_string(), "--prompt", "What is this?", "--image", &image]);
     assert_eq!(output.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&output.stderr).contains("text only"), "{}", String::from_utf8_lossy(&output.stderr));
@@ -100,7 +102,8 @@ fn a_served_model_gets_the_image_and_its_reply_is_printed() {
         stream.write_all(response.as_bytes()).expect("write");
         request
     });
-    let image = scratch(&tmp, "photo.jpg", &[0xff, 0xd8, 0xff, 0xe0, 1, 2, 3]);
+    let photo = Image::encode_rgb8(ImageFormat::Jpeg, 2, 1, &[10, 20, 30, 40, 50, 60]).expect("jpeg");
+    let image = scratch(&tmp, "photo.jpg", photo.bytes());
     let url = format!("openai:http://{address}/v1");
     let output = xtask(&[
         "chat",
@@ -125,7 +128,7 @@ fn a_served_model_gets_the_image_and_its_reply_is_printed() {
     );
     let request = server.join().expect("server");
     assert_eq!(request["model"], "qwen3-vl");
-    assert_eq!(request["messages"][0]["content"][1]["image_url"]["url"], "data:image/jpeg;base64,/9j/4AECAw==");
+    assert_eq!(request["messages"][0]["content"][1]["image_url"]["url"], photo.data_url());
     assert_eq!(request["response_format"]["json_schema"]["schema"]["required"], json!(["skill"]));
 }
 
@@ -145,6 +148,9 @@ fn bad_input_exits_2_and_a_failing_server_exits_1() {
     check(&["chat", "--model", url, "--prompt", "x", "--image", &missing], 2, "cannot read");
     let gif = scratch(&tmp, "anim.gif", b"GIF89a....");
     check(&["chat", "--model", url, "--prompt", "x", "--image", &gif], 2, "not a PNG or JPEG image");
+    let whole = Image::encode_rgb8(ImageFormat::Png, 4, 4, &[90; 48]).expect("png");
+    let cut = scratch(&tmp, "cut.png", &whole.bytes()[..whole.bytes().len() / 2]);
+    check(&["chat", "--model", url, "--prompt", "x", "--image", &cut], 2, "a PNG image that does not decode");
     let not_json = scratch(&tmp, "bad.schema.json", b"{ type: object }");
     check(&["chat", "--model", url, "--prompt", "x", "--schema", &not_json], 2, "not JSON");
     let bad_type = scratch(&tmp, "type.schema.json", br#"{"type": "dict"}"#);

@@ -285,7 +285,8 @@ fn virtualhome_takes_class_level_commands_only() {
 struct Pictured(AlfworldEnv);
 
 fn picture() -> Image {
-    Image { mime: "image/png", bytes: b"\x89PNG\r\n\x1a\n-not-really-a-picture".to_vec() }
+    let png = vlm_client::Image::encode_rgb8(vlm_client::ImageFormat::Png, 2, 2, &[120; 12]).expect("png");
+    Image { mime: "image/png", bytes: png.bytes().to_vec() }
 }
 
 impl Environment for Pictured {

@@ -13,7 +13,7 @@ use lm::LocalChat;
 use lm::LocalModel;
 use lm::tiny::TinySpec;
 use serde_json::{Value, json};
-use vlm_client::{ChatErrorKind, ChatModel, ChatRequest, Image, Message, Sampling, chat_json, validate};
+use vlm_client::{ChatErrorKind, ChatModel, ChatRequest, Image, ImageFormat, Message, Sampling, chat_json, validate};
 
 fn tiny_chat(dir: &TempDir) -> LocalChat {
     let model = LocalModel::load(&tiny_file(dir, "tiny.gguf", &TinySpec::default())).expect("loads");
@@ -104,7 +104,7 @@ fn tokens_the_schema_forces_skip_the_model_and_leave_the_reply_unchanged() {
 fn images_and_unusable_schemas_are_bad_input() {
     let dir = TempDir::new("local-chat-bad");
     let mut chat = tiny_chat(&dir);
-    let image = Image::from_bytes(b"\x89PNG\r\n\x1a\n".to_vec()).expect("png");
+    let image = Image::encode_rgb8(ImageFormat::Png, 1, 1, &[0, 0, 0]).expect("png");
     let with_image = ChatRequest::new(vec![Message::user("What is this?").with_image(image)]);
     let error = chat.chat(&with_image).expect_err("text only");
     assert!(matches!(&error.kind, ChatErrorKind::BadInput(m) if m.contains("text only")), "{error}");

@@ -24,7 +24,7 @@ pub enum ChatErrorKind {
     /// The configured API-key variable is not set (or not Unicode).
     #[error("the API key variable `{0}` is not set")]
     MissingApiKey(String),
-    /// An image that is neither PNG nor JPEG, or a message the API cannot carry.
+    /// An image that is neither PNG nor JPEG or does not decode, or a message the API cannot carry.
     #[error("bad input: {0}")]
     BadInput(String),
     /// The host name did not resolve, or the TCP/TLS connection could not be made.

@@ -1,5 +1,8 @@
 //! What a conversation holds: messages of text and image parts. Images are PNG or JPEG bytes,
-//! recognised by their signature and sent as base64 `data:` URLs.
+//! recognised by their signature, decoded whole once (so a truncated or corrupt picture is
+//! refused here, not by the server) and sent as base64 `data:` URLs.
+
+use std::io::Cursor;
 
 use base64::Engine;
 use serde_json::{Value, json};
@@ -31,21 +34,41 @@ pub enum ImageFormat {
     Jpeg,
 }
 
-/// An encoded image, checked to be PNG or JPEG.
+impl ImageFormat {
+    fn name(self) -> &'static str {
+        match self {
+            ImageFormat::Png => "PNG",
+            ImageFormat::Jpeg => "JPEG",
+        }
+    }
+
+    fn codec(self) -> image::ImageFormat {
+        match self {
+            ImageFormat::Png => image::ImageFormat::Png,
+            ImageFormat::Jpeg => image::ImageFormat::Jpeg,
+        }
+    }
+}
+
+/// An encoded image, checked to be a whole PNG or JPEG (it decodes), with its size.
 #[derive(Clone, PartialEq, Eq)]
 pub struct Image {
     format: ImageFormat,
+    width: u32,
+    height: u32,
     bytes: Vec<u8>,
 }
 
 impl std::fmt::Debug for Image {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        write!(f, "Image({:?}, {} bytes)", self.format, self.bytes.len())
+        write!(f, "Image({:?}, {}x{}, {} bytes)", self.format, self.width, self.height, self.bytes.len())
     }
 }
 
 impl Image {
-    /// The image in `bytes`, by its signature; anything else is [`ChatErrorKind::BadInput`].
+    /// The image in `bytes`: PNG or JPEG by its signature, then decoded whole (the pixels are
+    /// dropped; the bytes are what is sent). Anything else, or a file that does not decode
+    /// (truncated, corrupt), is [`ChatErrorKind::BadInput`] naming the decoder's complaint.
     pub fn from_bytes(bytes: Vec<u8>) -> Result<Image, ChatErrorKind> {
         let format = if bytes.starts_with(b"\x89PNG\r\n\x1a\n") {
             ImageFormat::Png
@@ -59,11 +82,58 @@ impl Image {
                 if head.is_empty() { "empty".to_string() } else { head.join(" ") }
             )));
         };
-        Ok(Image { format, bytes })
+        let refuse =
+            |why: String| ChatErrorKind::BadInput(format!("a {} image that does not decode ({} bytes): {why}", format.name(), bytes.len()));
+        let decoded = image::load_from_memory_with_format(&bytes, format.codec()).map_err(|e| refuse(e.to_string()))?;
+        if !ends_whole(format, &bytes) {
+            return Err(refuse(format!("it is cut short: no {} marker", if format == ImageFormat::Png { "IEND" } else { "end-of-image" })));
+        }
+        Ok(Image { format, width: decoded.width(), height: decoded.height(), bytes })
+    }
+
+    /// Encodes 8-bit RGB pixels (`width * height * 3` bytes, rows top to bottom), for an
+    /// environment that renders frames: PNG is lossless, JPEG at quality 90.
+    pub fn encode_rgb8(format: ImageFormat, width: u32, height: u32, rgb: &[u8]) -> Result<Image, ChatErrorKind> {
+        let expected = u64::from(width) * u64::from(height) * 3;
+        if width == 0 || height == 0 || rgb.len() as u64 != expected {
+            return Err(ChatErrorKind::BadInput(format!(
+                "{width}x{height} RGB pixels need {expected} bytes, not {} (and a size of at least 1x1)",
+                rgb.len()
+            )));
+        }
+        let mut bytes = Vec::new();
+        let encoded = match format {
+            ImageFormat::Png => image::ImageEncoder::write_image(
+                image::codecs::png::PngEncoder::new(Cursor::new(&mut bytes)),
+                rgb,
+                width,
+                height,
+                image::ExtendedColorType::Rgb8,
+            ),
+            ImageFormat::Jpeg => image::ImageEncoder::write_image(
+                image::codecs::jpeg::JpegEncoder::new_with_quality(Cursor::new(&mut bytes), 90),
+                rgb,
+                width,
+                height,
+                image::ExtendedColorType::Rgb8,
+            ),
+        };
+        encoded.map_err(|e| ChatErrorKind::BadInput(format!("cannot encode a {width}x{height} {}: {e}", format.name())))?;
+        Ok(Image { format, width, height, bytes })
     }
 
     pub fn format(&self) -> ImageFormat {
         self.format
+    }
+
+    /// Width in pixels.
+    pub fn width(&self) -> u32 {
+        self.width
+    }
+
+    /// Height in pixels.
+    pub fn height(&self) -> u32 {
+        self.height
     }
 
     pub fn bytes(&self) -> &[u8] {
@@ -78,6 +148,57 @@ impl Image {
         };
         format!("data:{mime};base64,{}", base64::engine::general_purpose::STANDARD.encode(&self.bytes))
     }
+}
+
+/// Whether the file reaches its format's end marker: PNG's IEND chunk, JPEG's end-of-image
+/// after its last scan (bytes after the marker, as some cameras append, are allowed).
+///
+/// Written here because the decoders are lenient by design: image's JPEG decoder (zune-jpeg)
+/// fills a scan cut short with grey, as browsers do, and the PNG decoder stops once the pixel
+/// data is read; zune-jpeg's strict mode would also refuse files libjpeg and browsers read
+/// (stray bytes between segments). libjpeg, which the servers' image loaders use, refuses a
+/// truncated JPEG.
+fn ends_whole(format: ImageFormat, bytes: &[u8]) -> bool {
+    match format {
+        ImageFormat::Png => bytes.windows(12).any(|w| w == b"\0\0\0\0IEND\xae\x42\x60\x82"),
+        ImageFormat::Jpeg => jpeg_reaches_eoi(bytes),
+    }
+}
+
+/// Walks a JPEG's segments from SOI: each marker's length skips its segment, and a scan's
+/// entropy-coded data runs to the next marker that is neither a stuffed `FF 00` nor a restart
+/// marker. An EXIF thumbnail's own SOS and EOI sit inside an APP1 segment and are skipped.
+fn jpeg_reaches_eoi(bytes: &[u8]) -> bool {
+    let mut at = 2; // past SOI
+    while at + 1 < bytes.len() {
+        if bytes[at] != 0xff {
+            return false;
+        }
+        let marker = bytes[at + 1];
+        at += 2;
+        match marker {
+            0xd9 => return true,
+            // Fill bytes before a marker, and markers without a segment.
+            0xff => at -= 1,
+            0x01 | 0xd0..=0xd7 => {}
+            _ => {
+                let Some(length) = bytes.get(at..at + 2).map(|l| usize::from(u16::from_be_bytes([l[0], l[1]]))) else {
+                    return false;
+                };
+                at += length;
+                if marker == 0xda {
+                    // The scan's data: up to the next real marker.
+                    while at + 1 < bytes.len() {
+                        if bytes[at] == 0xff && !matches!(bytes[at + 1], 0x00 | 0xd0..=0xd7) {
+                            break;
+                        }
+                        at += 1;
+                    }
+                }
+            }
+        }
+    }
+    false
 }
 
 /// One part of a message.
@@ -157,23 +278,101 @@ impl Message {
 mod tests {
     use super::*;
 
+    /// A 3x2 picture with every pixel different.
+    fn pixels() -> Vec<u8> {
+        (0u8..18).map(|i| i.wrapping_mul(37)).collect()
+    }
+
     #[test]
-    fn images_are_recognised_by_signature() {
-        let png = Image::from_bytes(b"\x89PNG\r\n\x1a\nrest".to_vec()).unwrap();
-        assert_eq!(png.format(), ImageFormat::Png);
-        assert_eq!(png.data_url(), "data:image/png;base64,iVBORw0KGgpyZXN0");
-        assert_eq!(Image::from_bytes(vec![0xff, 0xd8, 0xff, 0xe0]).unwrap().format(), ImageFormat::Jpeg);
+    fn images_are_decoded_whole_and_their_size_kept() {
+        for format in [ImageFormat::Png, ImageFormat::Jpeg] {
+            let encoded = Image::encode_rgb8(format, 3, 2, &pixels()).unwrap();
+            let read = Image::from_bytes(encoded.bytes().to_vec()).unwrap();
+            assert_eq!((read.format(), read.width(), read.height()), (format, 3, 2));
+            assert_eq!(read, encoded);
+            // Cut anywhere past its signature, the file is refused, naming the format.
+            let whole = encoded.bytes();
+            for cut in 9..whole.len() {
+                match Image::from_bytes(whole[..cut].to_vec()) {
+                    Err(ChatErrorKind::BadInput(m)) => assert!(m.contains("image that does not decode"), "{format:?} cut at {cut}: {m}"),
+                    other => panic!("{format:?} cut at {cut}: {other:?}"),
+                }
+            }
+        }
+        // PNG's chunks carry CRCs: one flipped byte in the image data is caught.
+        let png = Image::encode_rgb8(ImageFormat::Png, 3, 2, &pixels()).unwrap();
+        let idat = png.bytes().windows(4).position(|w| w == b"IDAT").unwrap();
+        let mut corrupt = png.bytes().to_vec();
+        corrupt[idat + 6] ^= 0x55;
+        assert!(matches!(Image::from_bytes(corrupt), Err(ChatErrorKind::BadInput(m)) if m.contains("PNG")));
+        assert!(format!("{png:?}").starts_with("Image(Png, 3x2, "));
+    }
+
+    #[test]
+    fn the_jpeg_end_is_found_past_a_thumbnail_and_before_trailing_bytes() {
+        let jpeg = Image::encode_rgb8(ImageFormat::Jpeg, 3, 2, &pixels()).unwrap();
+        // An APP1 segment holding a thumbnail's own SOS and EOI, as EXIF does.
+        let thumbnail = [0xff, 0xd8, 0xff, 0xda, 0x00, 0x02, 0x12, 0xff, 0xd9];
+        let mut with_app1 = vec![0xff, 0xd8, 0xff, 0xe1, 0x00, 2 + thumbnail.len() as u8];
+        with_app1.extend_from_slice(&thumbnail);
+        with_app1.extend_from_slice(&jpeg.bytes()[2..]);
+        let mut trailing = with_app1.clone();
+        trailing.extend_from_slice(b"appended video");
+        for whole in [with_app1.clone(), trailing] {
+            assert_eq!(Image::from_bytes(whole).unwrap().width(), 3);
+        }
+        let cut = &with_app1[..with_app1.len() - 2];
+        assert!(matches!(Image::from_bytes(cut.to_vec()), Err(ChatErrorKind::BadInput(m)) if m.contains("end-of-image")));
+        let mut png = Image::encode_rgb8(ImageFormat::Png, 3, 2, &pixels()).unwrap().bytes().to_vec();
+        png.extend_from_slice(b"after IEND");
+        assert_eq!(Image::from_bytes(png).unwrap().height(), 2);
+    }
+
+    proptest::proptest! {
+        /// Any bytes after a PNG or JPEG signature, or a real image with bytes overwritten,
+        /// give an image or bad input, never a panic; a JPEG that gets through reaches its end.
+        #[test]
+        fn arbitrary_bytes_are_an_image_or_bad_input(
+            tail in proptest::collection::vec(proptest::prelude::any::<u8>(), 0..300),
+            jpeg in proptest::prelude::any::<bool>(),
+            at in 0usize..2000,
+        ) {
+            let format = if jpeg { ImageFormat::Jpeg } else { ImageFormat::Png };
+            let real = Image::encode_rgb8(format, 3, 2, &pixels()).unwrap().bytes().to_vec();
+            let signature: &[u8] = if jpeg { &[0xff, 0xd8, 0xff] } else { b"\x89PNG\r\n\x1a\n" };
+            let mut overwritten = real.clone();
+            let start = (at % real.len()).max(signature.len());
+            for (i, b) in tail.iter().enumerate().filter(|(i, _)| start + i < real.len()) {
+                overwritten[start + i] = *b;
+            }
+            for bytes in [[signature, &tail[..]].concat(), overwritten] {
+                match Image::from_bytes(bytes.clone()) {
+                    Ok(image) => proptest::prop_assert!(!jpeg || jpeg_reaches_eoi(image.bytes())),
+                    Err(error) => proptest::prop_assert!(matches!(error, ChatErrorKind::BadInput(_))),
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn what_is_not_png_or_jpeg_is_refused_by_its_signature() {
+        let png = Image::encode_rgb8(ImageFormat::Png, 1, 1, &[255, 0, 0]).unwrap();
+        assert!(png.data_url().starts_with("data:image/png;base64,iVBORw0KGgo"));
         for bad in [b"GIF89a".to_vec(), Vec::new(), b"\x89PNG".to_vec()] {
-            assert!(matches!(Image::from_bytes(bad), Err(ChatErrorKind::BadInput(_))));
+            assert!(matches!(Image::from_bytes(bad), Err(ChatErrorKind::BadInput(m)) if m.contains("not a PNG or JPEG")));
+        }
+        for (width, height, len) in [(0, 1, 0), (2, 2, 11)] {
+            assert!(matches!(Image::encode_rgb8(ImageFormat::Png, width, height, &vec![0; len]), Err(ChatErrorKind::BadInput(_))));
         }
     }
 
     #[test]
     fn one_text_part_is_a_plain_string() {
         assert_eq!(Message::user("hi").to_json(), json!({ "role": "user", "content": "hi" }));
-        let image = Image::from_bytes(vec![0xff, 0xd8, 0xff]).unwrap();
-        let with_image = Message::user("look").with_image(image);
-        assert_eq!(with_image.to_json()["content"][1]["image_url"]["url"], "data:image/jpeg;base64,/9j/");
+        let image = Image::encode_rgb8(ImageFormat::Jpeg, 1, 1, &[0, 0, 255]).unwrap();
+        let with_image = Message::user("look").with_image(image.clone());
+        assert_eq!(with_image.to_json()["content"][1]["image_url"]["url"], image.data_url());
+        assert!(image.data_url().starts_with("data:image/jpeg;base64,/9j/"));
         assert_eq!(with_image.image_count(), 1);
         assert_eq!(with_image.joined_text(), "look");
     }

@@ -121,7 +121,7 @@ impl ChatRequest {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::message::Image;
+    use crate::message::{Image, ImageFormat};
 
     /// Pretty JSON with keys sorted at every level, whether or not another crate in the build
     /// turns on serde_json's `preserve_order` (feature unification would otherwise change the
@@ -142,7 +142,7 @@ mod tests {
     }
 
     fn request() -> ChatRequest {
-        let image = Image::from_bytes(b"\x89PNG\r\n\x1a\n\x00\x00\x00\rIHDR".to_vec()).unwrap();
+        let image = Image::encode_rgb8(ImageFormat::Png, 1, 1, &[255, 255, 255]).unwrap();
         ChatRequest::new(vec![
             Message::system("You choose the next skill."),
             Message::user("Goal: a clean mug in the coffee machine. Skills: Goto(countertop 1), Open(fridge 1), Done.").with_image(image),

@@ -11,8 +11,8 @@ use std::time::Duration;
 
 use serde_json::{Value, json};
 use vlm_client::{
-    ChatClient, ChatErrorKind, ChatModel, ChatRequest, ClientConfig, Image, JsonMode, Message, RetryPolicy, Sampling, ServedModel,
-    chat_json, served_models,
+    ChatClient, ChatErrorKind, ChatModel, ChatRequest, ClientConfig, Image, ImageFormat, JsonMode, Message, RetryPolicy, Sampling,
+    ServedModel, chat_json, served_models,
 };
 
 /// What a test server does with one request.
@@ -179,14 +179,15 @@ fn json_replies_are_read_and_images_counted() {
     let (address, seen) = serve(vec![ok(completion("Sure: {\"skill\": \"Goto(fridge 1)\"} - it may hold the mug."))]);
     let mut client = client(address);
     let mut request = skill_request();
-    request.messages[0] = request.messages[0].clone().with_image(Image::from_bytes(vec![0xff, 0xd8, 0xff, 0xdb]).expect("jpeg"));
+    let image = Image::encode_rgb8(ImageFormat::Jpeg, 1, 1, &[0, 128, 255]).expect("jpeg");
+    request.messages[0] = request.messages[0].clone().with_image(image.clone());
     let reply = chat_json(&mut client, &request).expect("json");
     assert_eq!(reply.value, json!({ "skill": "Goto(fridge 1)" }));
     assert!(!reply.repaired);
     assert_eq!((reply.usage.images, reply.reply.json_mode), (1, Some(JsonMode::Schema)));
     let body = &seen.all()[0].1;
     assert_eq!(body["response_format"]["type"], "json_schema");
-    assert_eq!(body["messages"][0]["content"][1]["image_url"]["url"], "data:image/jpeg;base64,/9j/2w==");
+    assert_eq!(body["messages"][0]["content"][1]["image_url"]["url"], image.data_url());
 }
 
 #[test]
