@@ -2,12 +2,13 @@
 """Compare vlm-client's image check with Pillow's on pictures cut short.
 
 vlm-client decodes every PNG or JPEG before it sends it (`Image::from_bytes`), so that a
-truncated or corrupt picture is bad input here, not a server's 400. Servers load pictures
-with Pillow (vLLM) or similar. This script makes a PNG, a baseline JPEG, a progressive JPEG
-and a JPEG with an EXIF segment with Pillow, cuts each at many lengths (every byte of the first
-and last 64, and 64 between), and asks both: Pillow (`Image.open(...).load()`, truncated images
-not allowed, its default) and our `xtask chat --image` (exit 2: the image is refused; exit 1
-with "cannot connect": it was accepted and the request went to a closed port).
+truncated or corrupt picture is bad input here, not a server's 400. Servers load pictures with
+Pillow (vLLM) or similar. This script makes, with Pillow, a PNG, a baseline JPEG, a progressive
+JPEG, a JPEG with an EXIF segment and one with stray bytes between segments, cuts each at many
+lengths (every byte of the first and last 64, and 64 between), and asks both: Pillow
+(`Image.open(...).load()`, truncated images not allowed, its default) and our `xtask chat
+--image` (exit 2: the image is refused; exit 1 with "cannot connect": it was accepted and the
+request went to a closed port).
 
 Usage: python3 tools/image_cut_check.py [--xtask PATH]   (needs Pillow; `pip install pillow`)
 Prints one line per picture with every disagreement, then a JSON summary. Exit 0 when the only
@@ -44,6 +45,10 @@ def pictures():
         buffer = io.BytesIO()
         img.save(buffer, fmt, **kwargs)
         out[name] = buffer.getvalue()
+    # Stray bytes after the APP0 segment, which libjpeg skips with a warning.
+    jpeg = out["jpeg"]
+    app0_end = 4 + int.from_bytes(jpeg[4:6], "big")
+    out["jpeg-stray-bytes"] = jpeg[:app0_end] + b"\x00\x42\x00" + jpeg[app0_end:]
     return out
 
 

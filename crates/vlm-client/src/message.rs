@@ -167,7 +167,10 @@ fn jpeg_reaches_eoi(bytes: &[u8]) -> bool {
     let mut at = 2; // past SOI
     while at + 1 < bytes.len() {
         if bytes[at] != 0xff {
-            return false;
+            // Stray bytes between segments: skipped to the next marker, as libjpeg does (with
+            // a warning).
+            at += 1;
+            continue;
         }
         let marker = bytes[at + 1];
         at += 2;
@@ -316,7 +319,10 @@ mod tests {
         with_app1.extend_from_slice(&jpeg.bytes()[2..]);
         let mut trailing = with_app1.clone();
         trailing.extend_from_slice(b"appended video");
-        for whole in [with_app1.clone(), trailing] {
+        // Stray bytes after the APP1 segment, which libjpeg skips with a warning.
+        let mut stray = with_app1.clone();
+        stray.splice(6 + thumbnail.len()..6 + thumbnail.len(), [0x00, 0x42, 0x00]);
+        for whole in [with_app1.clone(), trailing, stray] {
             assert_eq!(Image::from_bytes(whole).unwrap().width(), 3);
         }
         let cut = &with_app1[..with_app1.len() - 2];
