@@ -264,6 +264,7 @@ impl PhaseTwoRunner {
         if self.planner == "astar" {
             let mut config = heuristics::search::SearchConfig::new(heuristics::search::Algorithm::AStar);
             config.time_limit = Some(Duration::from_secs_f64(self.time_limit));
+            config.clock = self.decode.clock;
             config.symmetries = self.symmetries;
             // Unit costs: a plan's cost is its length, and no longer plan can finish in the
             // steps the episode has left (as MCTS's action bound).
@@ -321,16 +322,16 @@ impl PhaseTwoRunner {
                     json!({"planner": "mcts", "mode": mode, "stop": "OverBound", "lower_bound": bound, "max_actions": max_actions}),
                 ));
             }
-            let started = std::time::Instant::now();
+            let started = heuristics::search::Stopwatch::start(config.budget.clock);
             let check_time = Duration::from_secs_f64(self.time_limit / 20.0).min(FIT_PRECHECK_TIME);
-            if plan_fit(model, max_actions, FIT_PRECHECK_EXPANSIONS, Some(check_time)) == PlanFit::NoneFits {
+            if plan_fit(model, max_actions, FIT_PRECHECK_EXPANSIONS, Some(check_time), config.budget.clock) == PlanFit::NoneFits {
                 return Ok(no_plan(
                     format!("OverBound: no plan within {max_actions} actions (A* with LM-cut)"),
                     json!({"planner": "mcts", "mode": mode, "stop": "OverBound", "proved_by": "astar", "max_actions": max_actions}),
                 ));
             }
             // `--time-limit` is Phase II's in all: the check's time comes off the search's.
-            config.budget.wall_clock = config.budget.wall_clock.map(|w| w.saturating_sub(started.elapsed()));
+            config.budget.time_limit = config.budget.time_limit.map(|w| w.saturating_sub(started.elapsed()));
         }
         let prompt = planning_prompt(model, &grounded.spelling, &initial, &self.decode.prompt_options());
         let text = prompt.render(lm.as_ref()).map_err(|e| RunError(format!("rendering the prompt: {e}")))?;

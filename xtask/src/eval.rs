@@ -447,6 +447,11 @@ fn config(args: &EvalArgs, suite: Suite, tasks: &[EvalTask]) -> anyhow::Result<V
             config.as_object_mut().expect("object").insert("frontier".into(), json!(args.episode.frontier));
             config.as_object_mut().expect("object").insert("narrowing".into(), json!(args.episode.narrowing));
         }
+        // The A* planner's clock, only where it is not the wall clock: the hashes of other runs
+        // stay as they were (`ours` names it in its decoding settings below).
+        if args.agent == AgentName::Planner && !args.episode.decode.clock.is_wall() {
+            config.as_object_mut().expect("object").insert("clock".into(), json!(args.episode.decode.clock.name()));
+        }
         // Only where it is on: the hashes of other runs stay as they were.
         if args.episode.symmetries {
             config.as_object_mut().expect("object").insert("symmetries".into(), json!(true));

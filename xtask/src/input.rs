@@ -166,6 +166,16 @@ where
     clap::builder::PossibleValuesParser::new(T::VARIANTS).try_map(|name| name.parse::<T>())
 }
 
+/// A clap parser for `--clock`: a name of [`mcts::Clock`] this platform can read.
+pub fn clock(text: &str) -> Result<mcts::Clock, String> {
+    let names = <mcts::Clock as strum::VariantNames>::VARIANTS.join(", ");
+    let clock: mcts::Clock = text.parse().map_err(|_| format!("`{text}` is not a clock (one of: {names})"))?;
+    if !clock.available() {
+        return Err(format!("the `{text}` clock cannot be read on this platform (it needs clock_gettime's process CPU-time clock)"));
+    }
+    Ok(clock)
+}
+
 /// Serialises an enum field by its command-line name, as the `String` fields it replaced did
 /// (record configurations hash these names, so a typed field keeps the record file's name).
 pub fn serialize_name<T, S>(value: &T, serializer: S) -> Result<S::Ok, S::Error>

@@ -13,7 +13,7 @@ use benchmark_data::{Benchmark, Extra, TaskFiles};
 use lm::{LanguageModel, OpenAiConfig, OpenAiModel, ServerDialect, Tokenizer, UniformModel};
 use mcts::prompt::{PromptOptions, Relevance, planning_prompt};
 use mcts::{
-    Backup, DecodeConfig, Decoder, MctsConfig, ModeName, Normalization, Outcome, SamplingConfig, Strategy, Tokenization, ValueConfig,
+    Backup, Clock, DecodeConfig, Decoder, MctsConfig, ModeName, Normalization, Outcome, SamplingConfig, Strategy, Tokenization, ValueConfig,
 };
 use serde::{Deserialize, Serialize};
 use token_constraint::EndPolicy;
@@ -57,6 +57,14 @@ pub struct DecodeArgs {
     /// MCTS simulations at most.
     #[arg(long)]
     pub simulations: Option<u64>,
+    /// What `--time-limit` is read on: `wall` (elapsed time, the paper's) or `cpu` (the
+    /// processor time this process uses, all its threads: a search beside other work gets the
+    /// same work done in its limit, so its verdict does not depend on the machine's load).
+    /// Applies to Phase II's search and the A* planner, not to Phase I or a served model's
+    /// waits, which use no processor time here.
+    #[arg(long, default_value = "wall", value_parser = input::clock)]
+    #[serde(skip_serializing_if = "Clock::is_wall", serialize_with = "input::serialize_name")]
+    pub clock: Clock,
     /// Next-token distributions requested from the model, at most.
     #[arg(long)]
     pub model_calls: Option<u64>,
@@ -133,7 +141,7 @@ pub struct DecodeArgs {
 }
 
 impl DecodeArgs {
-    /// The decoding settings, with `time_limit` seconds per task.
+    /// The decoding settings, with `time_limit` seconds per task (on `--clock`).
     pub fn config(&self, time_limit: f64) -> anyhow::Result<DecodeConfig> {
         let mut mode = self.mode.mode();
         match &mut mode.strategy {
@@ -162,7 +170,8 @@ impl DecodeArgs {
         }
         let mut config = DecodeConfig::new(mode);
         config.budget.simulations = self.simulations;
-        config.budget.wall_clock = Some(input::seconds(time_limit)?);
+        config.budget.time_limit = Some(input::seconds(time_limit)?);
+        config.budget.clock = self.clock;
         config.budget.model_calls = self.model_calls;
         config.budget.max_tokens = self.max_tokens;
         config.budget.max_actions = self.max_actions;

@@ -34,7 +34,7 @@ pub struct PlanArgs {
     /// Stop after this many expansions.
     #[arg(long)]
     max_expansions: Option<u64>,
-    /// Stop after this many seconds of search.
+    /// Stop after this many seconds of search (on `--clock`).
     #[arg(long, value_parser = crate::input::positive_seconds)]
     time_limit: Option<f64>,
     /// Write the plan here, in Fast Downward's format.
@@ -98,6 +98,7 @@ pub fn plan(args: PlanArgs) -> anyhow::Result<ExitCode> {
     config.symmetries = args.symmetries;
     config.max_expansions = args.max_expansions;
     config.time_limit = args.time_limit.map(Duration::from_secs_f64);
+    config.clock = args.decode.clock;
     let start = Instant::now();
     let result = search(&model, heuristic.as_mut(), &config, None);
     let millis = start.elapsed().as_secs_f64() * 1e3;

@@ -715,6 +715,42 @@ fn eval_names_the_planner_agents_symmetries_in_its_configuration() {
     assert_eq!(orbit["symmetries"], true, "{orbit}");
 }
 
+/// `--clock cpu` reads Phase II's time limit on the processor time the process uses: another
+/// configuration (its own record file, the clock named in it), for the A* planner agent and
+/// for `ours` (in its decoding settings); `--clock wall` is the default, whose configurations
+/// name no clock (the hashes of the runs before the setting stay as they were). An unknown
+/// clock is bad input.
+#[test]
+fn eval_names_the_clock_in_its_configuration() {
+    let tmp = scratch_dir("xtask-cli-");
+    let out = tmp.path().display().to_string();
+    let run = |extra: &[&str]| {
+        let mut args = vec!["eval", "--benchmark", "alfworld-seen", "--limit", "1", "--out", &out, "--json"];
+        args.extend_from_slice(extra);
+        let output = xtask(&args);
+        assert_eq!(output.status.code(), Some(0), "{extra:?}: {}", String::from_utf8_lossy(&output.stderr));
+        let summary: serde_json::Value = serde_json::from_str(stdout(&output).trim()).expect("one JSON object");
+        assert_eq!(summary["alfworld-seen"]["successes"], 1, "{extra:?}: {summary}");
+        let records = PathBuf::from(summary["alfworld-seen"]["records"].as_str().expect("the records' path"));
+        let config = std::fs::read_to_string(records.with_extension("config.json")).expect("the configuration beside them");
+        (records, serde_json::from_str::<serde_json::Value>(&config).expect("JSON"))
+    };
+    let ours = ["--agent", "ours", "--explorer", "systematic", "--lm", "uniform"];
+    let (plain, wall, cpu) =
+        (run(&ours), run(&[&ours[..], &["--clock", "wall"]].concat()), run(&[&ours[..], &["--clock", "cpu"]].concat()));
+    assert_eq!(plain, wall, "`--clock wall` is the default configuration");
+    assert_ne!(plain.0, cpu.0, "one record file per configuration");
+    assert_eq!(plain.1["decode"].get("clock"), None, "{}", plain.1);
+    assert_eq!(cpu.1["decode"]["clock"], "cpu", "{}", cpu.1);
+    let (plain, cpu) = (run(&["--agent", "planner"]), run(&["--agent", "planner", "--clock", "cpu"]));
+    assert_ne!(plain.0, cpu.0, "one record file per configuration");
+    assert_eq!(plain.1.get("clock"), None, "{}", plain.1);
+    assert_eq!(cpu.1["clock"], "cpu", "{}", cpu.1);
+    let output = xtask(&["eval", "--benchmark", "alfworld-seen", "--limit", "1", "--clock", "moon"]);
+    assert_eq!(output.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&output.stderr).contains("one of: wall, cpu"), "{}", String::from_utf8_lossy(&output.stderr));
+}
+
 /// The chat planner (unconstrained thinking / greedy through a chat model): `--thinking` needs
 /// it, and an unknown model is bad input before any episode runs.
 #[test]

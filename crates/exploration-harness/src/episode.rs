@@ -478,8 +478,8 @@ pub enum PlanFit {
 }
 
 /// A* with LM-cut (admissible) on ŝ0 for plans of at most `steps` actions, within
-/// `max_expansions` and, where given, `time_limit` (without one, the same answer on any
-/// machine, however loaded). Phase II's planner asks it before a search
+/// `max_expansions` and, where given, `time_limit` read on `clock` (without one, the same
+/// answer on any machine, however loaded). Phase II's planner asks it before a search
 /// ([`PlanFit::NoneFits`]: no search can find a plan that finishes), the episode after a
 /// failed one (the attribution).
 pub fn plan_fit(
@@ -487,6 +487,7 @@ pub fn plan_fit(
     steps: usize,
     max_expansions: u64,
     time_limit: Option<std::time::Duration>,
+    clock: heuristics::search::Clock,
 ) -> PlanFit {
     if !model.task().has_unit_costs() {
         return PlanFit::Unknown;
@@ -495,6 +496,7 @@ pub fn plan_fit(
     config.max_cost = Some(steps as u64);
     config.max_expansions = Some(max_expansions);
     config.time_limit = time_limit;
+    config.clock = clock;
     match heuristics::search::optimal_plan_with(model, &config) {
         Ok(plan) => PlanFit::Fits(plan.len()),
         // `OverBound`: plans exist only beyond the bound. (`Unsolvable`, none at all, is not
@@ -506,7 +508,7 @@ pub fn plan_fit(
 
 /// Whether A* with LM-cut proves that ŝ0 has plans, but none of at most `steps` actions.
 fn no_plan_fits(model: &transition_model::TransitionModel, steps: usize) -> bool {
-    plan_fit(model, steps, FIT_EXPANSIONS, None) == PlanFit::NoneFits
+    plan_fit(model, steps, FIT_EXPANSIONS, None, heuristics::search::Clock::Wall) == PlanFit::NoneFits
 }
 
 /// Precision and recall of F_τ against the hidden state (module documentation); `None` where

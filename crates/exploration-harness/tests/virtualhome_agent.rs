@@ -6,6 +6,7 @@ use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
 
 use exploration_harness::virtualhome::VirtualhomeAdapter;
+use heuristics::search::Clock;
 mod common;
 
 use common::{Restless, assert_ends_where_the_engine_does, assert_no_target_repeats};
@@ -421,9 +422,9 @@ fn a_star_within_the_steps_left_proves_that_no_plan_fits_where_lm_cut_cannot() {
         let lm_cut = heuristics::LmCut::new(&g.model).evaluate(&g.model.initial_state());
         fits.borrow_mut().push((
             lm_cut,
-            plan_fit(&g.model, 7, 200_000, None),
-            plan_fit(&g.model, 8, 200_000, None),
-            plan_fit(&g.model, 7, 1, None),
+            plan_fit(&g.model, 7, 200_000, None, Clock::Wall),
+            plan_fit(&g.model, 8, 200_000, None, Clock::Wall),
+            plan_fit(&g.model, 7, 1, None, Clock::Wall),
         ));
         Ok(PhaseTwo { actions: a_star(g).expect("A* plans the hand-over"), ..PhaseTwo::default() })
     };

@@ -64,7 +64,7 @@ fn bench(c: &mut Criterion) {
             let mut config = DecodeConfig::new(Mode::from_name("constrained-mcts").expect("mode"));
             config.stop_at_goal = false;
             config.budget.simulations = Some(SIMULATIONS);
-            config.budget.wall_clock = None;
+            config.budget.time_limit = None;
             // The throughput counts SIMULATIONS per iteration: a task whose tree is exhausted
             // sooner (small VirtualHome tasks, with transpositions closed) would inflate it.
             let trial = Decoder::new(model, &spelling, Arc::clone(&vocab), value.clone())

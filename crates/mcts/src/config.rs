@@ -6,6 +6,7 @@
 use std::time::Duration;
 
 use grounding::ActionId;
+pub use heuristics::search::Clock;
 use lm::{LmError, Usage};
 use serde::{Deserialize, Serialize};
 use transition_model::State;
@@ -105,8 +106,11 @@ impl Mode {
 pub struct Budget {
     /// MCTS simulations.
     pub simulations: Option<u64>,
-    /// Wall-clock time (the paper: 250 s per task).
-    pub wall_clock: Option<Duration>,
+    /// Time (the paper: 250 s per task of wall-clock time), read on `clock`.
+    pub time_limit: Option<Duration>,
+    /// What `time_limit` is read on: the wall clock (the paper's), or the process's processor
+    /// time, which other work on the machine does not spend ([`Clock`]).
+    pub clock: Clock,
     /// Next-token distributions requested from the model (tokens it generates).
     pub model_calls: Option<u64>,
     /// Tokens of one plan (the paper: 512): greedy and sampled decoding stop there, and MCTS
@@ -118,7 +122,14 @@ pub struct Budget {
 
 impl Default for Budget {
     fn default() -> Self {
-        Budget { simulations: None, wall_clock: Some(Duration::from_secs(250)), model_calls: None, max_tokens: 512, max_actions: 64 }
+        Budget {
+            simulations: None,
+            time_limit: Some(Duration::from_secs(250)),
+            clock: Clock::Wall,
+            model_calls: None,
+            max_tokens: 512,
+            max_actions: 64,
+        }
     }
 }
 
@@ -170,7 +181,10 @@ pub enum StopReason {
     /// No action applies and the goal does not hold.
     DeadEnd,
     Simulations,
+    /// The time limit, on the wall clock.
     WallClock,
+    /// The time limit, on the processor-time clock ([`Clock::Cpu`]).
+    CpuTime,
     ModelCalls,
     /// MCTS explored every branch its width and limits allow.
     Exhausted,
@@ -199,6 +213,7 @@ pub struct Stats {
     /// Heuristic evaluations run, and states looked up (including cache hits).
     pub heuristic_evaluations: u64,
     pub heuristic_lookups: u64,
+    /// Real time the run took (whatever clock its limit was read on).
     pub millis: f64,
 }
 

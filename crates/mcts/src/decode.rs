@@ -3,8 +3,8 @@
 //! are here; MCTS is `search`; both step tokens through `step`.
 
 use std::sync::Arc;
-use std::time::Instant;
 
+use heuristics::search::Stopwatch;
 use lm::LanguageModel;
 use token_constraint::{EndPolicy, LanguageConfig, PlanLanguages, TokenId, Vocabulary};
 use transition_model::{Spelling, State, TransitionModel};
@@ -95,7 +95,7 @@ impl<'m> Decoder<'m> {
         if let Strategy::Mcts(mcts) = &config.mode.strategy {
             mcts.check()?;
         }
-        let started = Instant::now();
+        let started = Stopwatch::start(config.budget.clock);
         let usage_before = lm.usage();
         let (evaluations_before, lookups_before) = self.stepper.evaluator.counts();
         let root = match (config.mode.constrained, config.tokenization) {
@@ -118,7 +118,7 @@ impl<'m> Decoder<'m> {
         stats.usage = lm.usage().since(&usage_before);
         stats.heuristic_evaluations = evaluations - evaluations_before;
         stats.heuristic_lookups = lookups - lookups_before;
-        stats.millis = started.elapsed().as_secs_f64() * 1e3;
+        stats.millis = started.wall_elapsed().as_secs_f64() * 1e3;
         Ok(self.outcome(config, run, stats))
     }
 

@@ -31,8 +31,8 @@ mod value;
 mod vocab;
 
 pub use config::{
-    Backup, Budget, DecodeConfig, DecodeError, InvalidStep, MctsConfig, Mode, ModeName, Normalization, Outcome, RowKind, Stats, StopReason,
-    Strategy, Tokenization, TreeLevel, TreeRow, TreeSummary,
+    Backup, Budget, Clock, DecodeConfig, DecodeError, InvalidStep, MctsConfig, Mode, ModeName, Normalization, Outcome, RowKind, Stats,
+    StopReason, Strategy, Tokenization, TreeLevel, TreeRow, TreeSummary,
 };
 pub use decode::Decoder;
 pub use sampling::{Sampler, SamplingConfig};

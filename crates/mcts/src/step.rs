@@ -5,8 +5,8 @@
 //! both ask [`Stepper::distribution`] for candidates, append with [`Session::push`] and
 //! [`Stepper::advance`], and stop on [`Session::out_of_budget`].
 
+use heuristics::search::{Clock, Stopwatch};
 use std::sync::Arc;
-use std::time::Instant;
 
 use lm::{LanguageModel, Logprobs};
 use token_constraint::{TokenId, Vocabulary};
@@ -32,17 +32,20 @@ pub(crate) struct Session<'a> {
     pub lm: &'a mut dyn LanguageModel,
     pub prompt: &'a [TokenId],
     pub config: &'a DecodeConfig,
-    pub started: Instant,
+    pub started: Stopwatch,
     pub stats: Stats,
 }
 
 impl Session<'_> {
-    /// The budget's limits that apply to every strategy: wall clock and model calls (MCTS
+    /// The budget's limits that apply to every strategy: time and model calls (MCTS
     /// adds simulations, the linear decoders the plan's tokens).
     pub fn out_of_budget(&self) -> Option<StopReason> {
         let budget = &self.config.budget;
-        if budget.wall_clock.is_some_and(|limit| self.started.elapsed() >= limit) {
-            return Some(StopReason::WallClock);
+        if self.started.past(budget.time_limit) {
+            return Some(match self.started.clock() {
+                Clock::Wall => StopReason::WallClock,
+                Clock::Cpu => StopReason::CpuTime,
+            });
         }
         if budget.model_calls.is_some_and(|limit| self.stats.decoded_tokens - self.stats.forced_tokens >= limit) {
             return Some(StopReason::ModelCalls);

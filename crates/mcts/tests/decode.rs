@@ -4,10 +4,11 @@
 mod common;
 
 use std::sync::Arc;
+use std::time::Duration;
 
 use common::{TempDir, applicable_in_turn, ground, tiny_model, tiny_uniform};
 use lm::LanguageModel;
-use mcts::{Backup, DecodeConfig, Decoder, MctsConfig, Mode, Normalization, SamplingConfig, StopReason, Strategy, ValueConfig};
+use mcts::{Backup, Clock, DecodeConfig, Decoder, MctsConfig, Mode, Normalization, SamplingConfig, StopReason, Strategy, ValueConfig};
 use transition_model::{Spelling, TransitionModel};
 
 /// Two routes from a to d: a-b-c-d (three steps) and a-e-d (two).
@@ -70,6 +71,32 @@ fn mcts_finds_the_optimal_plan_given_enough_simulations() {
     assert_eq!(outcome.stop, StopReason::Exhausted, "the finite tree is searched to the end");
     assert!(outcome.solved);
     assert_eq!(outcome.lines, ["(go a e)", "(go e d)"]);
+}
+
+/// The time limit is read on the budget's clock, and the stop says which: a limit of zero
+/// ends every strategy before its first token, on the wall clock and on the processor's.
+#[test]
+fn the_time_limit_is_read_on_the_budgets_clock() {
+    let dir = TempDir::new("clock");
+    let mut lm = tiny_uniform(&dir);
+    let Setup { model, spelling, vocab, prompt } = setup(&lm, ROADS_DOMAIN, ROADS_PROBLEM);
+    let mut decoder = Decoder::new(&model, &spelling, vocab, ValueConfig::default());
+    for (clock, stop) in [(Clock::Wall, StopReason::WallClock), (Clock::Cpu, StopReason::CpuTime)] {
+        for name in ["constrained-mcts", "unconstrained-mcts", "constrained-greedy"] {
+            let mut config = DecodeConfig::new(mode(name));
+            config.budget.time_limit = Some(Duration::ZERO);
+            config.budget.clock = clock;
+            let outcome = decoder.decode(&mut lm, &prompt, &model.initial_state(), &config).expect("decodes");
+            assert_eq!(outcome.stop, stop, "{name} on {clock:?}");
+            assert!(outcome.plan.is_empty() && !outcome.solved, "{name} on {clock:?}");
+            assert_eq!(outcome.stats.decoded_tokens, 0, "{name} on {clock:?}");
+        }
+        // With room, the same search finds its plan on either clock.
+        let mut config = DecodeConfig::new(mode("constrained-mcts"));
+        config.budget.clock = clock;
+        let outcome = decoder.decode(&mut lm, &prompt, &model.initial_state(), &config).expect("decodes");
+        assert!(outcome.solved, "{clock:?}: {:?}", outcome.stop);
+    }
 }
 
 #[test]

@@ -10,18 +10,20 @@
 //! by h then insertion order. Dead ends (h = ∞) are never inserted. A* can register states up
 //! to a permutation of interchangeable objects ([`SearchConfig::symmetries`], [`symmetry`]).
 
+mod clock;
 mod registry;
 pub mod symmetry;
 
 use std::cmp::Reverse;
 use std::collections::BinaryHeap;
 use std::sync::Arc;
-use std::time::{Duration, Instant};
+use std::time::Duration;
 
 use grounding::ActionId;
 use transition_model::{State, TransitionModel};
 
 use crate::Heuristic;
+pub use clock::{Clock, Stopwatch};
 pub use registry::{StateId, StateRegistry, relevant_facts};
 pub use symmetry::ObjectSymmetries;
 
@@ -48,6 +50,8 @@ pub struct SearchConfig {
     pub preferred_operators: bool,
     pub max_expansions: Option<u64>,
     pub time_limit: Option<Duration>,
+    /// What `time_limit` is read on (the wall clock by default).
+    pub clock: Clock,
     /// A* only: plans costing more are not wanted. A node whose f = g + h exceeds it is pruned
     /// (LM-cut is admissible, so no plan within the bound is lost), and a search that finds none
     /// ends `OverBound`. An episode's planner sets it to the steps the episode has left: a plan
@@ -71,6 +75,7 @@ impl SearchConfig {
             preferred_operators: false,
             max_expansions: None,
             time_limit: None,
+            clock: Clock::Wall,
             max_cost: None,
             relevant: None,
             symmetries: false,
@@ -97,6 +102,7 @@ pub struct SearchResult {
     pub expanded: u64,
     pub evaluated: u64,
     pub generated: u64,
+    /// Real time the search took (whatever clock its limit was read on).
     pub elapsed: Duration,
 }
 
@@ -143,7 +149,7 @@ impl Space {
 }
 
 struct Budget {
-    start: Instant,
+    start: Stopwatch,
     config: SearchConfig,
 }
 
@@ -151,7 +157,7 @@ impl Budget {
     /// Checked before every expansion: reading the clock costs tens of nanoseconds, an
     /// expansion with an expensive heuristic can cost seconds.
     fn exhausted(&self, expanded: u64) -> bool {
-        self.config.max_expansions.is_some_and(|m| expanded >= m) || self.config.time_limit.is_some_and(|t| self.start.elapsed() >= t)
+        self.config.max_expansions.is_some_and(|m| expanded >= m) || self.start.past(self.config.time_limit)
     }
 }
 
@@ -188,7 +194,7 @@ fn astar_lmcut(model: &TransitionModel, config: &SearchConfig) -> Result<Vec<Act
 
 /// Runs a search from `start` (the task's initial state when `None`).
 pub fn search(model: &TransitionModel, heuristic: &mut dyn Heuristic, config: &SearchConfig, start: Option<&State>) -> SearchResult {
-    let budget = Budget { start: Instant::now(), config: config.clone() };
+    let budget = Budget { start: Stopwatch::start(config.clock), config: config.clone() };
     let initial = start.cloned().unwrap_or_else(|| model.initial_state());
     match config.algorithm {
         Algorithm::AStar => astar(model, heuristic, &budget, initial),
@@ -207,7 +213,7 @@ fn finish(
 ) -> SearchResult {
     let plan = goal.map(|g| space.plan(g)).unwrap_or_default();
     let cost = transition_model::plan_cost(model.task(), &plan);
-    SearchResult { status, plan, cost, expanded: counts.0, evaluated: counts.1, generated: counts.2, elapsed: budget.start.elapsed() }
+    SearchResult { status, plan, cost, expanded: counts.0, evaluated: counts.1, generated: counts.2, elapsed: budget.start.wall_elapsed() }
 }
 
 fn astar(model: &TransitionModel, heuristic: &mut dyn Heuristic, budget: &Budget, initial: State) -> SearchResult {

@@ -1,0 +1,140 @@
+//! The clock a search's time limit is read on.
+//!
+//! The paper bounds Phase II by wall-clock time (250 s a task), so a search that runs beside
+//! other work gets less done in its limit and can lose where it would win alone: its verdict
+//! depends on the machine's load. [`Clock::Cpu`] reads the processor time the process itself
+//! has used instead, which other processes do not spend: the same limit, on an idle machine
+//! about the same work, and the same work whatever else runs (`nice 19` in the background
+//! included). Counts (expansions, simulations, model calls) remain the bounds that do not
+//! depend on the machine at all.
+
+use std::time::{Duration, Instant};
+
+/// What a time limit is measured on (command-line names `wall`, `cpu`).
+#[derive(
+    Debug,
+    Clone,
+    Copy,
+    PartialEq,
+    Eq,
+    Hash,
+    Default,
+    serde::Serialize,
+    serde::Deserialize,
+    strum::EnumString,
+    strum::IntoStaticStr,
+    strum::VariantNames,
+)]
+#[serde(rename_all = "kebab-case")]
+#[strum(serialize_all = "kebab-case")]
+pub enum Clock {
+    /// Elapsed real time, what a user waits (the paper's).
+    #[default]
+    Wall,
+    /// Processor time used by this process, all its threads together (`CLOCK_PROCESS_CPUTIME_ID`):
+    /// one busy thread counts one second a second, two count two, a thread waiting for the
+    /// processor or a server counts nothing.
+    Cpu,
+}
+
+impl Clock {
+    /// Whether this is the wall clock (for `serde(skip_serializing_if)`: configurations
+    /// written before the clock was a setting name the wall clock by leaving it out).
+    pub fn is_wall(&self) -> bool {
+        *self == Clock::Wall
+    }
+
+    /// The command-line name.
+    pub fn name(self) -> &'static str {
+        self.into()
+    }
+
+    /// Whether this platform can read the clock (the processor-time clock is read with
+    /// `clock_gettime`, which Windows and a few Unix systems do not offer for a process).
+    pub fn available(self) -> bool {
+        match self {
+            Clock::Wall => true,
+            Clock::Cpu => cpu::now().is_some(),
+        }
+    }
+}
+
+/// A clock started at one moment: how much of a limit has been used since.
+#[derive(Debug, Clone, Copy)]
+pub struct Stopwatch {
+    clock: Clock,
+    wall: Instant,
+    /// The process's processor time at the start (zero on the wall clock).
+    cpu: Duration,
+}
+
+impl Stopwatch {
+    /// Starts now on `clock`. On a platform without the processor-time clock
+    /// ([`Clock::available`]) it reads the wall clock: callers that offer the choice check
+    /// availability when they parse it.
+    pub fn start(clock: Clock) -> Stopwatch {
+        let (clock, cpu) = match clock {
+            Clock::Wall => (Clock::Wall, Duration::ZERO),
+            Clock::Cpu => cpu::now().map_or((Clock::Wall, Duration::ZERO), |now| (Clock::Cpu, now)),
+        };
+        Stopwatch { clock, wall: Instant::now(), cpu }
+    }
+
+    /// The clock it reads.
+    pub fn clock(&self) -> Clock {
+        self.clock
+    }
+
+    /// Time used since the start, on its clock.
+    pub fn elapsed(&self) -> Duration {
+        match self.clock {
+            Clock::Wall => self.wall.elapsed(),
+            Clock::Cpu => cpu::now().map_or_else(|| self.wall.elapsed(), |now| now.saturating_sub(self.cpu)),
+        }
+    }
+
+    /// Real time since the start, whatever the clock (what a report shows as duration).
+    pub fn wall_elapsed(&self) -> Duration {
+        self.wall.elapsed()
+    }
+
+    /// Whether `limit` (if any) has been used up.
+    pub fn past(&self, limit: Option<Duration>) -> bool {
+        limit.is_some_and(|limit| self.elapsed() >= limit)
+    }
+}
+
+#[cfg(any(
+    target_os = "linux",
+    target_os = "android",
+    target_vendor = "apple",
+    target_os = "freebsd",
+    target_os = "openbsd",
+    target_os = "dragonfly"
+))]
+mod cpu {
+    use std::time::Duration;
+
+    /// The process's processor time (a system call, about a microsecond at most: read before
+    /// an expansion or a token, each of which costs far more).
+    pub fn now() -> Option<Duration> {
+        let t = rustix::time::clock_gettime(rustix::time::ClockId::ProcessCPUTime);
+        Some(Duration::new(u64::try_from(t.tv_sec).ok()?, u32::try_from(t.tv_nsec).ok()?))
+    }
+}
+
+#[cfg(not(any(
+    target_os = "linux",
+    target_os = "android",
+    target_vendor = "apple",
+    target_os = "freebsd",
+    target_os = "openbsd",
+    target_os = "dragonfly"
+)))]
+mod cpu {
+    use std::time::Duration;
+
+    pub fn now() -> Option<Duration> {
+        None
+    }
+}
