@@ -113,7 +113,7 @@ impl<'m> Decoder<'m> {
             Strategy::Sample(sampling) => linear(stepper, &mut session, root, Some(Sampler::new(sampling.clone())))?,
             Strategy::Mcts(mcts) => search::run(stepper, &mut session, root, mcts)?,
         };
-        let Session { lm, mut stats, .. } = session;
+        let Session { lm, mut stats, started, .. } = session;
         let (evaluations, lookups) = self.stepper.evaluator.counts();
         stats.usage = lm.usage().since(&usage_before);
         stats.heuristic_evaluations = evaluations - evaluations_before;
