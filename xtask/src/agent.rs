@@ -23,7 +23,7 @@ use heuristics::search::SearchStatus;
 use household_sim::{AlfworldEnv, Environment, Judge, VirtualhomeEnv};
 use lm::{LanguageModel, LocalChat, LocalModel};
 use mcts::prompt::planning_prompt;
-use mcts::{DecodeError, Decoder, StopReason};
+use mcts::{DecodeError, Decoder};
 use serde_json::json;
 use vlm_client::{CachedChat, ChatClient, ChatModel, ClientConfig};
 
@@ -367,11 +367,7 @@ impl PhaseTwoRunner {
         // sent: the transition model says it ends short of the goal, so running it would only
         // spend steps and pass a search failure off as the goal's. A model that ended the plan
         // at once wrote an empty plan, which is its DONE.
-        let searched_out = matches!(
-            outcome.stop,
-            StopReason::Simulations | StopReason::WallClock | StopReason::ModelCalls | StopReason::Exhausted | StopReason::DeadEnd
-        );
-        let no_plan = (!outcome.solved && searched_out).then(|| format!("{:?}: no plan", outcome.stop));
+        let no_plan = (!outcome.solved && outcome.stop.searched_out()).then(|| format!("{:?}: no plan", outcome.stop));
         let invalid_step = outcome.invalid.as_ref().map(|i| i.text.clone());
         Ok(PhaseTwo {
             actions: if no_plan.is_some() { Vec::new() } else { outcome.plan },

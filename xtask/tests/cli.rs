@@ -585,6 +585,25 @@ fn agent_reports_at_once_that_no_plan_fits_in_the_steps_left() {
     assert_eq!(episode["attribution"], "representation");
 }
 
+/// A search that runs out of time without a goal plan has found none, on either clock: the
+/// episode sends nothing and fails for want of a plan (the stop names the clock), where a
+/// plan the model ended short of the goal would be its DONE.
+#[test]
+fn a_search_out_of_time_is_no_plan_on_either_clock() {
+    for (clock, stop, detail) in [("wall", "WallClock", "wall-clock"), ("cpu", "CpuTime", "cpu-time")] {
+        #[rustfmt::skip]
+        let output = xtask(&[
+            "agent", "--benchmark", "virtualhome-rearrange", "--task", "fridge-003", "--time-limit", "0.000001", "--clock", clock, "--json",
+        ]);
+        let value: serde_json::Value = serde_json::from_str(&stdout(&output)).expect("one JSON object");
+        let episode = &value["episode"];
+        assert_eq!(output.status.code(), Some(1), "{clock}: {episode}");
+        assert_eq!(episode["no_plan"], true, "{clock}: {episode}");
+        assert_eq!(episode["failure"], format!("no plan: {stop}: no plan"), "{clock}: {episode}");
+        assert_eq!(episode["phase2_detail"]["stop"], detail, "{clock}");
+    }
+}
+
 /// EAI 229_1 with a budget of 11: the sweep's Phase I takes 4 steps and leaves 7; LM-cut at
 /// ŝ0 says 7, but the optimal plan takes 8. A* within 7 actions proves that none fits, so Phase
 /// II says so without searching (constrained MCTS would spend its whole time limit), and the

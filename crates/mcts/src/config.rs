@@ -190,6 +190,23 @@ pub enum StopReason {
     Exhausted,
 }
 
+impl StopReason {
+    /// Whether the run stopped because a budget ran out, the tree was searched through or no
+    /// action applied, rather than because a plan ended: a run that stops so without a goal
+    /// plan has found none (its best partial plan is not one to send).
+    pub fn searched_out(self) -> bool {
+        match self {
+            StopReason::Simulations
+            | StopReason::WallClock
+            | StopReason::CpuTime
+            | StopReason::ModelCalls
+            | StopReason::Exhausted
+            | StopReason::DeadEnd => true,
+            StopReason::Goal | StopReason::EndOfPlan | StopReason::InvalidAction | StopReason::MaxTokens | StopReason::MaxActions => false,
+        }
+    }
+}
+
 /// The first action of an unconstrained plan that could not be executed.
 #[derive(Debug, Clone, PartialEq, Eq, Serialize)]
 pub struct InvalidStep {
