@@ -140,5 +140,24 @@ fn symmetry_detect(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, bench, symmetry, symmetry_detect);
+/// The time limit read before every expansion, on each clock (`search::Clock`): blind A*, whose
+/// expansions are the cheapest, so the read weighs most (blocks instance-10, 36,657 expansions).
+fn clock(c: &mut Criterion) {
+    use heuristics::search::{Algorithm, Clock, SearchConfig, search};
+    let files = load(Benchmark::Ipc).expect("fixtures").into_iter().find(|t| t.id == "blocks/instance-10").expect("blocks/instance-10");
+    let model = model(&files);
+    let mut group = c.benchmark_group("clock");
+    group.sample_size(10);
+    for clock in [Clock::Wall, Clock::Cpu] {
+        let mut config = SearchConfig::new(Algorithm::AStar);
+        config.time_limit = Some(std::time::Duration::from_secs(1000));
+        config.clock = clock;
+        group.bench_function(format!("blocks-10/astar-blind/{}", clock.name()), |b| {
+            b.iter(|| search(&model, &mut heuristics::Blind::new(&model), &config, None).expanded)
+        });
+    }
+    group.finish();
+}
+
+criterion_group!(benches, bench, symmetry, symmetry_detect, clock);
 criterion_main!(benches);
