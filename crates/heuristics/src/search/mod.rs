@@ -154,8 +154,9 @@ struct Budget {
 }
 
 impl Budget {
-    /// Checked before every expansion: reading the clock costs tens of nanoseconds, an
-    /// expansion with an expensive heuristic can cost seconds.
+    /// Checked before every expansion: reading the wall clock costs tens of nanoseconds (the
+    /// processor clock is read at most once a millisecond, `Stopwatch::past`), an expansion
+    /// with an expensive heuristic can cost seconds.
     fn exhausted(&self, expanded: u64) -> bool {
         self.config.max_expansions.is_some_and(|m| expanded >= m) || self.start.past(self.config.time_limit)
     }
