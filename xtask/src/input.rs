@@ -166,14 +166,18 @@ where
     clap::builder::PossibleValuesParser::new(T::VARIANTS).try_map(|name| name.parse::<T>())
 }
 
-/// A clap parser for `--clock`: a name of [`mcts::Clock`] this platform can read.
-pub fn clock(text: &str) -> Result<mcts::Clock, String> {
-    let names = <mcts::Clock as strum::VariantNames>::VARIANTS.join(", ");
-    let clock: mcts::Clock = text.parse().map_err(|_| format!("`{text}` is not a clock (one of: {names})"))?;
-    if !clock.available() {
-        return Err(format!("the `{text}` clock cannot be read on this platform (it needs clock_gettime's process CPU-time clock)"));
-    }
-    Ok(clock)
+/// A clap parser for `--clock`: a name of [`mcts::Clock`] (clap lists them, as [`choice`] does
+/// for every enum option), refused where this platform cannot read that clock.
+pub fn clock() -> impl clap::builder::TypedValueParser<Value = mcts::Clock> {
+    use clap::builder::TypedValueParser;
+    choice::<mcts::Clock>().try_map(|clock: mcts::Clock| {
+        if clock.available() {
+            Ok(clock)
+        } else {
+            let name: &'static str = clock.into();
+            Err(format!("the `{name}` clock cannot be read on this platform (it needs clock_gettime's process CPU-time clock)"))
+        }
+    })
 }
 
 /// Serialises an enum field by its command-line name, as the `String` fields it replaced did

@@ -62,7 +62,7 @@ pub struct DecodeArgs {
     /// same work done in its limit, so its verdict does not depend on the machine's load).
     /// Applies to Phase II's search and the A* planner, not to Phase I or a served model's
     /// waits, which use no processor time here.
-    #[arg(long, default_value = "wall", value_parser = input::clock)]
+    #[arg(long, default_value = "wall", value_parser = input::clock())]
     #[serde(skip_serializing_if = "Clock::is_wall", serialize_with = "input::serialize_name")]
     pub clock: Clock,
     /// Next-token distributions requested from the model, at most.

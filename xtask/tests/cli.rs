@@ -655,6 +655,16 @@ fn soundness_plans_fixture_tasks_and_they_reach_their_goals() {
         assert_eq!(row["status"], "solved", "{row}");
         assert_eq!(row["ours_goal"], true, "{row}");
     }
+    // The same searches with the limit on the processor clock: the same plans.
+    let cpu = scratch(&tmp, "soundness-cpu.jsonl", "");
+    let output = xtask(&["soundness", "--limit", "3", "--clock", "cpu", "--out", cpu.to_str().unwrap()]);
+    assert_eq!(output.status.code(), Some(0), "{}", String::from_utf8_lossy(&output.stderr));
+    let plans = |text: String| -> Vec<serde_json::Value> {
+        text.lines().map(|l| serde_json::from_str::<serde_json::Value>(l).unwrap()["plan"].clone()).collect()
+    };
+    assert_eq!(plans(std::fs::read_to_string(&cpu).unwrap()), plans(std::fs::read_to_string(&out).unwrap()));
+    let output = xtask(&["soundness", "--limit", "1", "--clock", "moon"]);
+    assert_eq!(output.status.code(), Some(2), "{}", String::from_utf8_lossy(&output.stderr));
 }
 
 /// Durations a user can type wrong are bad input (exit 2), never a panic.
@@ -767,7 +777,11 @@ fn eval_names_the_clock_in_its_configuration() {
     assert_eq!(cpu.1["clock"], "cpu", "{}", cpu.1);
     let output = xtask(&["eval", "--benchmark", "alfworld-seen", "--limit", "1", "--clock", "moon"]);
     assert_eq!(output.status.code(), Some(2));
-    assert!(String::from_utf8_lossy(&output.stderr).contains("one of: wall, cpu"), "{}", String::from_utf8_lossy(&output.stderr));
+    assert!(
+        String::from_utf8_lossy(&output.stderr).contains("[possible values: wall, cpu]"),
+        "{}",
+        String::from_utf8_lossy(&output.stderr)
+    );
 }
 
 /// The chat planner (unconstrained thinking / greedy through a chat model): `--thinking` needs
