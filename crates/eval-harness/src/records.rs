@@ -11,8 +11,9 @@
 //!   ([`RecordError::ConfigMismatch`]).
 //! - **Whole or absent.** [`RecordFile::append`] writes a record and its newline in one
 //!   `write` on a file opened for appending, then `sync_data`: after a crash or `kill -9` the
-//!   file ends with whole records, or with one record cut short — which [`RecordFile::open`]
-//!   cuts off (its task runs again). A complete line that is not a record of this
+//!   file ends with whole records, or with one record cut short — whose task runs again, and
+//!   which the run's first [`RecordFile::append`] cuts off (a file refused for other damage is
+//!   left as it was). A complete line that is not a record of this
 //!   configuration is never dropped silently: it is an error naming `file:line`.
 //! - **Resume.** [`RecordFile::done`] lists the tasks already recorded; a run skips them. Each
 //!   record carries its task's `index` in the run's task list, so shards and resumed runs can
@@ -150,12 +151,15 @@ pub struct RecordFile {
     line_count: usize,
     done: BTreeSet<String>,
     file: File,
+    /// Where the whole lines end, when a record cut short follows them (cut off by the first
+    /// [`RecordFile::append`]).
+    torn_tail: Option<u64>,
 }
 
 impl RecordFile {
     /// Opens (creating) `<dir>/<stem>-<hash>[.shard-i-of-n].jsonl` for `config`: checks or
-    /// writes the configuration file beside it, cuts off a last record cut short, and reads
-    /// the records already there. `fresh` deletes earlier records of this configuration first.
+    /// writes the configuration file beside it and reads the records already there, passing
+    /// over a last record cut short (cut off by the first append). `fresh` deletes earlier records of this configuration first.
     pub fn open(dir: &Path, stem: &str, config: &impl Serialize, shard: Option<Shard>, fresh: bool) -> Result<RecordFile, RecordError> {
         std::fs::create_dir_all(dir).map_err(io(dir))?;
         let hash = config_hash(config);
@@ -166,7 +170,13 @@ impl RecordFile {
             // Compared as the hash compares them (canonical JSON): the text's key order depends
             // on serde_json's `preserve_order`, which another build of the same code may lack.
             Ok(existing) => {
-                let found = serde_json::from_str::<Value>(&existing).map(|v| config_hash(&v)).unwrap_or_else(|_| "unreadable".into());
+                let found = match serde_json::from_str::<Value>(&existing) {
+                    Ok(value) => config_hash(&value),
+                    Err(e) => {
+                        let message = format!("not a configuration: {e} (delete the file, and its records, to start over)");
+                        return Err(RecordError::Bad { path: config_path, line: e.line(), message });
+                    }
+                };
                 if found != hash {
                     return Err(RecordError::ConfigMismatch { path: config_path, expected: hash, found });
                 }
@@ -194,17 +204,15 @@ impl RecordFile {
         }
         let mut bytes = Vec::new();
         file.read_to_end(&mut bytes).map_err(io(&path))?;
-        // A last line without its newline is a record cut short by a crash: cut it off.
+        // A last line without its newline is a record cut short by a crash: its task runs
+        // again, and the line is cut off before the first append (not here: a file the run
+        // then refuses, here or in `check_tasks`, is left as it was).
         let (text, torn) = whole_lines(&path, bytes)?;
-        if torn > 0 {
-            file.set_len(text.len() as u64).map_err(io(&path))?;
-            file.seek(SeekFrom::End(0)).map_err(io(&path))?;
-            eprintln!("{}: cut off a record cut short (a killed run); its task runs again", path.display());
-        }
         let (lines, records): (Vec<usize>, Vec<Map<String, Value>>) = parse_records(&path, &text, Some(&hash))?.into_iter().unzip();
+        let torn_tail = (torn > 0).then_some(text.len() as u64);
         let done = records.iter().filter_map(|r| r.get("task").and_then(Value::as_str).map(str::to_string)).collect();
         let line_count = text.lines().count();
-        Ok(RecordFile { path, hash, records, lines, line_count, done, file })
+        Ok(RecordFile { path, hash, records, lines, line_count, done, file, torn_tail })
     }
 
     /// Refuses a record whose task is not among `tasks` (the run's list), naming its line: a
@@ -255,6 +263,11 @@ impl RecordFile {
         object.insert("config".into(), Value::from(self.hash.clone()));
         let mut line = Value::Object(object.clone()).to_string();
         line.push('\n');
+        if let Some(whole) = self.torn_tail.take() {
+            self.file.set_len(whole).map_err(io(&self.path))?;
+            self.file.seek(SeekFrom::End(0)).map_err(io(&self.path))?;
+            eprintln!("{}: cut off a record cut short (a killed run); its task ran again", self.path.display());
+        }
         self.file.write_all(line.as_bytes()).map_err(io(&self.path))?;
         self.file.sync_data().map_err(io(&self.path))?;
         self.done.insert(task);

@@ -122,10 +122,36 @@ fn a_record_cut_short_is_cut_off_and_its_task_runs_again() {
     bytes.pop();
     assert!(std::str::from_utf8(&bytes).is_err(), "the cut falls inside the character");
     std::fs::write(&path, &bytes).expect("writes");
-    let file = RecordFile::open(&dir, "run", &config, None, false).expect("recovers");
+    let mut file = RecordFile::open(&dir, "run", &config, None, false).expect("recovers");
     assert_eq!(tasks(&file), ["a", "b"]);
+    // The cut record stays until the next append (a run that writes nothing changes nothing),
+    // which cuts it off first.
+    assert_eq!(std::fs::read(&path).expect("reads"), bytes);
+    file.append(2, &json!({"task": "c"})).expect("appends");
     drop(file);
-    assert_eq!(std::fs::read_to_string(&path).expect("UTF-8 again").lines().count(), 2);
+    let text = std::fs::read_to_string(&path).expect("UTF-8 again");
+    assert_eq!(text.lines().map(|l| serde_json::from_str::<Value>(l).expect("whole")["task"].clone()).collect::<Vec<_>>(), ["a", "b", "c"]);
+}
+
+/// A file refused for damage before its cut record is left as it was: the cut is made only
+/// by a run that goes on to append.
+#[test]
+fn a_refused_file_keeps_its_cut_record() {
+    let (_tmp_dir, dir) = scratch("refused-torn");
+    let config = json!({"agent": "expert"});
+    let path = RecordFile::open(&dir, "run", &config, None, false).expect("opens").path().to_path_buf();
+    let damaged = format!("not json\n{{\"task\":\"a\",\"config\":\"{}\",\"succ", config_hash(&config));
+    std::fs::write(&path, &damaged).expect("writes");
+    let error = RecordFile::open(&dir, "run", &config, None, false).expect_err("damaged");
+    assert!(matches!(error, RecordError::Bad { line: 1, .. }), "{error}");
+    assert_eq!(std::fs::read_to_string(&path).expect("reads"), damaged);
+    // A task that is not the run's is refused after the open, by `check_tasks`: the same.
+    let whole = format!("{{\"task\":\"z\",\"config\":\"{}\"}}\n{{\"task\":\"a\"", config_hash(&config));
+    std::fs::write(&path, &whole).expect("writes");
+    let file = RecordFile::open(&dir, "run", &config, None, false).expect("opens");
+    assert!(file.check_tasks(&["a"].into_iter().collect()).is_err());
+    drop(file);
+    assert_eq!(std::fs::read_to_string(&path).expect("reads"), whole);
 }
 
 #[test]
@@ -152,6 +178,11 @@ fn damage_other_than_a_cut_is_an_error_naming_the_line() {
     std::fs::write(&path, "").expect("writes");
     std::fs::write(dir.join(format!("run-{hash}.config.json")), "{\"agent\": \"direct\"}\n").expect("writes");
     assert!(matches!(RecordFile::open(&dir, "run", &config, None, false), Err(RecordError::ConfigMismatch { .. })));
+    // A configuration file that is not JSON is named as such, with its line.
+    std::fs::write(dir.join(format!("run-{hash}.config.json")), "{\"agent\":\n nope}\n").expect("writes");
+    let error = RecordFile::open(&dir, "run", &config, None, false).expect_err("not JSON");
+    assert!(matches!(&error, RecordError::Bad { line: 2, path, .. } if path.ends_with(format!("run-{hash}.config.json"))), "{error}");
+    assert!(error.to_string().contains("not a configuration"), "{error}");
 }
 
 #[test]

@@ -17,8 +17,8 @@
 //! it saw.
 //!
 //! The file is JSON lines, one reply a line, appended whole and flushed; a line torn by a
-//! killed process (the last one, without its newline) is dropped when the file is opened, or
-//! before the next append. Processes may share a file (shards of one run): opening and each
+//! killed process (the last one, without its newline) is passed over when the file is read and
+//! cut off before the next append (a file refused for a damaged line is left as it was). Processes may share a file (shards of one run): opening and each
 //! append hold the operating system's exclusive lock on it (`flock`), so one never reads or
 //! cuts another's line half written; a reply another process stored after this one opened the
 //! file is not seen by this one, which asks its model and appends the same reply again (the
@@ -152,11 +152,12 @@ impl CachedChat {
         }
         let mut file = OpenOptions::new().read(true).append(true).create(true).open(path).map_err(io)?;
         let mut bytes = Vec::new();
-        // A last line without its newline was cut off by a killed writer: drop it, so the next
-        // append starts a line of its own.
+        // A last line without its newline was cut short by a killed writer: passed over here,
+        // and cut off before the next append (`cut_torn_tail`), so that it starts a line of its own.
         file.lock().map_err(io)?;
-        let read = cut_torn_tail(&file, path).and_then(|()| file.read_to_end(&mut bytes));
+        let read = file.read_to_end(&mut bytes);
         file.unlock().and(read).map_err(io)?;
+        bytes.truncate(bytes.iter().rposition(|&b| b == b'\n').map_or(0, |i| i + 1));
         let mut replies = BTreeMap::new();
         for (i, line) in bytes.split(|&b| b == b'\n').enumerate() {
             if line.iter().all(u8::is_ascii_whitespace) {

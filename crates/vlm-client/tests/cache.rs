@@ -106,6 +106,13 @@ fn a_torn_last_line_is_dropped_and_a_damaged_line_is_named() {
     let error = CachedChat::open(Box::new(Counting { calls }), "m", &path).expect_err("damaged");
     assert!(matches!(&error, CacheError::BadLine { line: 2, .. }), "{error}");
     assert!(error.to_string().starts_with(&format!("{}:2: ", path.display())), "{error}");
+    // A refused file keeps its torn tail: nothing is cut until a reply is appended.
+    let damaged = format!("not json\n{}", &second[..second.len() / 2]);
+    std::fs::write(&path, &damaged).expect("damage");
+    let calls = Rc::new(Cell::new(0));
+    let error = CachedChat::open(Box::new(Counting { calls }), "m", &path).expect_err("damaged");
+    assert!(matches!(&error, CacheError::BadLine { line: 1, .. }), "{error}");
+    assert_eq!(std::fs::read_to_string(&path).expect("file"), damaged);
 }
 
 /// Two runs sharing one reply file (shards): a writer killed mid-line after both opened it
