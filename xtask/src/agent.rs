@@ -70,7 +70,7 @@ pub struct EpisodeArgs {
     #[command(flatten)]
     pub chat: ChatPlannerArgs,
     /// Environment steps for the whole episode [default: the paper's, 55 ALFWorld, 20 VirtualHome].
-    #[arg(long, value_parser = crate::input::at_least_one)]
+    #[arg(long, value_parser = crate::input::at_least_one::<usize>)]
     pub budget: Option<usize>,
     /// Seconds of search for Phase II (the paper's 250 s per task, Appendix A.4; 60 s before
     /// HARNESS_VERSION 9).
@@ -140,8 +140,17 @@ impl EpisodeArgs {
 /// reply file `cache` when one is given.
 pub fn explorer(spec: &ModelSpec, served_model: &str, cache: Option<&std::path::Path>) -> anyhow::Result<Box<dyn Policy>> {
     if *spec == ModelSpec::Systematic {
+        if let Some(file) = cache {
+            return Err(InputError(format!(
+                "--chat-cache {}: keeps the replies of a Phase I chat model (--explorer smollm2, a GGUF path, openai:URL); the systematic explorer asks none",
+                file.display()
+            ))
+            .into());
+        }
         return Ok(Box::new(Systematic));
     }
+    // A damaged reply file is named before any model is loaded or server asked.
+    cache.map(CachedChat::check).transpose().map_err(|e| InputError(e.to_string()))?;
     let mut model = chat_model(spec, served_model)?;
     if let Some(file) = cache {
         // What names the model's answers: the file's digest for a local model, the server and
@@ -450,6 +459,9 @@ pub fn episode<E: Environment + Judge>(
 }
 
 pub fn run(args: AgentArgs) -> anyhow::Result<ExitCode> {
+    for (path, option) in [(&args.commands_out, "--commands-out"), (&args.trace, "--trace")] {
+        path.as_deref().map(|path| crate::input::file_to_write(path, option)).transpose()?;
+    }
     let mut policy = explorer(&args.episode.explorer, &args.episode.lm.served_model, args.episode.chat_cache.as_deref())?;
     let mut phase2 = PhaseTwoRunner::new(&args.planner, &args.episode)?;
     let (ep, name) = if let Some(game) = &args.which.game {
@@ -474,7 +486,7 @@ pub fn run(args: AgentArgs) -> anyhow::Result<ExitCode> {
     };
     if let Some(path) = &args.commands_out {
         let text: String = ep.steps.iter().map(|s| format!("{}\n", s.command)).collect();
-        std::fs::write(path, text).with_context(|| format!("cannot write {}", path.display()))?;
+        crate::input::write_output(path, "--commands-out", text)?;
     }
     // Who planned: a chat planner in place of the decoder, or `--planner` (with `--lm`).
     let (planner, lm) = match &args.episode.chat.chat_planner {
@@ -483,7 +495,7 @@ pub fn run(args: AgentArgs) -> anyhow::Result<ExitCode> {
     };
     let record = json!({"task": name, "explorer": args.episode.explorer, "planner": planner, "lm": lm, "episode": ep});
     if let Some(path) = &args.trace {
-        std::fs::write(path, serde_json::to_string_pretty(&record)?).with_context(|| format!("cannot write {}", path.display()))?;
+        crate::input::write_output(path, "--trace", serde_json::to_string_pretty(&record)?)?;
     }
     if args.json {
         println!("{record}");

@@ -2,9 +2,11 @@
 //! decoded under the JSON schema) or a served one (`openai:URL`, any OpenAI-compatible
 //! `/v1/chat/completions`, with images). Prints the reply, the parsed JSON and the usage.
 //!
-//! Exit codes: 0 a reply; 1 the model failed (a server still failing after its retries, or no
-//! valid JSON after the repair turn), with the typed error; 2 bad input (an unreadable or
-//! non-PNG/JPEG image, a schema file that is not a JSON schema, a bad URL, a missing API key).
+//! Exit codes, as every command's: 0 a reply; 1 a reply that is no answer (no valid JSON after
+//! the repair turn); 2 bad input (an unreadable or non-PNG/JPEG image, a schema file that is
+//! not a JSON schema, a bad URL, a missing API key); 3 the model failed (a server still
+//! unreachable or failing after its retries, a reply that is not a chat completion), with the
+//! typed error.
 
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
@@ -161,7 +163,8 @@ pub fn run(args: ChatArgs) -> anyhow::Result<ExitCode> {
                 );
             }
             eprintln!("error: {error}");
-            return Ok(ExitCode::from(1));
+            let answered = matches!(error.kind, ChatErrorKind::InvalidJson { .. });
+            return Ok(ExitCode::from(if answered { 1 } else { 3 }));
         }
     };
     if args.json {

@@ -70,6 +70,9 @@ pub fn load_task(benchmark: &str, task: &str, task_dir: Option<&std::path::Path>
     let default = if benchmark == "virtualhome-rearrange" { "virtualhome-rearrange" } else { "virtualhome-eai/graphs" };
     let dir = task_dir.map_or_else(|| benchmark_data::fixtures_dir().join(default), std::path::Path::to_path_buf);
     let path = dir.join(format!("{task}.json.gz"));
+    if !dir.is_dir() {
+        bail!(crate::input::InputError(format!("{}: no such folder of task files", dir.display())));
+    }
     if !path.is_file() {
         bail!(crate::input::InputError(format!("no task {task} in {} (task files there are `<id>.json.gz`)", dir.display())));
     }

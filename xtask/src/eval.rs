@@ -99,7 +99,7 @@ pub struct EvalArgs {
     subset: String,
     /// Run at most this many tasks per benchmark (the first ones; records stay valid for a
     /// longer run of the same configuration).
-    #[arg(long, value_parser = crate::input::at_least_one)]
+    #[arg(long, value_parser = crate::input::at_least_one::<usize>)]
     limit: Option<usize>,
     /// Run every n-th task only, `i/n` (1 <= i <= n), into its own shard file, its report into
     /// `<out>/report-shard-i-of-n`; `cargo xtask merge` joins the shards.
@@ -113,7 +113,7 @@ pub struct EvalArgs {
     episode: EpisodeArgs,
     /// The direct agent's threshold: failed turns in a row that end an episode (the paper's
     /// "ungroundable threshold", whose value it does not give).
-    #[arg(long, default_value_t = exploration_harness::direct::FAILURE_LIMIT, value_parser = crate::input::at_least_one)]
+    #[arg(long, default_value_t = exploration_harness::direct::FAILURE_LIMIT, value_parser = crate::input::at_least_one::<usize>)]
     failure_limit: usize,
     /// Run once per seed (comma-separated; e.g. the paper's `0,42,1738` for the stochastic
     /// conditions, Appendix B): each run sets `--seed` and has its own records, and the report
@@ -590,6 +590,22 @@ fn plan(args: &EvalArgs) -> anyhow::Result<Vec<Planned>> {
         return Err(InputError(format!("--benchmark names {twice} twice")).into());
     }
     crate::input::folder_to_write(&args.out, "--out")?;
+    // A task folder is read for EAI's set by the agents that run episodes; given otherwise, it
+    // would be passed over in silence.
+    if let Some(dir) = &args.task_dir {
+        if args.agent == AgentName::Expert {
+            return Err(InputError(format!(
+                "--task-dir {}: the expert replays EAI's own problems and plans in fixtures/virtualhome-eai, not task files",
+                dir.display()
+            ))
+            .into());
+        }
+        if !suites.contains(&Suite::VirtualhomeEai) {
+            return Err(
+                InputError(format!("--task-dir {}: a folder of EAI task files, for --benchmark virtualhome-eai", dir.display())).into()
+            );
+        }
+    }
     if args.agent == AgentName::Expert && suites.contains(&Suite::VirtualhomeRearrange) {
         return Err(InputError("--agent expert: the rearrangement set has no expert plans in the benchmark's own form".into()).into());
     }
@@ -617,6 +633,9 @@ fn plan(args: &EvalArgs) -> anyhow::Result<Vec<Planned>> {
             ))
             .into());
         }
+        // A damaged reply file is named before a server is asked who it serves (the records'
+        // configuration names it).
+        vlm_client::CachedChat::check(cache).map_err(|e| InputError(e.to_string()))?;
         // `report` reads every `*.jsonl` of a records folder as records.
         let folder = |p: &Path| std::fs::canonicalize(p).unwrap_or_else(|_| p.to_path_buf());
         let parent = cache.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new("."));

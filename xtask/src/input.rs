@@ -55,6 +55,33 @@ pub fn folder_to_write(path: &Path, option: &str) -> anyhow::Result<()> {
     Ok(())
 }
 
+/// Refuses, before any work, an output file `option` names that cannot be written: a folder
+/// is there, or the folder it would go in does not exist.
+pub fn file_to_write(path: &Path, option: &str) -> anyhow::Result<()> {
+    if path.is_dir() {
+        return Err(InputError(format!("{option} {}: a folder is there, not a file", path.display())).into());
+    }
+    match path.parent().filter(|p| !p.as_os_str().is_empty()) {
+        Some(dir) if !dir.is_dir() => {
+            Err(InputError(format!("{option} {}: no folder {} to write it in", path.display(), dir.display())).into())
+        }
+        _ => Ok(()),
+    }
+}
+
+/// Writes the output file `option` names: a path the system refuses (no such folder, a folder
+/// in its place, no permission) is bad input naming the option; any other failure (a full
+/// disk) is not.
+pub fn write_output(path: &Path, option: &str, bytes: impl AsRef<[u8]>) -> anyhow::Result<()> {
+    use std::io::ErrorKind::*;
+    std::fs::write(path, bytes).map_err(|e| match e.kind() {
+        NotFound | PermissionDenied | IsADirectory | NotADirectory | ReadOnlyFilesystem | InvalidFilename => {
+            InputError(format!("{option} {}: cannot write: {e}", path.display())).into()
+        }
+        _ => anyhow::Error::new(e).context(format!("cannot write {}", path.display())),
+    })
+}
+
 /// Whether `step` is one PDDL action, `(name arg ...)` or without its parentheses (`name arg
 /// ...`, which `Spelling::pddl` reads too): one group, nothing nested, nothing before or after.
 pub fn one_action(step: &str) -> bool {
@@ -203,9 +230,9 @@ pub fn number_in(min: f64, min_open: bool, max: f64) -> impl Fn(&str) -> Result<
 }
 
 /// A clap parser for a whole number of at least 1.
-pub fn at_least_one(text: &str) -> Result<usize, String> {
-    match text.trim().parse::<usize>() {
-        Ok(value) if value >= 1 => Ok(value),
+pub fn at_least_one<T: std::str::FromStr + PartialOrd + From<u8>>(text: &str) -> Result<T, String> {
+    match text.trim().parse::<T>() {
+        Ok(value) if value >= T::from(1) => Ok(value),
         _ => Err(format!("`{text}` is not a whole number of at least 1")),
     }
 }

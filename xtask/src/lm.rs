@@ -92,6 +92,9 @@ pub fn resolve_model(name: &str) -> Result<PathBuf, InputError> {
         return Ok(path);
     }
     let path = PathBuf::from(name);
+    if path.is_dir() {
+        return Err(InputError(format!("{name}: a folder, not a model file (use `smollm2` or a path to a GGUF file)")));
+    }
     if !path.is_file() {
         return Err(InputError(format!("{name}: no such model file (use `smollm2` or a path to a GGUF file)")));
     }

@@ -110,12 +110,24 @@ enum Command {
     /// Greedy generation with a local GGUF model; prints the continuation and tokens/s.
     Generate(lm::GenerateArgs),
     /// One chat turn with a local or served model (images, a JSON schema); prints the reply,
-    /// the parsed JSON and the usage; exit 1 when the model fails after its retries.
+    /// the parsed JSON and the usage; exit 1 when the reply holds no valid JSON after the repair
+    /// turn, 3 when the model fails after its retries.
     Chat(chat::ChatArgs),
 }
 
 fn main() -> ExitCode {
-    let cli = Cli::parse();
+    // A negative number after an option is its value (`--limit -1` is then refused by the
+    // option's own parser, which names it), not an unknown flag.
+    fn negative_numbers(command: clap::Command) -> clap::Command {
+        command.allow_negative_numbers(true).mut_subcommands(negative_numbers)
+    }
+    let cli = match negative_numbers(<Cli as clap::CommandFactory>::command())
+        .try_get_matches()
+        .and_then(|matches| <Cli as clap::FromArgMatches>::from_arg_matches(&matches))
+    {
+        Ok(cli) => cli,
+        Err(error) => error.exit(),
+    };
     match run(cli.command) {
         Ok(code) => code,
         Err(error) => {

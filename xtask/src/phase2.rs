@@ -55,7 +55,7 @@ pub struct DecodeArgs {
     #[serde(serialize_with = "input::serialize_name")]
     pub mode: ModeName,
     /// MCTS simulations at most.
-    #[arg(long)]
+    #[arg(long, value_parser = input::at_least_one::<u64>)]
     pub simulations: Option<u64>,
     /// What `--time-limit` is read on: `wall` (elapsed time, the paper's) or `cpu` (the
     /// processor time this process uses, all its threads: a search beside other work gets the
@@ -66,16 +66,16 @@ pub struct DecodeArgs {
     #[serde(skip_serializing_if = "Clock::is_wall", serialize_with = "input::serialize_name")]
     pub clock: Clock,
     /// Next-token distributions requested from the model, at most.
-    #[arg(long)]
+    #[arg(long, value_parser = input::at_least_one::<u64>)]
     pub model_calls: Option<u64>,
     /// Tokens of one plan at most.
-    #[arg(long, default_value_t = 512)]
+    #[arg(long, default_value_t = 512, value_parser = input::at_least_one::<usize>)]
     pub max_tokens: usize,
     /// Actions of one plan at most.
-    #[arg(long, default_value_t = 64)]
+    #[arg(long, default_value_t = 64, value_parser = input::at_least_one::<usize>)]
     pub max_actions: usize,
     /// MCTS: children per node.
-    #[arg(long, default_value_t = 16, value_parser = input::at_least_one)]
+    #[arg(long, default_value_t = 16, value_parser = input::at_least_one::<usize>)]
     pub width: usize,
     /// MCTS: exploration constant (finite, at least 0).
     #[arg(long, default_value_t = 2.5, value_parser = input::number_in(0.0, false, 1e9))]
@@ -407,8 +407,9 @@ pub fn plan_one(
 ) -> anyhow::Result<ExitCode> {
     // The settings that make this plan, hashed as a run's records are (the task is the set),
     // asked of a server before the search, so that a server that cannot say loses no search.
-    let config = RunConfig::new(files.benchmark.name(), &files.id, lm_args, args, time_limit)?;
+    // The model's files (a tokenizer, a GGUF) are checked before a server is asked.
     let mut lm = load_lm(lm_args)?;
+    let config = RunConfig::new(files.benchmark.name(), &files.id, lm_args, args, time_limit)?;
     let vocab = Arc::new(mcts::constraint_vocabulary(lm.vocabulary()).context("the model's vocabulary")?);
     let (mut record, outcome, model) = solve(files, lm.as_mut(), &lm_args.lm.to_string(), &vocab, args, time_limit)?;
     record.config = eval_harness::records::config_hash(&config);
@@ -424,7 +425,7 @@ pub fn plan_one(
     if let Some(out) = out {
         let mut text = outcome.lines.join("\n");
         text.push('\n');
-        std::fs::write(out, text).with_context(|| format!("cannot write {}", out.display()))?;
+        crate::input::write_output(out, "--out", text)?;
     }
     if json {
         println!("{}", serde_json::to_string(&record)?);
@@ -455,7 +456,7 @@ pub struct Phase2Args {
     #[arg(long)]
     subset: Option<String>,
     /// Run at most this many tasks.
-    #[arg(long, value_parser = crate::input::at_least_one)]
+    #[arg(long, value_parser = crate::input::at_least_one::<usize>)]
     limit: Option<usize>,
     #[command(flatten)]
     lm: LmArgs,
@@ -503,6 +504,8 @@ pub fn run(args: Phase2Args) -> anyhow::Result<ExitCode> {
         None => args.benchmark.name().to_string(),
     };
     let variant = args.decode.variant();
+    // The model's files (a tokenizer, a GGUF) are checked before a server is asked.
+    let mut lm = load_lm(&args.lm)?;
     let config = RunConfig::new(args.benchmark.name(), &set, &args.lm, &args.decode, args.time_limit)?;
     // Records in `<stem>-<hash>.jsonl`, the configuration beside them, appended whole and
     // resumed (eval_harness::records); a file of another configuration's records is refused.
@@ -519,7 +522,6 @@ pub fn run(args: Phase2Args) -> anyhow::Result<ExitCode> {
     let done: BTreeSet<String> = records.iter().map(|r| r.task.clone()).collect();
     let todo: Vec<(usize, &TaskFiles)> = tasks.iter().enumerate().filter(|(_, t)| !done.contains(&t.id)).collect();
 
-    let mut lm = load_lm(&args.lm)?;
     let vocab = Arc::new(mcts::constraint_vocabulary(lm.vocabulary()).context("the model's vocabulary")?);
     let bar = input::progress_bar(format!("{set} {}", args.decode.mode), tasks.len());
     bar.set_position((tasks.len() - todo.len()) as u64);

@@ -5,7 +5,6 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 use std::time::{Duration, Instant};
 
-use anyhow::Context;
 use clap::ValueEnum;
 use heuristics::HeuristicName;
 use heuristics::search::{Algorithm, SearchConfig, SearchStatus, search};
@@ -86,6 +85,7 @@ pub fn plan(args: PlanArgs) -> anyhow::Result<ExitCode> {
     if args.symmetries && args.planner != Planner::Astar {
         return Err(crate::input::InputError("--symmetries is a setting of --planner astar".to_string()).into());
     }
+    args.out.as_deref().map(|out| input::file_to_write(out, "--out")).transpose()?;
     let files = args.task.load()?;
     let Some(algorithm) = args.planner.algorithm() else {
         let limit = args.time_limit.unwrap_or(crate::phase2::DEFAULT_TIME_LIMIT);
@@ -108,7 +108,7 @@ pub fn plan(args: PlanArgs) -> anyhow::Result<ExitCode> {
             .validate(&result.plan)
             .map_err(|e| anyhow::anyhow!("internal error: the plan found does not validate: {}", e.describe(model.task())))?;
         if let Some(out) = &args.out {
-            std::fs::write(out, plan_text(&model, &result.plan, result.cost)).with_context(|| format!("cannot write {}", out.display()))?;
+            crate::input::write_output(out, "--out", plan_text(&model, &result.plan, result.cost))?;
         }
     }
     let status = match result.status {

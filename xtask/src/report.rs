@@ -21,7 +21,7 @@ pub struct ReportArgs {
     #[arg(long, default_value = "target/report")]
     out: PathBuf,
     /// Bootstrap replicates of Table 7's intervals.
-    #[arg(long, default_value_t = 10_000, value_parser = crate::input::at_least_one)]
+    #[arg(long, default_value_t = 10_000, value_parser = crate::input::at_least_one::<usize>)]
     replicates: usize,
     /// Seed of the bootstrap.
     #[arg(long, default_value_t = 0)]

@@ -66,7 +66,10 @@ pub fn run(args: SoundnessArgs) -> anyhow::Result<ExitCode> {
     let domain = pddl_syntax::parse_domain(SOUND_DOMAIN).map_err(|e| anyhow::anyhow!("the sound domain does not parse: {e:?}"))?;
 
     let mut out: Box<dyn std::io::Write> = match &args.out {
-        Some(path) => Box::new(std::fs::File::create(path).with_context(|| format!("cannot write {}", path.display()))?),
+        Some(path) => {
+            crate::input::file_to_write(path, "--out")?;
+            Box::new(std::fs::File::create(path).with_context(|| format!("cannot write {}", path.display()))?)
+        }
         None => Box::new(std::io::stdout().lock()),
     };
     let (mut solved, mut ours_ok, mut gold_valid, mut gold_ok) = (0, 0, 0, 0);

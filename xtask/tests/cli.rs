@@ -855,6 +855,43 @@ fn eval_reports_bad_input_before_it_fetches_the_model() {
     assert!(!records.exists(), "no records for a run that never started");
 }
 
+/// Options given where they would be passed over, and output paths that cannot be written,
+/// are bad input before any work; a negative number is refused by its option's parser.
+#[test]
+fn options_that_would_be_ignored_or_cannot_be_written_are_bad_input() {
+    let tmp = scratch_dir("xtask-cli-bad-");
+    let game = "fixtures/alfworld/valid_seen/look_at_obj_in_light-AlarmClock-None-DeskLamp-323/trial_T20190909_044715_250790";
+    let cache = scratch(&tmp, "replies.jsonl", "");
+    let out = tmp.path().join("records");
+    let (domain, problem) = household();
+    let cases: [(Vec<&str>, &str); 7] = [
+        (vec!["agent", "--game", game, "--lm", "uniform", "--chat-cache", cache.to_str().unwrap()], "the systematic explorer asks none"),
+        (
+            vec!["eval", "--agent", "expert", "--benchmark", "virtualhome-eai", "--task-dir", "fixtures", "--out", out.to_str().unwrap()],
+            "the expert replays EAI's own problems",
+        ),
+        (
+            vec!["eval", "--agent", "planner", "--benchmark", "alfworld-seen", "--task-dir", "fixtures", "--out", out.to_str().unwrap()],
+            "for --benchmark virtualhome-eai",
+        ),
+        (vec!["plan", "--domain", &domain, "--problem", &problem, "--out", tmp.path().to_str().unwrap()], "a folder is there, not a file"),
+        (vec!["agent", "--game", game, "--lm", "uniform", "--trace", "no/such/folder/t.json"], "no folder no/such/folder to write it in"),
+        (vec!["eval", "--agent", "expert", "--limit", "-1", "--out", out.to_str().unwrap()], "for '--limit <LIMIT>'"),
+        (
+            vec!["plan", "--domain", &domain, "--problem", &problem, "--planner", "mcts", "--lm", "uniform", "--simulations", "0"],
+            "for '--simulations <SIMULATIONS>'",
+        ),
+    ];
+    for (args, message) in cases {
+        let output = xtask(&args);
+        let stderr = String::from_utf8_lossy(&output.stderr);
+        assert_eq!(output.status.code(), Some(2), "{args:?}: {stderr}");
+        assert!(stderr.contains(message), "{args:?}: `{stderr}` should say `{message}`");
+    }
+    assert!(!out.exists(), "no records for a run refused");
+    assert_eq!(std::fs::read_to_string(&cache).expect("reads"), "", "the reply file untouched");
+}
+
 /// A grounding error that is about the domain (an action that increases a function other than
 /// `total-cost`) names the domain file, the line and column there and the action, not the
 /// problem file.

@@ -73,6 +73,8 @@ pub enum DataError {
     MissingProblem { path: PathBuf, id: String },
     #[error("{path}:{line}: no task `{id}` in {benchmark}")]
     UnknownSubsetTask { path: PathBuf, line: usize, id: String, benchmark: &'static str },
+    #[error("no subset {name} (there is no {path}); the subsets: {known}")]
+    UnknownSubset { name: String, path: PathBuf, known: String },
     #[error("{path}:{line}: task `{id}` is listed twice")]
     DuplicateSubsetTask { path: PathBuf, line: usize, id: String },
     #[error("{path}:{line}:{column}: not UTF-8 text (byte 0x{byte:02x})")]
@@ -435,7 +437,23 @@ pub fn subset_path(name_or_path: &str) -> PathBuf {
 /// The task ids a subset file lists, with their line numbers: one id per line, white space
 /// trimmed; blank lines and lines starting with `#` are skipped. A repeated id is an error.
 pub fn subset_ids(path: &Path) -> Result<Vec<(usize, String)>, DataError> {
-    let text = read(path)?;
+    let text = read(path).map_err(|e| match e {
+        // A name that is not a subset of the fixtures' (a path given as such is named as read).
+        DataError::Io { source, .. }
+            if source.kind() == std::io::ErrorKind::NotFound && path.parent().is_some_and(|dir| dir.ends_with("subsets")) =>
+        {
+            let mut known: Vec<String> = std::fs::read_dir(path.parent().unwrap_or(path))
+                .into_iter()
+                .flatten()
+                .flatten()
+                .filter_map(|entry| entry.file_name().to_str().and_then(|n| n.strip_suffix(".txt")).map(str::to_string))
+                .collect();
+            known.sort();
+            let name = path.file_stem().map_or_else(|| path.display().to_string(), |s| s.to_string_lossy().into_owned());
+            DataError::UnknownSubset { name, path: path.to_path_buf(), known: known.join(", ") }
+        }
+        other => other,
+    })?;
     let mut ids: Vec<(usize, String)> = Vec::new();
     for (index, line) in text.lines().enumerate() {
         let id = line.trim();

@@ -88,6 +88,12 @@ fn an_unknown_or_repeated_id_is_reported_at_its_line() {
     std::fs::write(&repeated, "384_1\n384_1\n").expect("write");
     let error = load_subset(Benchmark::VirtualhomeEai, repeated.to_str().expect("utf-8 path")).expect_err("repeated id");
     assert!(matches!(&error, DataError::DuplicateSubsetTask { line: 2, .. }), "{error}");
+    // A name that is no subset lists the subsets there are; a path is named as given.
+    let error = load_subset(Benchmark::AlfworldSeen, "alfworld-seen-13").expect_err("no such subset");
+    assert!(matches!(&error, DataError::UnknownSubset { name, .. } if name == "alfworld-seen-13"), "{error}");
+    assert!(error.to_string().contains("alfworld-seen-12, alfworld-seen-50"), "{error}");
+    let error = load_subset(Benchmark::AlfworldSeen, dir.join("absent.txt").to_str().expect("utf-8 path")).expect_err("no file");
+    assert!(matches!(&error, DataError::Io { .. }), "{error}");
 }
 
 #[test]

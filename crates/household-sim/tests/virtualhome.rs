@@ -208,8 +208,13 @@ fn bad_task_files_name_the_field() {
     bytes.extend_from_slice(b"\n\n\xff");
     std::fs::write(&named, bytes).expect("writes");
     let error = VirtualhomeTask::load(&named).expect_err("not UTF-8").to_string();
+    // A `.gz` file that is not gzip data is read as JSON, and said to be neither.
+    let not_gzip = dir.join("t1.json.gz");
+    std::fs::write(&not_gzip, "plain text").expect("writes");
+    let gz_error = VirtualhomeTask::load(&not_gzip).expect_err("neither").to_string();
     std::fs::remove_dir_all(&dir).ok();
     assert!(error.contains(&format!("not UTF-8 text at line {}", text.lines().count() + 2)), "{error}");
+    assert!(gz_error.contains("t1.json.gz: not valid task JSON: neither gzip data"), "{gz_error}");
 }
 
 #[test]

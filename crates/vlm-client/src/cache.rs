@@ -152,22 +152,10 @@ impl CachedChat {
         }
         let mut file = OpenOptions::new().read(true).append(true).create(true).open(path).map_err(io)?;
         let mut bytes = Vec::new();
-        // A last line without its newline was cut short by a killed writer: passed over here,
-        // and cut off before the next append (`cut_torn_tail`), so that it starts a line of its own.
         file.lock().map_err(io)?;
         let read = file.read_to_end(&mut bytes);
         file.unlock().and(read).map_err(io)?;
-        bytes.truncate(bytes.iter().rposition(|&b| b == b'\n').map_or(0, |i| i + 1));
-        let mut replies = BTreeMap::new();
-        for (i, line) in bytes.split(|&b| b == b'\n').enumerate() {
-            if line.iter().all(u8::is_ascii_whitespace) {
-                continue;
-            }
-            let bad = |message: String| CacheError::BadLine { path: path.display().to_string(), line: i + 1, message };
-            let value: Value = serde_json::from_slice(line).map_err(|e| bad(e.to_string()))?;
-            let (key, stored) = Stored::from_json(&value).map_err(bad)?;
-            replies.insert(key, stored);
-        }
+        let replies = read_replies(path, bytes)?;
         Ok(CachedChat {
             inner,
             identity: identity.to_string(),
@@ -177,6 +165,18 @@ impl CachedChat {
             hits: 0,
             cached_usage: Usage::default(),
         })
+    }
+
+    /// The number of replies the file at `path` holds (0 where there is none yet), checked as
+    /// [`CachedChat::open`] checks them, without opening it for writing or asking any model:
+    /// for a caller that must ask a server who it is before it can open the file, so that a
+    /// damaged file is named before a server that is down.
+    pub fn check(path: &Path) -> Result<usize, CacheError> {
+        match std::fs::read(path) {
+            Ok(bytes) => Ok(read_replies(path, bytes)?.len()),
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound => Ok(0),
+            Err(source) => Err(CacheError::Io { path: path.display().to_string(), source }),
+        }
     }
 
     /// Replies answered from the file so far.
@@ -261,6 +261,24 @@ impl ChatModel for CachedChat {
         usage.add(&self.cached_usage);
         usage
     }
+}
+
+/// The replies of a reply file's `bytes`, by key. A last line without its newline was cut
+/// short by a killed writer: passed over here, and cut off before the next append
+/// ([`cut_torn_tail`]), so that it starts a line of its own.
+fn read_replies(path: &Path, mut bytes: Vec<u8>) -> Result<BTreeMap<String, Stored>, CacheError> {
+    bytes.truncate(bytes.iter().rposition(|&b| b == b'\n').map_or(0, |i| i + 1));
+    let mut replies = BTreeMap::new();
+    for (i, line) in bytes.split(|&b| b == b'\n').enumerate() {
+        if line.iter().all(u8::is_ascii_whitespace) {
+            continue;
+        }
+        let bad = |message: String| CacheError::BadLine { path: path.display().to_string(), line: i + 1, message };
+        let value: Value = serde_json::from_slice(line).map_err(|e| bad(e.to_string()))?;
+        let (key, stored) = Stored::from_json(&value).map_err(bad)?;
+        replies.insert(key, stored);
+    }
+    Ok(replies)
 }
 
 /// Cuts a last line without its newline (a writer killed mid-line) off the file, so the next

@@ -78,7 +78,8 @@ impl VirtualhomeTask {
     pub fn load(path: &Path) -> Result<VirtualhomeTask, VirtualhomeError> {
         let origin = path.display().to_string();
         let bytes = std::fs::read(path).map_err(|source| VirtualhomeError::Io { path: origin.clone(), source })?;
-        let bytes = if bytes.starts_with(&[0x1f, 0x8b]) {
+        let gzipped = bytes.starts_with(&[0x1f, 0x8b]);
+        let bytes = if gzipped {
             let mut text = Vec::new();
             flate2::read::GzDecoder::new(&bytes[..])
                 .read_to_end(&mut text)
@@ -93,7 +94,13 @@ impl VirtualhomeTask {
             let (line, column) = pddl_syntax::line_column(before, at);
             VirtualhomeError::Json { origin: origin.clone(), message: format!("not UTF-8 text at line {line}, column {column}") }
         })?;
-        let task = VirtualhomeTask::from_json(&text, &origin)?;
+        let task = VirtualhomeTask::from_json(&text, &origin).map_err(|e| match e {
+            // Read as JSON for want of gzip's signature: say both, for a `.gz` file.
+            VirtualhomeError::Json { origin, message } if !gzipped && origin.ends_with(".gz") => {
+                VirtualhomeError::Json { origin, message: format!("neither gzip data (no gzip signature) nor JSON: {message}") }
+            }
+            other => other,
+        })?;
         // A task file is named by its task: another id inside is a file renamed or mixed up.
         if let Some(stem) = path.file_name().and_then(|n| n.to_str()).and_then(|n| n.strip_suffix(".json.gz").or(n.strip_suffix(".json")))
             && stem != task.task_id
