@@ -271,6 +271,15 @@ fn faults_in_the_input_name_the_file_and_line() {
 
     std::fs::write(&path, format!("{}\n", first.replace("8ab1a4359acc", "000000000000"))).unwrap();
     assert!(message(load(&path)).starts_with(&format!("{shown}:1: a record of configuration 000000000000")));
+    // The records as written, the configuration beside them edited: that file is named as the
+    // one that changed.
+    std::fs::write(&path, format!("{first}\n")).unwrap();
+    let config = dir.join(format!("{stem}.config.json"));
+    let written = std::fs::read_to_string(&config).unwrap();
+    std::fs::write(&config, written.replacen("\"agent\"", "\"edited\": 1, \"agent\"", 1)).unwrap();
+    let said = message(load(&path));
+    assert!(said.contains("as the file's name says") && said.contains("edited after the run?"), "{said}");
+    std::fs::write(&config, written).unwrap();
 
     std::fs::write(&path, format!("{first}\n{first}\n")).unwrap();
     assert!(message(load(&path)).contains(":2: task "));

@@ -150,7 +150,16 @@ pub fn load(path: &Path) -> Result<RecordSet, ReportError> {
     for (line, fields) in parsed {
         let found = fields.get("config").and_then(Value::as_str).unwrap_or("none");
         if found != expected {
-            let message = format!("a record of configuration {found}, beside the configuration {} ({expected})", config_path.display());
+            // The file's name carries the hash of the configuration it was made with: where the
+            // records agree with it, the configuration file is the one that changed.
+            let message = if record_stem(path).ends_with(&format!("-{found}")) {
+                format!(
+                    "a record of configuration {found}, as the file's name says, but the configuration {} beside it is another ({expected}): edited after the run?",
+                    config_path.display()
+                )
+            } else {
+                format!("a record of configuration {found}, beside the configuration {} ({expected})", config_path.display())
+            };
             return Err(RecordError::Bad { path: path.to_path_buf(), line, message }.into());
         }
         check(path, line, &fields)?;
