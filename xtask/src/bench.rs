@@ -484,9 +484,10 @@ fn plan(
     let mut rows = Vec::new();
     let mut summary = serde_json::Map::new();
     for config in &chosen {
-        // Per domain: coverage of each, and expansions and seconds over the instances both
-        // solved (so a slow timeout does not decide the rate).
-        let mut per_domain: std::collections::BTreeMap<String, [f64; 6]> = std::collections::BTreeMap::new();
+        // Per domain: our coverage; expansions and seconds over the instances both solved (so a
+        // slow timeout does not decide the rate); Fast Downward's coverage, expansions and
+        // seconds over the same; how many both solved.
+        let mut per_domain: std::collections::BTreeMap<String, [f64; 7]> = std::collections::BTreeMap::new();
         let mut all = Vec::new();
         for benchmark in &benchmarks {
             let loaded = benchmark_data::load(*benchmark)?;
@@ -540,6 +541,7 @@ fn plan(
                             entry[2] += ours_s;
                             entry[4] += fd.expanded as f64;
                             entry[5] += fd.search_s;
+                            entry[6] += 1.0;
                         }
                     }
                 }
@@ -552,14 +554,16 @@ fn plan(
         }
         bar.finish_and_clear();
         let mut domains = serde_json::Map::new();
-        for (domain, [solved, expanded, seconds, fd_solved, fd_expanded, fd_seconds]) in per_domain {
-            let rate = expanded / seconds.max(1e-9);
-            let fd_rate = fd_expanded / fd_seconds.max(1e-9);
+        for (domain, [solved, expanded, seconds, fd_solved, fd_expanded, fd_seconds, both]) in per_domain {
+            // Rates over the tasks both planners solved: none (Fast Downward refused them all,
+            // as its LM-cut does tasks with conditional effects) is no rate, not a rate of 0.
+            let both = both > 0.0;
+            let (rate, fd_rate) = (both.then(|| expanded / seconds.max(1e-9)), both.then(|| fd_expanded / fd_seconds.max(1e-9)));
             domains.insert(
                 domain,
                 json!({
                     "coverage": solved, "fd_coverage": fd_solved,
-                    "expansions_per_s": rate, "fd_expansions_per_s": fd_rate, "ratio": rate / fd_rate.max(1e-9),
+                    "expansions_per_s": rate, "fd_expansions_per_s": fd_rate, "ratio": rate.zip(fd_rate).map(|(r, f)| r / f.max(1e-9)),
                 }),
             );
         }
