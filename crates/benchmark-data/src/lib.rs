@@ -107,7 +107,7 @@ fn read_json(path: &Path) -> Result<serde_json::Value, DataError> {
     serde_json::from_str(&text).map_err(|e| DataError::Json {
         path: path.to_path_buf(),
         line: e.line(),
-        column: e.column(),
+        column: e.column().max(1), // serde_json says 0 at the start of a line (an empty file)
         message: e.to_string(),
     })
 }

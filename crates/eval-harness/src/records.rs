@@ -439,7 +439,7 @@ pub fn merge(shards: &[PathBuf], partial: bool) -> Result<Merged, RecordError> {
         RecordError::Merge(format!("{}: cannot read the run's configuration beside the shards: {e}", config_path.display()))
     })?;
     let written: Value = serde_json::from_str(&text)
-        .map_err(|e| RecordError::Merge(format!("{}:{}:{}: not JSON: {e}", config_path.display(), e.line(), e.column())))?;
+        .map_err(|e| RecordError::Merge(format!("{}:{}:{}: not JSON: {e}", config_path.display(), e.line(), e.column().max(1))))?;
     if config_hash(&written) != config {
         return Err(RecordError::Merge(format!(
             "{}: the configuration {} beside the shards, whose records are of {config}",

@@ -92,8 +92,14 @@ impl GroundingError {
             let lines = |(path, text): (&str, &str), all: &[Diagnostic]| {
                 all.iter().filter(|d| d.is_error()).map(|d| d.render(path, text)).collect::<Vec<_>>()
             };
-            let mut out = lines(domain, d);
-            out.extend(lines(problem, p));
+            let mut out: Vec<String> = Vec::new();
+            // One line for the same error at the same place (a type every object of a list is
+            // declared with is reported once per object).
+            for line in lines(domain, d).into_iter().chain(lines(problem, p)) {
+                if !out.contains(&line) {
+                    out.push(line);
+                }
+            }
             return out.join("\n");
         }
         match self.location() {

@@ -101,3 +101,14 @@ fn names_that_do_not_check_render_each_in_its_file() {
     assert!(lines[0].starts_with("d.pddl:2:44: error[unknown-predicate]: predicate `r`"), "{rendered}");
     assert!(lines[1].starts_with("p.pddl:2:11: error[unknown-predicate]: predicate `s`"), "{rendered}");
 }
+
+/// A type every object of a list is declared with is one error, said once: the checker finds it
+/// for each object, at the same place.
+#[test]
+fn an_error_found_once_per_object_at_one_place_is_said_once() {
+    let problem = "(define (problem p) (:domain roads)\n (:objects x y z - town)\n (:init (at x)) (:goal (at y)))\n";
+    let error = ground(ROADS, problem);
+    let rendered = render(&error, ROADS, problem);
+    assert_eq!(rendered.lines().count(), 1, "{rendered}");
+    assert!(rendered.starts_with("p.pddl:2:20: error[unknown-type]: type `town`"), "{rendered}");
+}

@@ -185,9 +185,16 @@ impl ParseError {
         self.errors().next().map(|d| d.message.clone()).unwrap_or_default()
     }
 
-    /// Every diagnostic rendered as `path:line:column: ...`, one a line.
+    /// Every diagnostic rendered as `path:line:column: ...`, one a line: the errors first (what
+    /// made the parse fail), then the warnings, each in source order, a line said twice once.
     pub fn render(&self, path: &str, source: &str) -> String {
-        let lines: Vec<String> = self.diagnostics.iter().map(|d| d.render(path, source)).collect();
+        let (errors, warnings): (Vec<&Diagnostic>, Vec<&Diagnostic>) = self.diagnostics.iter().partition(|d| d.is_error());
+        let mut lines: Vec<String> = Vec::new();
+        for line in errors.into_iter().chain(warnings).map(|d| d.render(path, source)) {
+            if !lines.contains(&line) {
+                lines.push(line);
+            }
+        }
         lines.join("\n")
     }
 }

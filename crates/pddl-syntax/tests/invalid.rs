@@ -88,3 +88,16 @@ fn nesting_too_deep_is_an_error_not_a_crash() {
     }
     assert!(parse_domain(&deep(40)).is_ok(), "40 levels of `not` is PDDL");
 }
+
+/// A parse that fails says its errors first: the first line of the message is what made it
+/// fail, not a warning that came before it in the file.
+#[test]
+fn a_failed_parse_says_its_errors_before_its_warnings() {
+    let source = "(define (domain d) (:requirements :durative-actions)\n (:durative-action a :parameters ()))\n";
+    let error = pddl_syntax::parse_domain(source).expect_err("a durative action is outside the fragment");
+    let rendered = error.render("d.pddl", source);
+    let lines: Vec<&str> = rendered.lines().collect();
+    assert!(lines.len() >= 2, "{rendered}");
+    assert!(lines[0].contains(": error["), "{rendered}");
+    assert!(lines.iter().any(|l| l.contains(": warning[")), "{rendered}");
+}

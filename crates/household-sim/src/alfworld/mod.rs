@@ -185,7 +185,7 @@ impl AlfworldEnv {
         let json: serde_json::Value = serde_json::from_str(text).map_err(|e| EnvError::Json {
             path: source.into(),
             line: e.line(),
-            column: e.column(),
+            column: e.column().max(1), // serde_json says 0 at the start of a line (an empty file)
             message: e.to_string(),
         })?;
         let field = |key: &str| -> Result<&str, EnvError> {
