@@ -7,7 +7,7 @@ Pillow (vLLM) or similar. This script makes, with Pillow, a PNG, a baseline JPEG
 JPEG, a JPEG with an EXIF segment and one with stray bytes between segments, cuts each at many
 lengths (every byte of the first and last 64, and 64 between), and asks both: Pillow
 (`Image.open(...).load()`, truncated images not allowed, its default) and our `xtask chat
---image` (exit 2: the image is refused; exit 1 with "cannot connect": it was accepted and the
+--image` (exit 2: the image is refused; exit 3 with "cannot connect": it was accepted and the
 request went to a closed port).
 
 Usage: python3 tools/image_cut_check.py [--xtask PATH]   (needs Pillow; `pip install pillow`)
@@ -76,7 +76,7 @@ def ours_reads(xtask, data, path):
         capture_output=True, text=True)
     if r.returncode == 2:
         return False
-    if r.returncode == 1 and "cannot connect" in r.stderr:
+    if r.returncode == 3 and "cannot connect" in r.stderr:
         return True
     sys.exit(f"xtask chat: unexpected exit {r.returncode}: {r.stderr.strip()}")
 
