@@ -13,8 +13,8 @@
 //!   `write` on a file opened for appending, then `sync_data`: after a crash or `kill -9` the
 //!   file ends with whole records, or with one record cut short — whose task runs again, and
 //!   which the run's first [`RecordFile::append`] cuts off (a file refused for other damage is
-//!   left as it was). A complete line that is not a record of this
-//!   configuration is never dropped silently: it is an error naming `file:line`.
+//!   left as it was). A complete line that is not a record of this configuration is never
+//!   dropped silently: it is an error naming `file:line`.
 //! - **Resume.** [`RecordFile::done`] lists the tasks already recorded; a run skips them. Each
 //!   record carries its task's `index` in the run's task list, so shards and resumed runs can
 //!   be put back in order.
@@ -159,7 +159,8 @@ pub struct RecordFile {
 impl RecordFile {
     /// Opens (creating) `<dir>/<stem>-<hash>[.shard-i-of-n].jsonl` for `config`: checks or
     /// writes the configuration file beside it and reads the records already there, passing
-    /// over a last record cut short (cut off by the first append). `fresh` deletes earlier records of this configuration first.
+    /// over a last record cut short (cut off by the first append). `fresh` deletes earlier
+    /// records of this configuration first.
     pub fn open(dir: &Path, stem: &str, config: &impl Serialize, shard: Option<Shard>, fresh: bool) -> Result<RecordFile, RecordError> {
         std::fs::create_dir_all(dir).map_err(io(dir))?;
         let hash = config_hash(config);

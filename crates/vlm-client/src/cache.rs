@@ -18,11 +18,12 @@
 //!
 //! The file is JSON lines, one reply a line, appended whole and flushed; a line torn by a
 //! killed process (the last one, without its newline) is passed over when the file is read and
-//! cut off before the next append (a file refused for a damaged line is left as it was). Processes may share a file (shards of one run): opening and each
-//! append hold the operating system's exclusive lock on it (`flock`), so one never reads or
-//! cuts another's line half written; a reply another process stored after this one opened the
-//! file is not seen by this one, which asks its model and appends the same reply again (the
-//! later line wins on the next open, with the same content).
+//! cut off before the next append (a file refused for a damaged line is left as it was).
+//! Processes may share a file (shards of one run): opening and each append hold the operating
+//! system's exclusive lock on it (`flock`), so one never reads or cuts another's line half
+//! written; a reply another process stored after this one opened the file is not seen by this
+//! one, which asks its model and appends the same reply again (the later line wins on the next
+//! open, with the same content).
 //! Written by hand: a memo table over a JSON-lines file, which no crate offers in this shape.
 
 use std::collections::BTreeMap;
