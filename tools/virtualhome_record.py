@@ -16,8 +16,9 @@ Usage:
         from the dataset, as EAI does: "load and reset") and every line of EAI's gold program;
         one JSON line per task {task, reset_s, steps, step_s (all steps together)}.
     virtualhome_record.py check SOUNDNESS.jsonl OUT.jsonl [--shard I/N] [--task-dir DIR]
-        The sound domain's figures: for every line of `cargo xtask soundness --out`, EAI's gold
-        program, the A* plan's script (`script`) and the rewritten gold PDDL plan's script
+        The sound domain's figures: for every record of `cargo xtask soundness` (the file it
+        prints), EAI's gold program, the A* plan's script (`script`) and the rewritten gold PDDL
+        plan's script
         (`gold_script`) run in the real evolving graph, each judged on every goal; one JSON line
         per task {task, gold_program_ok, a_executed, a_goal, b_executed, b_goal, ...}, and the
         counts on standard error. Exit 1 when an A* plan fails on a task whose gold program

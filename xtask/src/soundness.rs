@@ -2,16 +2,17 @@
 //! files. Per task: (a) A* with LM-cut on the problem `household_sim::vh_pddl::problem` writes,
 //! and (b) EAI's gold PDDL plan rewritten for the domain (its classes bound to instances); both
 //! validated under the domain, spelled as the executor's script lines and run in our
-//! `VirtualhomeEnv`. One JSON line per task; `tools/virtualhome_record.py check` runs the same
-//! script lines in the real evolving graph.
+//! `VirtualhomeEnv`. One JSON line per task, a record of the run's configuration
+//! (`eval_harness::records`: resumed, never mixed with another configuration's);
+//! `tools/virtualhome_record.py check` runs the same script lines in the real evolving graph.
 
 use std::collections::BTreeMap;
-use std::io::Write as _;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use std::time::{Duration, Instant};
 
 use anyhow::Context;
+use eval_harness::records::RecordFile;
 use heuristics::search::SearchStatus;
 use household_sim::vh_pddl::{self, SOUND_DOMAIN, VhProblem};
 use household_sim::{Environment, Event, Judge, VhGoal, VirtualhomeEnv, VirtualhomeTask};
@@ -37,15 +38,35 @@ pub struct SoundnessArgs {
     /// depend on the load).
     #[arg(long, default_value = "wall", value_parser = crate::input::clock())]
     clock: heuristics::search::Clock,
-    /// Only the first N tasks (sorted ids).
-    #[arg(long)]
+    /// Only the first N tasks (sorted ids); their records stay valid for a longer run.
+    #[arg(long, value_parser = crate::input::at_least_one::<usize>)]
     limit: Option<usize>,
-    /// JSON lines go here (one per task) instead of standard output.
+    /// Folder for the records: one JSON line per task in `virtualhome-soundness-<hash>.jsonl`,
+    /// named by the run's configuration (the task folder's ids, EAI's files, the domain, the
+    /// time limit and its clock), written beside it as `.config.json`. A rerun resumes; a
+    /// killed run loses no finished task; another configuration never shares the file.
+    #[arg(long, default_value = "target/soundness")]
+    out: PathBuf,
+    /// Discard earlier records of this configuration instead of resuming.
     #[arg(long)]
-    out: Option<PathBuf>,
+    fresh: bool,
+}
+
+/// A task file's id: its name without `.json.gz` or `.json` (`VirtualhomeTask::load` checks
+/// that the task inside has it).
+fn task_id(path: &Path) -> String {
+    let name = path.file_name().and_then(|n| n.to_str()).unwrap_or_default();
+    name.strip_suffix(".json.gz").or(name.strip_suffix(".json")).unwrap_or(name).to_string()
+}
+
+/// The first 12 hex digits of the SHA-256 of `text`.
+fn digest(text: &str) -> String {
+    use sha2::{Digest, Sha256};
+    Sha256::digest(text.as_bytes()).iter().take(6).map(|b| format!("{b:02x}")).collect()
 }
 
 pub fn run(args: SoundnessArgs) -> anyhow::Result<ExitCode> {
+    crate::input::folder_to_write(&args.out, "--out")?;
     let dir = args.tasks.clone().unwrap_or_else(|| PathBuf::from("fixtures/virtualhome-eai/graphs"));
     let mut files: Vec<PathBuf> = std::fs::read_dir(&dir)
         .map_err(|e| InputError(format!("{}: cannot read the task folder: {e}", dir.display())))?
@@ -54,101 +75,128 @@ pub fn run(args: SoundnessArgs) -> anyhow::Result<ExitCode> {
         .filter(|p| p.to_string_lossy().ends_with(".json.gz") || p.extension().is_some_and(|e| e == "json"))
         .collect();
     files.sort();
-    if let Some(n) = args.limit {
-        files.truncate(n);
-    }
+    let ids: Vec<String> = files.iter().map(|p| task_id(p)).collect();
     let classes = eai_problem_classes(&args.eai.join("problem_pddl"))?;
     let gold_path = args.eai.join("gold_pddl_plan.json");
-    let gold: BTreeMap<String, Vec<String>> = serde_json::from_str(
-        &std::fs::read_to_string(&gold_path).map_err(|e| InputError(format!("{}: cannot read: {e}", gold_path.display())))?,
-    )
-    .map_err(|e| InputError(format!("{}: {e}", gold_path.display())))?;
+    let gold_text = std::fs::read_to_string(&gold_path).map_err(|e| InputError(format!("{}: cannot read: {e}", gold_path.display())))?;
+    let gold: BTreeMap<String, Vec<String>> =
+        serde_json::from_str(&gold_text).map_err(|e| InputError(format!("{}: {e}", gold_path.display())))?;
     let domain = pddl_syntax::parse_domain(SOUND_DOMAIN).map_err(|e| anyhow::anyhow!("the sound domain does not parse: {e:?}"))?;
 
-    let mut out: Box<dyn std::io::Write> = match &args.out {
-        Some(path) => {
-            crate::input::file_to_write(path, "--out")?;
-            Box::new(std::fs::File::create(path).with_context(|| format!("cannot write {}", path.display()))?)
-        }
-        None => Box::new(std::io::stdout().lock()),
-    };
-    let (mut solved, mut ours_ok, mut gold_run, mut gold_valid, mut gold_ok) = (0, 0, 0, 0, 0);
-    let bar = crate::input::progress_bar("soundness".into(), files.len());
-    for path in &files {
+    // The run's configuration names its records: the task list (every task of the folder, so
+    // a `--limit` run's records are a longer run's), EAI's files by content, the domain, the
+    // search's limit and its clock (named only where it is `cpu`, as in `eval`).
+    let mut config = json!({
+        "command": "soundness",
+        "tasks": {"count": ids.len(), "ids_sha256": digest(&ids.join("\n"))},
+        "gold_sha256": digest(&gold_text),
+        "problem_classes_sha256": digest(&serde_json::to_string(&classes)?),
+        "domain_sha256": digest(SOUND_DOMAIN),
+        "time_limit": args.time_limit,
+    });
+    if !args.clock.is_wall() {
+        config["clock"] = json!(<&str>::from(args.clock));
+    }
+    let mut records = RecordFile::open(&args.out, "virtualhome-soundness", &config, None, args.fresh)
+        .and_then(|file| file.check_tasks(&ids.iter().map(String::as_str).collect()).map(|()| file))
+        .map_err(|e| InputError(e.to_string()))?;
+    let run = args.limit.map_or(files.len(), |n| n.min(files.len()));
+    let bar = crate::input::progress_bar("soundness".into(), run);
+    for (index, path) in files.iter().enumerate().take(run) {
         bar.inc(1);
-        let task = VirtualhomeTask::load(path).map_err(|e| InputError(e.to_string()))?;
-        let id = task.task_id.clone();
-        let task_classes: Vec<&str> = classes.get(&id).map(|c| c.iter().map(String::as_str).collect()).unwrap_or_default();
-        let mut row = json!({"task": id, "task_name": task.task_name});
-        let problem = match vh_pddl::problem(&task, &task_classes) {
-            Ok(p) => p,
-            Err(e) => {
-                row["status"] = json!("unexpressible");
-                row["error"] = json!(e.to_string());
-                bar.suspend(|| writeln!(out, "{row}"))?;
-                continue;
-            }
-        };
-        let parsed =
-            pddl_syntax::parse_problem(&problem.text).map_err(|e| anyhow::anyhow!("{id}: the written problem does not parse: {e:?}"))?;
-        let model = TransitionModel::new(grounding::ground(&domain, &parsed).with_context(|| format!("{id}: grounding"))?);
-        row["objects"] = json!(problem.objects.len());
-        row["actions"] = json!(model.task().actions.len());
-
-        // (a) A* with LM-cut.
-        let start = Instant::now();
-        let mut search = heuristics::search::SearchConfig::new(heuristics::search::Algorithm::AStar);
-        (search.time_limit, search.clock) = (Some(Duration::from_secs_f64(args.time_limit)), args.clock);
-        let result = heuristics::search::optimal_plan_with(&model, &search);
-        row["millis"] = json!(start.elapsed().as_secs_f64() * 1e3);
-        row["status"] = json!(match &result {
-            Ok(_) => "solved",
-            Err(SearchStatus::Unsolvable) => "unsolvable",
-            Err(_) => "out-of-budget",
-        });
-        if let Ok(plan) = result {
-            let plan: Vec<String> = plan.iter().map(|&a| model.task().action_name(a)).collect();
-            solved += 1;
-            let script = spell(&problem, &task, &plan)?;
-            let (executed, goal) = run_in_env(&task, &script);
-            ours_ok += usize::from(executed && goal);
-            row["plan"] = json!(plan);
-            row["script"] = json!(script);
-            row["ours_executed"] = json!(executed);
-            row["ours_goal"] = json!(goal);
+        if records.done().contains(&ids[index]) {
+            continue;
         }
-
-        // (b) EAI's gold PDDL plan, its classes bound to instances.
-        if let Some(steps) = gold.get(&id) {
-            gold_run += 1;
-            match rewrite_gold(&task, &problem, steps) {
-                Ok(plan) => {
-                    let verdict = validate(&model, &plan);
-                    gold_valid += usize::from(verdict.is_ok());
-                    let script = spell(&problem, &task, &plan)?;
-                    let (executed, goal) = run_in_env(&task, &script);
-                    gold_ok += usize::from(executed && goal);
-                    row["gold_plan"] = json!(plan);
-                    row["gold_script"] = json!(script);
-                    row["gold_valid"] = json!(verdict.is_ok());
-                    if let Err(why) = verdict {
-                        row["gold_invalid"] = json!(why);
-                    }
-                    row["gold_ours_executed"] = json!(executed);
-                    row["gold_ours_goal"] = json!(goal);
-                }
-                Err(why) => row["gold_error"] = json!(why),
-            }
-        }
-        bar.suspend(|| writeln!(out, "{row}").and_then(|()| out.flush()))?;
+        let row = check_task(path, &classes, &gold, &domain, &args)?;
+        records.append(index, &row)?;
     }
     bar.finish_and_clear();
+    // The figures of this run's tasks, those of an earlier run of the configuration included.
+    let rows: Vec<&serde_json::Map<String, serde_json::Value>> =
+        records.records().iter().filter(|r| r["index"].as_u64().is_some_and(|i| (i as usize) < run)).collect();
+    let count = |test: &dyn Fn(&serde_json::Map<String, serde_json::Value>) -> bool| rows.iter().filter(|r| test(r)).count();
+    let yes = |r: &serde_json::Map<String, serde_json::Value>, key: &str| r.get(key) == Some(&json!(true));
     eprintln!(
-        "{} tasks: (a) A* solved {solved}, executed and reached the goal in our executor {ours_ok}; (b) gold PDDL plans {}: valid under the sound domain {gold_valid}, reached the goal in our executor {gold_ok}",
-        files.len(),
-        gold_run
+        "{run} tasks: (a) A* solved {}, executed and reached the goal in our executor {}; (b) gold PDDL plans {}: valid under the sound domain {}, reached the goal in our executor {}",
+        count(&|r| r["status"] == "solved"),
+        count(&|r| yes(r, "ours_executed") && yes(r, "ours_goal")),
+        count(&|r| r.contains_key("gold_plan") || r.contains_key("gold_error")),
+        count(&|r| yes(r, "gold_valid")),
+        count(&|r| yes(r, "gold_ours_executed") && yes(r, "gold_ours_goal")),
     );
+    println!("{}", records.path().display());
     Ok(ExitCode::SUCCESS)
+}
+
+/// One task's row: (a) A* with LM-cut on the problem the sound domain's writer makes, and (b)
+/// EAI's gold PDDL plan rewritten for the domain; each validated, spelled as script lines and
+/// run in our executor.
+fn check_task(
+    path: &Path,
+    classes: &BTreeMap<String, Vec<String>>,
+    gold: &BTreeMap<String, Vec<String>>,
+    domain: &pddl_syntax::Domain,
+    args: &SoundnessArgs,
+) -> anyhow::Result<serde_json::Value> {
+    let task = VirtualhomeTask::load(path).map_err(|e| InputError(e.to_string()))?;
+    let id = task.task_id.clone();
+    let task_classes: Vec<&str> = classes.get(&id).map(|c| c.iter().map(String::as_str).collect()).unwrap_or_default();
+    let mut row = json!({"task": id, "task_name": task.task_name});
+    let problem = match vh_pddl::problem(&task, &task_classes) {
+        Ok(p) => p,
+        Err(e) => {
+            row["status"] = json!("unexpressible");
+            row["error"] = json!(e.to_string());
+            return Ok(row);
+        }
+    };
+    let parsed =
+        pddl_syntax::parse_problem(&problem.text).map_err(|e| anyhow::anyhow!("{id}: the written problem does not parse: {e:?}"))?;
+    let model = TransitionModel::new(grounding::ground(domain, &parsed).with_context(|| format!("{id}: grounding"))?);
+    row["objects"] = json!(problem.objects.len());
+    row["actions"] = json!(model.task().actions.len());
+
+    // (a) A* with LM-cut.
+    let start = Instant::now();
+    let mut search = heuristics::search::SearchConfig::new(heuristics::search::Algorithm::AStar);
+    (search.time_limit, search.clock) = (Some(Duration::from_secs_f64(args.time_limit)), args.clock);
+    let result = heuristics::search::optimal_plan_with(&model, &search);
+    row["millis"] = json!(start.elapsed().as_secs_f64() * 1e3);
+    row["status"] = json!(match &result {
+        Ok(_) => "solved",
+        Err(SearchStatus::Unsolvable) => "unsolvable",
+        Err(_) => "out-of-budget",
+    });
+    if let Ok(plan) = result {
+        let plan: Vec<String> = plan.iter().map(|&a| model.task().action_name(a)).collect();
+        let script = spell(&problem, &task, &plan)?;
+        let (executed, goal) = run_in_env(&task, &script);
+        row["plan"] = json!(plan);
+        row["script"] = json!(script);
+        row["ours_executed"] = json!(executed);
+        row["ours_goal"] = json!(goal);
+    }
+
+    // (b) EAI's gold PDDL plan, its classes bound to instances.
+    if let Some(steps) = gold.get(&id) {
+        match rewrite_gold(&task, &problem, steps) {
+            Ok(plan) => {
+                let verdict = validate(&model, &plan);
+                let script = spell(&problem, &task, &plan)?;
+                let (executed, goal) = run_in_env(&task, &script);
+                row["gold_plan"] = json!(plan);
+                row["gold_script"] = json!(script);
+                row["gold_valid"] = json!(verdict.is_ok());
+                if let Err(why) = verdict {
+                    row["gold_invalid"] = json!(why);
+                }
+                row["gold_ours_executed"] = json!(executed);
+                row["gold_ours_goal"] = json!(goal);
+            }
+            Err(why) => row["gold_error"] = json!(why),
+        }
+    }
+    Ok(row)
 }
 
 /// Task id → the object names of EAI's problem file (`<dir>/<Category>/<id>.pddl`).

@@ -646,23 +646,33 @@ fn agent_solves_a_virtualhome_rearrangement_task_with_a_trace() {
 #[test]
 fn soundness_plans_fixture_tasks_and_they_reach_their_goals() {
     let tmp = scratch_dir("xtask-cli-");
-    let out = scratch(&tmp, "soundness.jsonl", "");
-    let output = xtask(&["soundness", "--limit", "3", "--out", out.to_str().unwrap()]);
-    assert_eq!(output.status.code(), Some(0), "{}", String::from_utf8_lossy(&output.stderr));
-    let rows: Vec<serde_json::Value> = std::fs::read_to_string(&out).unwrap().lines().map(|l| serde_json::from_str(l).unwrap()).collect();
-    assert_eq!(rows.len(), 3);
+    let out = tmp.path().join("soundness");
+    let soundness = |extra: &[&str]| -> (PathBuf, Vec<serde_json::Value>) {
+        let mut args = vec!["soundness", "--out", out.to_str().unwrap()];
+        args.extend_from_slice(extra);
+        let output = xtask(&args);
+        assert_eq!(output.status.code(), Some(0), "{extra:?}: {}", String::from_utf8_lossy(&output.stderr));
+        let records = PathBuf::from(stdout(&output).trim());
+        let rows = std::fs::read_to_string(&records).unwrap().lines().map(|l| serde_json::from_str(l).unwrap()).collect();
+        (records, rows)
+    };
+    let (records, rows) = soundness(&["--limit", "2"]);
+    assert_eq!(rows.len(), 2);
     for row in &rows {
         assert_eq!(row["status"], "solved", "{row}");
         assert_eq!(row["ours_goal"], true, "{row}");
     }
-    // The same searches with the limit on the processor clock: the same plans.
-    let cpu = scratch(&tmp, "soundness-cpu.jsonl", "");
-    let output = xtask(&["soundness", "--limit", "3", "--clock", "cpu", "--out", cpu.to_str().unwrap()]);
-    assert_eq!(output.status.code(), Some(0), "{}", String::from_utf8_lossy(&output.stderr));
-    let plans = |text: String| -> Vec<serde_json::Value> {
-        text.lines().map(|l| serde_json::from_str::<serde_json::Value>(l).unwrap()["plan"].clone()).collect()
-    };
-    assert_eq!(plans(std::fs::read_to_string(&cpu).unwrap()), plans(std::fs::read_to_string(&out).unwrap()));
+    // A longer run of the same configuration resumes: the first two records as they were.
+    let before = std::fs::read_to_string(&records).unwrap();
+    let (again, rows) = soundness(&["--limit", "3"]);
+    assert_eq!(again, records, "the same configuration, the same file");
+    assert_eq!(rows.len(), 3);
+    assert!(std::fs::read_to_string(&records).unwrap().starts_with(&before));
+    // The searches' limit on the processor clock: another configuration, its own file, the same plans.
+    let (cpu, cpu_rows) = soundness(&["--limit", "3", "--clock", "cpu"]);
+    assert_ne!(cpu, records);
+    let plans = |rows: &[serde_json::Value]| rows.iter().map(|r| r["plan"].clone()).collect::<Vec<_>>();
+    assert_eq!(plans(&cpu_rows), plans(&rows));
     let output = xtask(&["soundness", "--limit", "1", "--clock", "moon"]);
     assert_eq!(output.status.code(), Some(2), "{}", String::from_utf8_lossy(&output.stderr));
 }
