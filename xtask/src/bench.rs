@@ -485,8 +485,8 @@ fn plan(
     let mut summary = serde_json::Map::new();
     for config in &chosen {
         // Per domain: our coverage; expansions and seconds over the instances both solved (so a
-        // slow timeout does not decide the rate); Fast Downward's coverage, expansions and
-        // seconds over the same; how many both solved.
+        // slow timeout does not decide the rate; without Fast Downward, those ours solved);
+        // Fast Downward's coverage, expansions and seconds over the same; how many.
         let mut per_domain: std::collections::BTreeMap<String, [f64; 7]> = std::collections::BTreeMap::new();
         let mut all = Vec::new();
         for benchmark in &benchmarks {
@@ -545,6 +545,11 @@ fn plan(
                         }
                     }
                 }
+            } else if ours_solved {
+                // Ours alone: its rate over the tasks it solved.
+                entry[1] += ours.expanded as f64;
+                entry[2] += ours_s;
+                entry[6] += 1.0;
             }
             if !json {
                 bar.suspend(|| println!("{row}"));
@@ -557,12 +562,15 @@ fn plan(
         for (domain, [solved, expanded, seconds, fd_solved, fd_expanded, fd_seconds, both]) in per_domain {
             // Rates over the tasks both planners solved: none (Fast Downward refused them all,
             // as its LM-cut does tasks with conditional effects) is no rate, not a rate of 0.
+            // Without Fast Downward, ours over the tasks it solved, and no coverage of its.
+            let fd_ran = downward.is_some();
             let both = both > 0.0;
-            let (rate, fd_rate) = (both.then(|| expanded / seconds.max(1e-9)), both.then(|| fd_expanded / fd_seconds.max(1e-9)));
+            let rate = both.then(|| expanded / seconds.max(1e-9));
+            let fd_rate = (both && fd_ran).then(|| fd_expanded / fd_seconds.max(1e-9));
             domains.insert(
                 domain,
                 json!({
-                    "coverage": solved, "fd_coverage": fd_solved,
+                    "coverage": solved, "fd_coverage": fd_ran.then_some(fd_solved),
                     "expansions_per_s": rate, "fd_expansions_per_s": fd_rate, "ratio": rate.zip(fd_rate).map(|(r, f)| r / f.max(1e-9)),
                 }),
             );

@@ -706,6 +706,7 @@ fn run_once(args: &EvalArgs, planned: &[Planned]) -> anyhow::Result<(serde_json:
         let mut records = RecordFile::open(&args.out, &stem, &config(args, suite, tasks)?, args.shard, args.fresh)
             .map_err(|e| InputError(e.to_string()))?;
         records.check_tasks(&tasks.iter().map(EvalTask::id).collect()).map_err(|e| InputError(e.to_string()))?;
+        records.settle()?;
         let total = one.total(args.limit);
         let selected = (0..total).filter(|&i| args.shard.is_none_or(|s| s.selects(i))).count();
         let bar = crate::input::progress_bar(format!("{} {agent_name}", suite.name()), selected);

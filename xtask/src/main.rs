@@ -117,9 +117,12 @@ enum Command {
 
 fn main() -> ExitCode {
     // A negative number after an option is its value (`--limit -1` is then refused by the
-    // option's own parser, which names it), not an unknown flag.
+    // option's own parser, which names it), not an unknown flag. Numbers only: `--shard -1/2`
+    // is still an unknown argument (exit 2 all the same).
     fn negative_numbers(command: clap::Command) -> clap::Command {
-        command.allow_negative_numbers(true).mut_subcommands(negative_numbers)
+        command
+            .mut_args(|arg| if arg.get_action().takes_values() { arg.allow_negative_numbers(true) } else { arg })
+            .mut_subcommands(negative_numbers)
     }
     let cli = match negative_numbers(<Cli as clap::CommandFactory>::command())
         .try_get_matches()

@@ -242,7 +242,11 @@ fn default_tokenizer() -> PathBuf {
 fn tokenizer_at(path: &Path) -> anyhow::Result<Tokenizer> {
     let result =
         if path.extension().is_some_and(|e| e == "gguf") { Tokenizer::from_gguf_file(path) } else { Tokenizer::from_tokenizer_json(path) };
-    result.map_err(|e| InputError(format!("{}: {e}", path.display())).into())
+    // Named once: most of the tokenizer's errors name their file already.
+    result.map_err(|e| {
+        let (shown, text) = (path.display().to_string(), e.to_string());
+        InputError(if text.contains(&shown) { text } else { format!("{shown}: {text}") }).into()
+    })
 }
 
 /// The model `args` names.
@@ -519,6 +523,7 @@ pub fn run(args: Phase2Args) -> anyhow::Result<ExitCode> {
         .map(|r| serde_json::from_value(serde_json::Value::Object(r.clone())))
         .collect::<Result<_, _>>()
         .map_err(|e| InputError(format!("{}: a record that is not a Phase II record: {e}", path.display())))?;
+    file.settle()?;
     let done: BTreeSet<String> = records.iter().map(|r| r.task.clone()).collect();
     let todo: Vec<(usize, &TaskFiles)> = tasks.iter().enumerate().filter(|(_, t)| !done.contains(&t.id)).collect();
 

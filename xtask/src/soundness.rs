@@ -38,7 +38,8 @@ pub struct SoundnessArgs {
     /// depend on the load).
     #[arg(long, default_value = "wall", value_parser = crate::input::clock())]
     clock: heuristics::search::Clock,
-    /// Only the first N tasks (sorted ids); their records stay valid for a longer run.
+    /// Only the first N tasks (sorted ids); their records stay valid for a longer run (the
+    /// file holds every record of the configuration: a longer run's too).
     #[arg(long, value_parser = crate::input::at_least_one::<usize>)]
     limit: Option<usize>,
     /// Folder for the records: one JSON line per task in `virtualhome-soundness-<hash>.jsonl`,
@@ -51,6 +52,12 @@ pub struct SoundnessArgs {
     #[arg(long)]
     fresh: bool,
 }
+
+/// The version of what a soundness record holds: raised whenever the problem writer
+/// (`vh_pddl::problem`), the executor (`VirtualhomeEnv`), the gold plans' rewriting or the
+/// spelling of script lines changes a row, so that a resumed run never takes the old rows as
+/// the new code's. 1: the first with records.
+pub const SOUNDNESS_VERSION: u32 = 1;
 
 /// A task file's id: its name without `.json.gz` or `.json` (`VirtualhomeTask::load` checks
 /// that the task inside has it).
@@ -67,6 +74,13 @@ fn digest(text: &str) -> String {
 
 pub fn run(args: SoundnessArgs) -> anyhow::Result<ExitCode> {
     crate::input::folder_to_write(&args.out, "--out")?;
+    if args.out.extension().is_some_and(|e| e == "jsonl") {
+        return Err(InputError(format!(
+            "--out {}: a folder for the records (the file is named by the run's configuration, and printed)",
+            args.out.display()
+        ))
+        .into());
+    }
     let dir = args.tasks.clone().unwrap_or_else(|| PathBuf::from("fixtures/virtualhome-eai/graphs"));
     let mut files: Vec<PathBuf> = std::fs::read_dir(&dir)
         .map_err(|e| InputError(format!("{}: cannot read the task folder: {e}", dir.display())))?
@@ -76,6 +90,9 @@ pub fn run(args: SoundnessArgs) -> anyhow::Result<ExitCode> {
         .collect();
     files.sort();
     let ids: Vec<String> = files.iter().map(|p| task_id(p)).collect();
+    if ids.is_empty() {
+        return Err(InputError(format!("{}: no task files (`<id>.json.gz`) there", dir.display())).into());
+    }
     let classes = eai_problem_classes(&args.eai.join("problem_pddl"))?;
     let gold_path = args.eai.join("gold_pddl_plan.json");
     let gold_text = std::fs::read_to_string(&gold_path).map_err(|e| InputError(format!("{}: cannot read: {e}", gold_path.display())))?;
@@ -88,6 +105,7 @@ pub fn run(args: SoundnessArgs) -> anyhow::Result<ExitCode> {
     // search's limit and its clock (named only where it is `cpu`, as in `eval`).
     let mut config = json!({
         "command": "soundness",
+        "version": SOUNDNESS_VERSION,
         "tasks": {"count": ids.len(), "ids_sha256": digest(&ids.join("\n"))},
         "gold_sha256": digest(&gold_text),
         "problem_classes_sha256": digest(&serde_json::to_string(&classes)?),
@@ -100,6 +118,7 @@ pub fn run(args: SoundnessArgs) -> anyhow::Result<ExitCode> {
     let mut records = RecordFile::open(&args.out, "virtualhome-soundness", &config, None, args.fresh)
         .and_then(|file| file.check_tasks(&ids.iter().map(String::as_str).collect()).map(|()| file))
         .map_err(|e| InputError(e.to_string()))?;
+    records.settle()?;
     let run = args.limit.map_or(files.len(), |n| n.min(files.len()));
     let bar = crate::input::progress_bar("soundness".into(), run);
     for (index, path) in files.iter().enumerate().take(run) {
@@ -113,12 +132,12 @@ pub fn run(args: SoundnessArgs) -> anyhow::Result<ExitCode> {
     bar.finish_and_clear();
     // The figures of this run's tasks, those of an earlier run of the configuration included.
     let rows: Vec<&serde_json::Map<String, serde_json::Value>> =
-        records.records().iter().filter(|r| r["index"].as_u64().is_some_and(|i| (i as usize) < run)).collect();
+        records.records().iter().filter(|r| r.get("index").and_then(|i| i.as_u64()).is_some_and(|i| (i as usize) < run)).collect();
     let count = |test: &dyn Fn(&serde_json::Map<String, serde_json::Value>) -> bool| rows.iter().filter(|r| test(r)).count();
     let yes = |r: &serde_json::Map<String, serde_json::Value>, key: &str| r.get(key) == Some(&json!(true));
     eprintln!(
         "{run} tasks: (a) A* solved {}, executed and reached the goal in our executor {}; (b) gold PDDL plans {}: valid under the sound domain {}, reached the goal in our executor {}",
-        count(&|r| r["status"] == "solved"),
+        count(&|r| r.get("status").and_then(|s| s.as_str()) == Some("solved")),
         count(&|r| yes(r, "ours_executed") && yes(r, "ours_goal")),
         count(&|r| r.contains_key("gold_plan") || r.contains_key("gold_error")),
         count(&|r| yes(r, "gold_valid")),

@@ -673,8 +673,19 @@ fn soundness_plans_fixture_tasks_and_they_reach_their_goals() {
     assert_ne!(cpu, records);
     let plans = |rows: &[serde_json::Value]| rows.iter().map(|r| r["plan"].clone()).collect::<Vec<_>>();
     assert_eq!(plans(&cpu_rows), plans(&rows));
-    let output = xtask(&["soundness", "--limit", "1", "--clock", "moon"]);
-    assert_eq!(output.status.code(), Some(2), "{}", String::from_utf8_lossy(&output.stderr));
+    // A run killed in the middle of a record, resumed by a shorter run that writes nothing:
+    // the record cut short is cut off all the same, so the file is whole lines for the tools.
+    let whole = std::fs::read_to_string(&records).unwrap();
+    let last = whole.lines().last().unwrap();
+    std::fs::write(&records, &whole[..whole.len() - last.len() / 2 - 1]).unwrap();
+    let (_, rows) = soundness(&["--limit", "2"]);
+    assert_eq!(rows.len(), 2, "the cut record is gone");
+    for (args, message) in [(["--clock", "moon"], "[possible values: wall, cpu]"), (["--out", "sound.jsonl"], "a folder for the records")] {
+        let output = xtask(&[&["soundness", "--limit", "1"], &args[..]].concat());
+        let stderr = String::from_utf8_lossy(&output.stderr);
+        assert_eq!(output.status.code(), Some(2), "{stderr}");
+        assert!(stderr.contains(message), "{args:?}: {stderr}");
+    }
 }
 
 /// Durations a user can type wrong are bad input (exit 2), never a panic.
@@ -874,8 +885,29 @@ fn options_that_would_be_ignored_or_cannot_be_written_are_bad_input() {
     let cache = scratch(&tmp, "replies.jsonl", "");
     let out = tmp.path().join("records");
     let (domain, problem) = household();
-    let cases: [(Vec<&str>, &str); 7] = [
+    let damaged = scratch(&tmp, "damaged.jsonl", "not a reply\n");
+    let damaged_at = format!("{}:1: not a cached reply", damaged.display());
+    let closed = "openai:http://127.0.0.1:9/v1";
+    let cases: [(Vec<&str>, &str); 9] = [
         (vec!["agent", "--game", game, "--lm", "uniform", "--chat-cache", cache.to_str().unwrap()], "the systematic explorer asks none"),
+        // A damaged reply file is named before a server (none here) is asked who it serves.
+        (vec!["agent", "--game", game, "--explorer", closed, "--lm", "uniform", "--chat-cache", damaged.to_str().unwrap()], &damaged_at),
+        (
+            vec![
+                "eval",
+                "--agent",
+                "planner",
+                "--explorer",
+                closed,
+                "--benchmark",
+                "alfworld-seen",
+                "--chat-cache",
+                damaged.to_str().unwrap(),
+                "--out",
+                out.to_str().unwrap(),
+            ],
+            &damaged_at,
+        ),
         (
             vec!["eval", "--agent", "expert", "--benchmark", "virtualhome-eai", "--task-dir", "fixtures", "--out", out.to_str().unwrap()],
             "the expert replays EAI's own problems",

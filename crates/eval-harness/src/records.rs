@@ -12,8 +12,8 @@
 //! - **Whole or absent.** [`RecordFile::append`] writes a record and its newline in one
 //!   `write` on a file opened for appending, then `sync_data`: after a crash or `kill -9` the
 //!   file ends with whole records, or with one record cut short — whose task runs again, and
-//!   which the run's first [`RecordFile::append`] cuts off (a file refused for other damage is
-//!   left as it was). A complete line that is not a record of this configuration is never
+//!   which [`RecordFile::settle`] cuts off once the run has checked the file (a file refused
+//!   for other damage is left as it was). A complete line that is not a record of this configuration is never
 //!   dropped silently: it is an error naming `file:line`.
 //! - **Resume.** [`RecordFile::done`] lists the tasks already recorded; a run skips them. Each
 //!   record carries its task's `index` in the run's task list, so shards and resumed runs can
@@ -151,16 +151,17 @@ pub struct RecordFile {
     line_count: usize,
     done: BTreeSet<String>,
     file: File,
-    /// Where the whole lines end, when a record cut short follows them (cut off by the first
-    /// [`RecordFile::append`]).
-    torn_tail: Option<u64>,
+    /// When a record cut short follows the whole lines: where they end, and the file's length
+    /// as read (cut off by [`RecordFile::settle`]).
+    torn_tail: Option<(u64, u64)>,
 }
 
 impl RecordFile {
     /// Opens (creating) `<dir>/<stem>-<hash>[.shard-i-of-n].jsonl` for `config`: checks or
     /// writes the configuration file beside it and reads the records already there, passing
-    /// over a last record cut short (cut off by the first append). `fresh` deletes earlier
-    /// records of this configuration first.
+    /// over a last record cut short (cut off by [`RecordFile::settle`], once the caller has no
+    /// more reason to refuse the file). `fresh` deletes earlier records of this configuration
+    /// first.
     pub fn open(dir: &Path, stem: &str, config: &impl Serialize, shard: Option<Shard>, fresh: bool) -> Result<RecordFile, RecordError> {
         std::fs::create_dir_all(dir).map_err(io(dir))?;
         let hash = config_hash(config);
@@ -206,14 +207,30 @@ impl RecordFile {
         let mut bytes = Vec::new();
         file.read_to_end(&mut bytes).map_err(io(&path))?;
         // A last line without its newline is a record cut short by a crash: its task runs
-        // again, and the line is cut off before the first append (not here: a file the run
-        // then refuses, here or in `check_tasks`, is left as it was).
+        // again, and the line is cut off by `settle` (not here: a file the run then refuses,
+        // here or in `check_tasks`, is left as it was).
         let (text, torn) = whole_lines(&path, bytes)?;
         let (lines, records): (Vec<usize>, Vec<Map<String, Value>>) = parse_records(&path, &text, Some(&hash))?.into_iter().unzip();
-        let torn_tail = (torn > 0).then_some(text.len() as u64);
+        let torn_tail = (torn > 0).then_some((text.len() as u64, (text.len() + torn) as u64));
         let done = records.iter().filter_map(|r| r.get("task").and_then(Value::as_str).map(str::to_string)).collect();
         let line_count = text.lines().count();
         Ok(RecordFile { path, hash, records, lines, line_count, done, file, torn_tail })
+    }
+
+    /// Cuts off a last record cut short by a crash, saying so: for the caller to call once it
+    /// has checked the file (`check_tasks`, its own reading of the records), so that a file it
+    /// refuses is left as it was; [`RecordFile::append`] settles first too. Where the file
+    /// changed since it was read (another writer, on a file system without locks), nothing is
+    /// cut: the line is then no longer the last, and every later open names it.
+    pub fn settle(&mut self) -> Result<(), RecordError> {
+        let Some((whole, length)) = self.torn_tail.take() else { return Ok(()) };
+        if self.file.metadata().map_err(io(&self.path))?.len() != length {
+            return Ok(());
+        }
+        self.file.set_len(whole).map_err(io(&self.path))?;
+        self.file.seek(SeekFrom::End(0)).map_err(io(&self.path))?;
+        eprintln!("{}: cut off a record cut short (a killed run); its task runs again", self.path.display());
+        Ok(())
     }
 
     /// Refuses a record whose task is not among `tasks` (the run's list), naming its line: a
@@ -264,11 +281,7 @@ impl RecordFile {
         object.insert("config".into(), Value::from(self.hash.clone()));
         let mut line = Value::Object(object.clone()).to_string();
         line.push('\n');
-        if let Some(whole) = self.torn_tail.take() {
-            self.file.set_len(whole).map_err(io(&self.path))?;
-            self.file.seek(SeekFrom::End(0)).map_err(io(&self.path))?;
-            eprintln!("{}: cut off a record cut short (a killed run); its task ran again", self.path.display());
-        }
+        self.settle()?;
         self.file.write_all(line.as_bytes()).map_err(io(&self.path))?;
         self.file.sync_data().map_err(io(&self.path))?;
         self.done.insert(task);

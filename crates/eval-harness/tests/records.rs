@@ -124,17 +124,35 @@ fn a_record_cut_short_is_cut_off_and_its_task_runs_again() {
     std::fs::write(&path, &bytes).expect("writes");
     let mut file = RecordFile::open(&dir, "run", &config, None, false).expect("recovers");
     assert_eq!(tasks(&file), ["a", "b"]);
-    // The cut record stays until the next append (a run that writes nothing changes nothing),
-    // which cuts it off first.
+    // The cut record stays until the run has checked the file and settles it, or appends.
     assert_eq!(std::fs::read(&path).expect("reads"), bytes);
+    file.settle().expect("settles");
+    drop(file);
+    assert_eq!(std::fs::read_to_string(&path).expect("UTF-8 again").lines().count(), 2);
+
+    // Without `settle`, the first append cuts it off first.
+    let mut bytes = std::fs::read(&path).expect("reads");
+    bytes.extend_from_slice(b"{\"task\":\"c\",\"suc");
+    std::fs::write(&path, &bytes).expect("writes");
+    let mut file = RecordFile::open(&dir, "run", &config, None, false).expect("recovers");
     file.append(2, &json!({"task": "c"})).expect("appends");
     drop(file);
-    let text = std::fs::read_to_string(&path).expect("UTF-8 again");
+    let text = std::fs::read_to_string(&path).expect("whole lines");
     assert_eq!(text.lines().map(|l| serde_json::from_str::<Value>(l).expect("whole")["task"].clone()).collect::<Vec<_>>(), ["a", "b", "c"]);
+
+    // A file that changed since it was read (another writer, where there are no locks): its
+    // cut line is no longer the last, and nothing is cut.
+    std::fs::write(&path, format!("{text}{{\"task\":\"d\"")).expect("writes");
+    let mut file = RecordFile::open(&dir, "run", &config, None, false).expect("recovers");
+    let grown = format!("{text}{{\"task\":\"d\"}}\n");
+    std::fs::write(&path, &grown).expect("another writer");
+    file.settle().expect("settles");
+    drop(file);
+    assert_eq!(std::fs::read_to_string(&path).expect("reads"), grown);
 }
 
 /// A file refused for damage before its cut record is left as it was: the cut is made only
-/// by a run that goes on to append.
+/// once the run has checked the file.
 #[test]
 fn a_refused_file_keeps_its_cut_record() {
     let (_tmp_dir, dir) = scratch("refused-torn");

@@ -561,7 +561,8 @@ fn json_error(path: &Path, error: &(dyn std::error::Error + 'static)) -> LmError
             let message = e.to_string();
             let suffix = format!(" at line {} column {}", e.line(), e.column());
             let message = message.strip_suffix(&suffix).unwrap_or(&message).to_string();
-            LmError::MalformedJson { path: path.to_path_buf(), line: e.line(), column: e.column(), message }
+            // serde_json says column 0 at the start of a line (an empty file): an editor's is 1.
+            LmError::MalformedJson { path: path.to_path_buf(), line: e.line(), column: e.column().max(1), message }
         }
         None => LmError::BadTokenizerFile { path: path.to_path_buf(), message: error.to_string() },
     }
