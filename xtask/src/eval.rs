@@ -103,7 +103,7 @@ pub struct EvalArgs {
     limit: Option<usize>,
     /// Run every n-th task only, `i/n` (1 <= i <= n), into its own shard file, its report into
     /// `<out>/report-shard-i-of-n`; `cargo xtask merge` joins the shards.
-    #[arg(long)]
+    #[arg(long, allow_hyphen_values = true)]
     shard: Option<Shard>,
     /// Folder of EAI task files for `virtualhome-eai` with `ours`/`planner`/`direct` [default: the 33
     /// in fixtures/virtualhome-eai/graphs; `cargo xtask fetch-data` prints the folder of all 342].
@@ -118,7 +118,7 @@ pub struct EvalArgs {
     /// Run once per seed (comma-separated; e.g. the paper's `0,42,1738` for the stochastic
     /// conditions, Appendix B): each run sets `--seed` and has its own records, and the report
     /// puts them together as runs of one condition.
-    #[arg(long, value_delimiter = ',', conflicts_with = "seed")]
+    #[arg(long, value_delimiter = ',', conflicts_with = "seed", allow_hyphen_values = true)]
     seeds: Vec<u64>,
     /// Folder for the records.
     #[arg(long, default_value = "target/eval")]

@@ -117,8 +117,8 @@ enum Command {
 
 fn main() -> ExitCode {
     // A negative number after an option is its value (`--limit -1` is then refused by the
-    // option's own parser, which names it), not an unknown flag. Numbers only: `--shard -1/2`
-    // is still an unknown argument (exit 2 all the same).
+    // option's own parser, which names it), not an unknown flag. Numbers only; `--shard` and
+    // `--seeds`, whose values are never flags, take any value (`-1/2`, `-1,2`).
     fn negative_numbers(command: clap::Command) -> clap::Command {
         command
             .mut_args(|arg| if arg.get_action().takes_values() { arg.allow_negative_numbers(true) } else { arg })

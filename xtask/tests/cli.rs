@@ -888,7 +888,7 @@ fn options_that_would_be_ignored_or_cannot_be_written_are_bad_input() {
     let damaged = scratch(&tmp, "damaged.jsonl", "not a reply\n");
     let damaged_at = format!("{}:1: not a cached reply", damaged.display());
     let closed = "openai:http://127.0.0.1:9/v1";
-    let cases: [(Vec<&str>, &str); 9] = [
+    let cases: [(Vec<&str>, &str); 11] = [
         (vec!["agent", "--game", game, "--lm", "uniform", "--chat-cache", cache.to_str().unwrap()], "the systematic explorer asks none"),
         // A damaged reply file is named before a server (none here) is asked who it serves.
         (vec!["agent", "--game", game, "--explorer", closed, "--lm", "uniform", "--chat-cache", damaged.to_str().unwrap()], &damaged_at),
@@ -919,6 +919,8 @@ fn options_that_would_be_ignored_or_cannot_be_written_are_bad_input() {
         (vec!["plan", "--domain", &domain, "--problem", &problem, "--out", tmp.path().to_str().unwrap()], "a folder is there, not a file"),
         (vec!["agent", "--game", game, "--lm", "uniform", "--trace", "no/such/folder/t.json"], "no folder no/such/folder to write it in"),
         (vec!["eval", "--agent", "expert", "--limit", "-1", "--out", out.to_str().unwrap()], "for '--limit <LIMIT>'"),
+        (vec!["eval", "--agent", "expert", "--shard", "-1/2", "--out", out.to_str().unwrap()], "for '--shard <SHARD>'"),
+        (vec!["eval", "--agent", "expert", "--seeds", "-1,2", "--out", out.to_str().unwrap()], "for '--seeds <SEEDS>'"),
         (
             vec!["plan", "--domain", &domain, "--problem", &problem, "--planner", "mcts", "--lm", "uniform", "--simulations", "0"],
             "for '--simulations <SIMULATIONS>'",
