@@ -80,10 +80,7 @@ fn validate_reports_valid_invalid_and_bad_input_with_exit_codes() {
     assert_eq!(output.status.code(), Some(1));
     assert_eq!(
         stdout(&output).trim(),
-        format!(
-            "invalid: step 2 ({}:2): `(putin wineglass dishwasher)` ((putin wineglass dishwasher)) is not applicable: unmet (at dishwasher)",
-            swapped.display()
-        )
+        format!("invalid: step 2 ({}:2): `(putin wineglass dishwasher)` is not applicable: unmet (at dishwasher)", swapped.display())
     );
     // Comments (`;` to the end of a line, `#` lines) and blank lines are no steps; a step's
     // line is the file's; an action may come without its parentheses.

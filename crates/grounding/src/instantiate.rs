@@ -271,7 +271,7 @@ impl<'a> Instantiator<'a> {
 
     fn describe(&self, schema: &LiftedSchema, args: &[ObjectId]) -> String {
         let names: Vec<&str> = args.iter().map(|o| self.lifted.objects[o.index()].name.as_str()).collect();
-        format!("action ({} {})", schema.name, names.join(" "))
+        if names.is_empty() { format!("action ({})", schema.name) } else { format!("action ({} {})", schema.name, names.join(" ")) }
     }
 
     fn cost(&self, schema: &LiftedSchema, args: &[ObjectId], binding: &Binding) -> Result<Cost, GroundingError> {

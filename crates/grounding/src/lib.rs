@@ -117,7 +117,10 @@ fn first_message(domain: &[Diagnostic], problem: &[Diagnostic]) -> String {
     domain.iter().chain(problem).find(|d| d.is_error()).map(|d| d.message.clone()).unwrap_or_default()
 }
 
-/// Grounds `problem` over `domain`. Both are name-checked first ([`pddl_syntax::check`]).
+/// Grounds `problem` over `domain`. Both are name-checked first ([`pddl_syntax::check`]): its
+/// errors are [`GroundingError::Invalid`]; its warnings (a problem naming another domain, an
+/// atom no typed action makes or uses) are not returned here, so call `pddl_syntax::check`
+/// yourself to show them, as `cargo xtask` does.
 pub fn ground(domain: &pddl_syntax::Domain, problem: &pddl_syntax::Problem) -> Result<Task, GroundingError> {
     let report = check(domain, Some(problem));
     if report.has_errors() {

@@ -43,8 +43,9 @@ pub use relaxation::{HAdd, HFF, HMax};
 pub use remaining::RemainingPlanCost;
 pub use simple::{Blind, GoalCount};
 
-use grounding::ActionId;
-use transition_model::State;
+/// The model and states every heuristic and search takes, and the ids of plans: a user needs
+/// no direct dependency on `transition-model` or `grounding` to name them.
+pub use transition_model::{ActionId, State, TransitionModel};
 
 /// The value of an unreachable fact inside the explorations; never returned (dead ends are `None`).
 pub const INFINITE: u32 = u32::MAX;

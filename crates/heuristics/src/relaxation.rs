@@ -400,6 +400,7 @@ pub struct HMax {
 }
 
 impl HMax {
+    /// h_max over `model`'s delete relaxation.
     pub fn new(model: &TransitionModel) -> HMax {
         HMax { exploration: Exploration::new(model.task()) }
     }
@@ -423,6 +424,7 @@ pub struct HAdd {
 }
 
 impl HAdd {
+    /// h_add over `model`'s delete relaxation.
     pub fn new(model: &TransitionModel) -> HAdd {
         HAdd { exploration: Exploration::new(model.task()) }
     }
@@ -454,6 +456,8 @@ pub struct HFF<'m> {
 }
 
 impl<'m> HFF<'m> {
+    /// h_FF over `model`'s delete relaxation (it borrows the model to compute preferred
+    /// operators, the relaxed plan's actions applicable in the evaluated state).
     pub fn new(model: &'m TransitionModel) -> HFF<'m> {
         let exploration = Exploration::new(model.task());
         let facts = exploration.relaxed.num_facts;

@@ -120,3 +120,15 @@ fn astar_with_a_cost_bound_finds_the_optimum_at_it_and_nothing_below() {
     }
     assert!(checked >= 10, "{checked}");
 }
+
+/// A search that finds no plan is an error a caller can pass on with `?`, with a message.
+#[test]
+fn no_plan_is_an_error_with_a_message() {
+    fn plan(model: &heuristics::TransitionModel) -> Result<usize, Box<dyn std::error::Error>> {
+        Ok(heuristics::search::optimal_plan_expanding(model, 0)?.len())
+    }
+    let files = load(Benchmark::Ipc).expect("fixtures").into_iter().find(|t| t.id == "blocks/instance-10").expect("blocks 10");
+    let model = model(&files);
+    let error = plan(&model).expect_err("no expansions, no plan");
+    assert_eq!(error.to_string(), "no plan found within the search's budget");
+}

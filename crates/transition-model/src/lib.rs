@@ -19,7 +19,7 @@
 //! let plan = model.validate_text(&spelling, &["(go a b)", "(go b c)"]).unwrap();
 //! assert_eq!(plan.cost, 2);
 //! let error = model.validate_text(&spelling, &["(go b c)"]).unwrap_err();
-//! assert_eq!(error.describe(model.task()), "invalid: step 1: `(go b c)` ((go b c)) is not applicable: unmet (at b)");
+//! assert_eq!(error.describe(model.task()), "invalid: step 1: `(go b c)` is not applicable: unmet (at b)");
 //! ```
 
 mod spelling;
@@ -32,7 +32,9 @@ pub use state::State;
 pub use successor::SuccessorGenerator;
 pub use validate::{PlanError, Unmet, ValidPlan, plan_cost, unmet};
 
-use grounding::{ActionId, Task};
+/// The grounded task and its ids, which this crate's signatures use: a user of the model needs
+/// no direct dependency on `grounding` to name them.
+pub use grounding::{ActionId, FactId, Task};
 
 /// A task with its successor generator.
 #[derive(Debug, Clone)]
@@ -42,15 +44,18 @@ pub struct TransitionModel {
 }
 
 impl TransitionModel {
+    /// The model of a grounded task (`grounding::ground`): builds its successor generator.
     pub fn new(task: Task) -> TransitionModel {
         let successors = SuccessorGenerator::new(&task);
         TransitionModel { task, successors }
     }
 
+    /// The grounded task: its facts, actions, goal and names.
     pub fn task(&self) -> &Task {
         &self.task
     }
 
+    /// The task's initial state.
     pub fn initial_state(&self) -> State {
         State::from_facts(self.task.facts.len(), self.task.init.iter().copied())
     }
@@ -94,6 +99,7 @@ impl TransitionModel {
         }
     }
 
+    /// Whether the task's goal holds in `state` (a state of this model).
     pub fn is_goal(&self, state: &State) -> bool {
         self.task.goal.holds(|f| state.contains(f))
     }

@@ -55,10 +55,13 @@ impl State {
         })
     }
 
+    /// The number of facts true in the state (not the number it ranges over, which
+    /// [`State::empty`] takes).
     pub fn len(&self) -> usize {
         self.words.iter().map(|w| w.count_ones() as usize).sum()
     }
 
+    /// Whether no fact is true.
     pub fn is_empty(&self) -> bool {
         self.words.iter().all(|&w| w == 0)
     }

@@ -43,8 +43,11 @@ pub fn unmet(condition: &grounding::Condition, state: &State) -> Vec<Unmet> {
 /// A plan that reaches the goal.
 #[derive(Debug, Clone)]
 pub struct ValidPlan {
+    /// The plan's actions, one a step (for a text plan, the action each step applied).
     pub actions: Vec<ActionId>,
+    /// The sum of the actions' costs (their number where the task has no costs).
     pub cost: u64,
+    /// The state the plan ends in, where the goal holds.
     pub final_state: State,
 }
 
@@ -75,12 +78,10 @@ impl PlanError {
             PlanError::UnknownAction { step, text } => format!("invalid: step {step}{}: `{text}` is not an action of this task", at(*step)),
             PlanError::Inapplicable { step, text, action, unmet: parts } => {
                 let parts: Vec<String> = parts.iter().map(|u| u.describe(task)).collect();
-                format!(
-                    "invalid: step {step}{}: `{text}` ({}) is not applicable: unmet {}",
-                    at(*step),
-                    task.action_name(*action),
-                    parts.join(", ")
-                )
+                // The grounded action in parentheses where the plan spelled it otherwise.
+                let name = task.action_name(*action);
+                let grounded = if name == *text { String::new() } else { format!(" ({name})") };
+                format!("invalid: step {step}{}: `{text}`{grounded} is not applicable: unmet {}", at(*step), parts.join(", "))
             }
             PlanError::GoalNotReached { steps, unmet: parts } if parts.is_empty() => {
                 format!("invalid: goal: after {steps} step{} the goal does not hold, and no reachable state satisfies it", plural(*steps))
@@ -113,7 +114,15 @@ impl std::error::Error for PlanError {}
 impl TransitionModel {
     /// Replays `plan` from the initial state.
     pub fn validate(&self, plan: &[ActionId]) -> Result<ValidPlan, PlanError> {
-        let steps = plan.iter().map(|&a| (self.task().action_name(a), vec![a]));
+        // An id past the task's actions (another task's plan) is an unknown action, not a panic.
+        let actions = self.task().actions.len();
+        let steps = plan.iter().map(|&a| {
+            if a.index() < actions {
+                (self.task().action_name(a), vec![a])
+            } else {
+                (format!("action #{} of {actions}", a.index()), Vec::new())
+            }
+        });
         self.replay(steps)
     }
 

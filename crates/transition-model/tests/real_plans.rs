@@ -119,7 +119,15 @@ fn unknown_and_malformed_plan_steps_are_named() {
     assert_eq!(error.describe(model.task()), "invalid: step 2: `(fly-away b)` is not an action of this task");
     let error = model.validate_text(&spelling, &["(stack a b)"]).unwrap_err();
     let line = error.describe(model.task());
-    assert!(line.starts_with("invalid: step 1: `(stack a b)` ((stack a b)) is not applicable: unmet (holding a)"), "{line}");
+    assert!(line.starts_with("invalid: step 1: `(stack a b)` is not applicable: unmet (holding a)"), "{line}");
+    // The grounded action is named beside the text where the plan spelled it otherwise.
+    let line = model.validate_text(&spelling, &["stack a b"]).unwrap_err().describe(model.task());
+    assert!(line.starts_with("invalid: step 1: `stack a b` ((stack a b)) is not applicable"), "{line}");
+    // An action id past the task's (another task's plan) is an unknown action, not a panic.
+    let pick_up = spelling.parse("(pick-up a)")[0];
+    let foreign = transition_model::ActionId::from_index(model.task().actions.len());
+    let error = model.validate(&[pick_up, foreign]).unwrap_err();
+    assert!(matches!(&error, PlanError::UnknownAction { step: 2, .. }), "{error:?}");
 }
 
 /// The decision tree finds exactly the actions a scan of every action finds, in every

@@ -48,7 +48,9 @@ pub struct SearchConfig {
     /// only successors reached by preferred operators, alternated with the first, with
     /// Fast Downward's boost of 1000 priority on progress for the lazy variant.
     pub preferred_operators: bool,
+    /// Stop (`OutOfBudget`) after expanding this many states: the same answer on any machine.
     pub max_expansions: Option<u64>,
+    /// Stop (`OutOfBudget`) after this long, read on `clock`.
     pub time_limit: Option<Duration>,
     /// What `time_limit` is read on (the wall clock by default).
     pub clock: Clock,
@@ -83,8 +85,12 @@ impl SearchConfig {
     }
 }
 
+/// How a search ended. As the error of [`optimal_plan`] and its kin it is never `Solved`; it
+/// implements `std::error::Error`, so `optimal_plan(..)?` works in a function returning
+/// `Box<dyn Error>` or `anyhow::Result`.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum SearchStatus {
+    /// A plan reaching the goal was found.
     Solved,
     /// The whole reachable space (under the heuristic's dead-end pruning) was searched.
     Unsolvable,
@@ -94,13 +100,35 @@ pub enum SearchStatus {
     OverBound,
 }
 
+impl std::fmt::Display for SearchStatus {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            SearchStatus::Solved => "solved",
+            SearchStatus::Unsolvable => "no plan exists (the reachable states were searched)",
+            SearchStatus::OutOfBudget => "no plan found within the search's budget",
+            SearchStatus::OverBound => "no plan within the cost bound",
+        })
+    }
+}
+
+impl std::error::Error for SearchStatus {}
+
+/// What a search found and what it cost.
 #[derive(Debug, Clone)]
 pub struct SearchResult {
+    /// How it ended.
     pub status: SearchStatus,
+    /// The plan, from the start state to a goal state; empty unless `status` is `Solved`.
     pub plan: Vec<ActionId>,
+    /// The plan's cost (action costs, or its length where the task has none); 0 unless
+    /// `status` is `Solved` (check the status, not the cost: a goal that holds at the start
+    /// is solved at cost 0 too).
     pub cost: u64,
+    /// States expanded (their successors generated), as Fast Downward counts them.
     pub expanded: u64,
+    /// States whose heuristic value was computed.
     pub evaluated: u64,
+    /// Successor states generated.
     pub generated: u64,
     /// Real time the search took (whatever clock its limit was read on).
     pub elapsed: Duration,
