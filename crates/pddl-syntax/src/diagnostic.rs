@@ -39,9 +39,13 @@ impl std::hash::Hash for Span {
     fn hash<H: std::hash::Hasher>(&self, _: &mut H) {}
 }
 
+/// How bad a diagnostic is.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash)]
 pub enum Severity {
+    /// Parsing goes on and the result is usable; worth showing (a construct ignored, a name
+    /// that checks but looks wrong).
     Warning,
+    /// The input is refused: parsing or checking fails.
     Error,
 }
 
@@ -122,9 +126,13 @@ impl DiagnosticKind {
 /// One finding, located by a byte span in the source it came from.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct Diagnostic {
+    /// Error or warning.
     pub severity: Severity,
+    /// What kind of fault, stable for matching.
     pub kind: DiagnosticKind,
+    /// What is wrong, for a person, naming the names involved.
     pub message: String,
+    /// Where in the source text (bytes); [`Diagnostic::render`] turns it into line and column.
     pub span: Span,
 }
 

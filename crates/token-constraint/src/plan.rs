@@ -56,10 +56,16 @@ pub struct PlanLanguages<'m> {
 }
 
 impl<'m> PlanLanguages<'m> {
+    /// The languages of `model`'s states, spelled by `spelling`, with the default settings:
+    /// the plan may end in any state ([`EndPolicy::Anywhere`]: the end-of-sequence token and
+    /// `DONE` are allowed where the goal does not hold yet, and the verdict is the
+    /// validator's); [`PlanLanguages::with_config`] to allow ending at a goal state only.
     pub fn new(model: &'m TransitionModel, spelling: &'m Spelling) -> PlanLanguages<'m> {
         PlanLanguages::with_config(model, spelling, LanguageConfig::default(), EndPolicy::default())
     }
 
+    /// The languages with `config` (the separator after each action, the end marker) and `end`
+    /// (where a plan may end).
     pub fn with_config(model: &'m TransitionModel, spelling: &'m Spelling, config: LanguageConfig, end: EndPolicy) -> PlanLanguages<'m> {
         PlanLanguages { model, spelling, config, end, cache: FxHashMap::default(), applicable: Vec::new(), hits: 0, misses: 0 }
     }

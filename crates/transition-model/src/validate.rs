@@ -55,13 +55,32 @@ pub struct ValidPlan {
 #[derive(Debug, Clone)]
 pub enum PlanError {
     /// The text of step `step` names no action of the task.
-    UnknownAction { step: usize, text: String },
-    /// Step `step` names actions, none of them applicable; `unmet` is for the one closest
-    /// to applicable.
-    Inapplicable { step: usize, text: String, action: ActionId, unmet: Vec<Unmet> },
+    UnknownAction {
+        /// The step, 1-based.
+        step: usize,
+        /// The step as written.
+        text: String,
+    },
+    /// Step `step` names actions, none of them applicable; `action` and `unmet` are the one
+    /// closest to applicable and its preconditions that do not hold.
+    Inapplicable {
+        /// The step, 1-based.
+        step: usize,
+        /// The step as written.
+        text: String,
+        /// The grounded action the step names (the closest to applicable, where it names several).
+        action: ActionId,
+        /// Its preconditions that do not hold in the state before the step.
+        unmet: Vec<Unmet>,
+    },
     /// Every step applied, but the goal does not hold; `unmet` is for the goal disjunct
     /// closest to holding (empty when the goal can never hold).
-    GoalNotReached { steps: usize, unmet: Vec<Unmet> },
+    GoalNotReached {
+        /// The plan's length.
+        steps: usize,
+        /// The goal's parts that do not hold at the end.
+        unmet: Vec<Unmet>,
+    },
 }
 
 impl PlanError {
