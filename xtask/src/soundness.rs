@@ -12,7 +12,7 @@ use std::process::ExitCode;
 use std::time::{Duration, Instant};
 
 use anyhow::Context;
-use eval_harness::records::RecordFile;
+use eval_harness::records::{RecordFile, config_hash};
 use heuristics::search::SearchStatus;
 use household_sim::vh_pddl::{self, SOUND_DOMAIN, VhProblem};
 use household_sim::{Environment, Event, Judge, VhGoal, VirtualhomeEnv, VirtualhomeTask};
@@ -66,12 +66,6 @@ fn task_id(path: &Path) -> String {
     name.strip_suffix(".json.gz").or(name.strip_suffix(".json")).unwrap_or(name).to_string()
 }
 
-/// The first 12 hex digits of the SHA-256 of `text`.
-fn digest(text: &str) -> String {
-    use sha2::{Digest, Sha256};
-    Sha256::digest(text.as_bytes()).iter().take(6).map(|b| format!("{b:02x}")).collect()
-}
-
 pub fn run(args: SoundnessArgs) -> anyhow::Result<ExitCode> {
     crate::input::folder_to_write(&args.out, "--out")?;
     if args.out.extension().is_some_and(|e| e == "jsonl") {
@@ -102,14 +96,15 @@ pub fn run(args: SoundnessArgs) -> anyhow::Result<ExitCode> {
 
     // The run's configuration names its records: the task list (every task of the folder, so
     // a `--limit` run's records are a longer run's), EAI's files by content, the domain, the
-    // search's limit and its clock (named only where it is `cpu`, as in `eval`).
+    // search's limit and its clock (named only where it is `cpu`, as in `eval`). Contents are
+    // named by the records' own short digest (`config_hash`, of their canonical JSON).
     let mut config = json!({
         "command": "soundness",
         "version": SOUNDNESS_VERSION,
-        "tasks": {"count": ids.len(), "ids_sha256": digest(&ids.join("\n"))},
-        "gold_sha256": digest(&gold_text),
-        "problem_classes_sha256": digest(&serde_json::to_string(&classes)?),
-        "domain_sha256": digest(SOUND_DOMAIN),
+        "tasks": {"count": ids.len(), "ids_sha256": config_hash(&ids)},
+        "gold_sha256": config_hash(&gold),
+        "problem_classes_sha256": config_hash(&classes),
+        "domain_sha256": config_hash(&SOUND_DOMAIN),
         "time_limit": args.time_limit,
     });
     if !args.clock.is_wall() {
