@@ -7,11 +7,14 @@ macro_rules! id {
         pub struct $name(pub u32);
 
         impl $name {
+            /// The id as a 0-based index into its table.
             #[inline]
             pub fn index(self) -> usize {
                 self.0 as usize
             }
 
+            /// The id of a 0-based table index; `index` must fit in a `u32` (larger values are
+            /// truncated, not checked).
             #[inline]
             pub fn from_index(index: usize) -> $name {
                 $name(index as u32)

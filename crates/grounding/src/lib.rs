@@ -47,31 +47,70 @@ use pddl_syntax::{Diagnostic, Span, check};
 /// Which of the two files an error is about.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum PddlFile {
+    /// The domain text, `(define (domain ...) ...)`.
     Domain,
+    /// The problem text, `(define (problem ...) ...)`.
     Problem,
 }
 
+/// Why [`ground`] refused a domain and problem.
 #[derive(Debug, thiserror::Error)]
 pub enum GroundingError {
     /// The domain or problem does not check (unknown names, wrong arity, ...).
     #[error("the PDDL does not check: {}", first_message(.domain, .problem))]
-    Invalid { domain: Vec<Diagnostic>, problem: Vec<Diagnostic> },
+    Invalid {
+        /// [`pddl_syntax::CheckReport::domain`]: every diagnostic on the domain, warnings included.
+        domain: Vec<Diagnostic>,
+        /// [`pddl_syntax::CheckReport::problem`]: every diagnostic of the problem pass, warnings
+        /// included.
+        problem: Vec<Diagnostic>,
+    },
     /// A name that does not resolve; [`check`] rejects these first, so this is a guard.
     #[error("{0} is not declared")]
     Unresolved(String),
     /// A construct of the domain outside the fragment, at `span` in the domain.
     #[error("unsupported: {message}")]
-    Unsupported { message: String, span: Span },
-    /// At `span` in `file`: an action's precondition (domain) or the goal (problem).
+    Unsupported {
+        /// What is unsupported, naming the action.
+        message: String,
+        /// The offending `(increase ...)` effect in the domain.
+        span: Span,
+    },
+    /// At `span` in `file`: an action's precondition or the condition of one of its conditional
+    /// effects (domain), or the goal (problem).
     #[error("{what} splits into more than 4096 alternatives; simplify its disjunctions")]
-    TooManyAlternatives { what: String, file: PddlFile, span: Span },
+    TooManyAlternatives {
+        /// The action instance, as `action (name a b)`, or `the goal`.
+        what: String,
+        /// [`PddlFile::Domain`] for an action, [`PddlFile::Problem`] for the goal.
+        file: PddlFile,
+        /// The whole `(:action ...)` form, or the goal's condition.
+        span: Span,
+    },
     /// `term` is the cost term as instantiated; `span` is where the domain writes it.
     #[error("{action}: its cost {term} has no value in the problem's `:init`")]
-    MissingCost { action: String, term: String, span: Span },
+    MissingCost {
+        /// The action instance, as `action (name a b)` with the problem's object names.
+        action: String,
+        /// The function term with its arguments bound, as `(f a b)`.
+        term: String,
+        /// Where the domain writes the term.
+        span: Span,
+    },
     /// At `span` in `file`: the first term that makes the cost invalid (a value in the
     /// problem's `:init`, or a number in the domain).
     #[error("{action}: cost {value} is not a non-negative integer")]
-    InvalidCost { action: String, value: f64, file: PddlFile, span: Span },
+    InvalidCost {
+        /// The action instance, as `action (name a b)` with the problem's object names.
+        action: String,
+        /// The instance's total cost: the sum of all its `(increase (total-cost) ...)` terms.
+        value: f64,
+        /// Which file `span` points into.
+        file: PddlFile,
+        /// The first negative or fractional term, or, when only the sum is bad (above `u32::MAX`),
+        /// the first term.
+        span: Span,
+    },
 }
 
 impl GroundingError {

@@ -105,6 +105,7 @@ pub struct RelevantFacts {
 }
 
 impl RelevantFacts {
+    /// Whether `fact` is relevant (found within the depth).
     pub fn contains(&self, fact: FactId) -> bool {
         self.step(fact).is_some()
     }
@@ -119,6 +120,7 @@ impl RelevantFacts {
         self.steps.iter().filter(|&&s| s != UNREACHED).count()
     }
 
+    /// Whether no fact is relevant.
     pub fn is_empty(&self) -> bool {
         self.len() == 0
     }

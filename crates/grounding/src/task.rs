@@ -9,26 +9,32 @@ use crate::ids::{ActionId, FactId, ObjectId, PredicateId, SchemaId};
 pub struct Literal(u32);
 
 impl Literal {
+    /// The literal that holds when `fact` is true.
     pub fn positive(fact: FactId) -> Literal {
         Literal(fact.0 << 1)
     }
 
+    /// The literal that holds when `fact` is false.
     pub fn negative(fact: FactId) -> Literal {
         Literal(fact.0 << 1 | 1)
     }
 
+    /// The negative literal of `fact` when `negated`, else the positive one.
     pub fn new(fact: FactId, negated: bool) -> Literal {
         Literal(fact.0 << 1 | negated as u32)
     }
 
+    /// The fact, whatever the sign.
     pub fn fact(self) -> FactId {
         FactId(self.0 >> 1)
     }
 
+    /// Whether this is the literal "`fact` is false".
     pub fn is_negated(self) -> bool {
         self.0 & 1 == 1
     }
 
+    /// The complementary literal: same fact, other sign.
     pub fn negate(self) -> Literal {
         Literal(self.0 ^ 1)
     }
@@ -51,6 +57,7 @@ pub struct Condition {
 }
 
 impl Condition {
+    /// Whether there are no literals and no clauses, so the condition always holds.
     pub fn is_empty(&self) -> bool {
         self.pos.is_empty() && self.neg.is_empty() && self.clauses.is_empty()
     }
@@ -73,8 +80,12 @@ impl Condition {
 /// `del` is removed and then `add` is added.
 #[derive(Debug, Clone, Default, PartialEq, Eq, Hash)]
 pub struct ConditionalEffect {
+    /// Must hold, in the state the action is applied in, for the effect to fire; never empty in a
+    /// [`Task`] (such effects are merged into [`Action::add`] and [`Action::del`]).
     pub condition: Condition,
+    /// Facts added when the effect fires, sorted, without duplicates.
     pub add: Vec<FactId>,
+    /// Facts deleted when the effect fires, sorted, without duplicates.
     pub del: Vec<FactId>,
 }
 
@@ -88,41 +99,58 @@ pub type Cost = u32;
 /// action that both adds and deletes a fact leaves it true (PDDL semantics).
 #[derive(Debug, Clone, PartialEq, Eq, Hash)]
 pub struct Action {
+    /// The schema it instantiates: an index into [`Task::schemas`].
     pub schema: SchemaId,
     /// Values of the schema's parameters, in order. Actions split from one disjunctive or
     /// existential precondition share their schema and arguments, so they share a name.
     pub args: SmallVec<[ObjectId; 6]>,
+    /// Must hold for the action to be applicable; over fluent facts only (static ones were
+    /// evaluated away).
     pub pre: Condition,
     /// Unconditional adds and deletes, sorted, without duplicates.
     pub add: Vec<FactId>,
+    /// Unconditional deletes, sorted, without duplicates; none is also in `add` (adds win) or in
+    /// `pre.neg` (already false).
     pub del: Vec<FactId>,
+    /// Effects that fire only where their condition holds.
     pub conditional: Vec<ConditionalEffect>,
+    /// The sum of the schema's `(increase (total-cost) ...)` terms when the problem has a `:metric`
+    /// (0 without such terms); 1 when it has none.
     pub cost: Cost,
 }
 
 /// A ground atom: predicate and arguments.
 #[derive(Debug, Clone, PartialEq, Eq, Hash, PartialOrd, Ord)]
 pub struct Atom {
+    /// An index into [`Task::predicates`].
     pub predicate: PredicateId,
+    /// Indexes into [`Task::objects`], in order, as many as the predicate's arity.
     pub args: SmallVec<[ObjectId; 4]>,
 }
 
 /// What an action schema looks like after grounding, for naming and spelling actions.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct Schema {
+    /// The action's name as the domain writes it, lowercased.
     pub name: String,
     /// Parameter names without `?`, lowercased.
     pub params: Vec<String>,
 }
 
 #[derive(Debug, Clone, PartialEq, Eq)]
+/// A predicate the domain declares, indexed by [`PredicateId`].
 pub struct Predicate {
+    /// Its name, lowercased.
     pub name: String,
+    /// Its number of arguments.
     pub arity: usize,
 }
 
 #[derive(Debug, Clone, PartialEq, Eq)]
+/// An object or constant, indexed by [`ObjectId`]: the domain's `:constants` first, then the
+/// problem's `:objects`, each in the order declared.
 pub struct Object {
+    /// Its name, lowercased.
     pub name: String,
     /// The declared type and all its ancestors, ending with `object`.
     pub types: Vec<String>,
@@ -135,10 +163,12 @@ pub struct Object {
 /// means it always holds.
 #[derive(Debug, Clone, Default, PartialEq, Eq)]
 pub struct Goal {
+    /// The alternatives: the goal holds in a state where one of them does.
     pub disjuncts: Vec<Condition>,
 }
 
 impl Goal {
+    /// Whether some disjunct holds, given a membership test for fluent facts.
     pub fn holds(&self, is_true: impl Fn(FactId) -> bool + Copy) -> bool {
         self.disjuncts.iter().any(|d| d.holds(is_true))
     }
@@ -150,10 +180,16 @@ impl Goal {
 /// that never change were evaluated away and are listed in [`Task::static_facts`].
 #[derive(Debug, Clone)]
 pub struct Task {
+    /// The name after `(domain ...)`, lowercased.
     pub domain_name: String,
+    /// The name after `(problem ...)`, lowercased.
     pub problem_name: String,
+    /// Every object and constant, indexed by [`ObjectId`].
     pub objects: Vec<Object>,
+    /// Every predicate the domain declares (static ones too), indexed by [`PredicateId`].
     pub predicates: Vec<Predicate>,
+    /// Every action schema of the domain, indexed by [`SchemaId`], in the order declared, even those
+    /// with no reachable action.
     pub schemas: Vec<Schema>,
     /// Fluent facts, indexed by [`FactId`].
     pub facts: Vec<Atom>,
@@ -161,6 +197,7 @@ pub struct Task {
     pub actions: Vec<Action>,
     /// Fluent facts true in the initial state, sorted.
     pub init: Vec<FactId>,
+    /// The goal, over fluent facts.
     pub goal: Goal,
     /// Facts true in every reachable state (never deleted), for display: prompts show them.
     pub static_facts: Vec<Atom>,
@@ -169,18 +206,22 @@ pub struct Task {
 }
 
 impl Task {
+    /// The atom a fact id stands for; panics when `fact` is not an id of this task.
     pub fn fact(&self, fact: FactId) -> &Atom {
         &self.facts[fact.index()]
     }
 
+    /// The action an id stands for; panics when `action` is not an id of this task.
     pub fn action(&self, action: ActionId) -> &Action {
         &self.actions[action.index()]
     }
 
+    /// Every fact id, in increasing order.
     pub fn fact_ids(&self) -> impl Iterator<Item = FactId> + use<> {
         (0..self.facts.len() as u32).map(FactId)
     }
 
+    /// Every action id, in increasing order.
     pub fn action_ids(&self) -> impl Iterator<Item = ActionId> + use<> {
         (0..self.actions.len() as u32).map(ActionId)
     }
@@ -202,10 +243,12 @@ impl Task {
         out
     }
 
+    /// The fact as `(pred a b)`; panics when `fact` is not an id of this task.
     pub fn fact_name(&self, fact: FactId) -> String {
         self.atom_name(self.fact(fact))
     }
 
+    /// `(pred a b)`, or `(not (pred a b))` for a negative literal.
     pub fn literal_name(&self, literal: Literal) -> String {
         let name = self.fact_name(literal.fact());
         if literal.is_negated() { format!("(not {name})") } else { name }
@@ -223,6 +266,8 @@ impl Task {
         out
     }
 
+    /// The object with this name, compared after lowercasing `name` (stored names are lowercase);
+    /// `None` when there is none.
     pub fn object_by_name(&self, name: &str) -> Option<ObjectId> {
         let lower = name.to_lowercase();
         self.objects.iter().position(|o| o.name == lower).map(|i| ObjectId(i as u32))

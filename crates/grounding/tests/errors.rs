@@ -102,6 +102,20 @@ fn names_that_do_not_check_render_each_in_its_file() {
     assert!(lines[1].starts_with("p.pddl:2:11: error[unknown-predicate]: predicate `s`"), "{rendered}");
 }
 
+/// A constant of the domain's actions that neither file declares is found in the problem pass
+/// (the problem may declare it, as ALFWorld's problems declare `SinkType`), but it is an error in
+/// the domain's text, and is shown there.
+#[test]
+fn a_domain_constant_neither_file_declares_is_shown_in_the_domain() {
+    let domain = "(define (domain d) (:requirements :strips) (:predicates (p ?x))\n  (:action a :parameters () :precondition (p sink) :effect (p other)))\n";
+    let problem = "(define (problem e) (:domain d) (:objects other)\n  (:init) (:goal (p other)))\n";
+    let error = ground(domain, problem);
+    assert_eq!(
+        render(&error, domain, problem),
+        "d.pddl:2:46: error[unknown-object]: action `a` names `sink`, which is declared neither in the domain's `:constants` nor in the problem's `:objects`"
+    );
+}
+
 /// A type every object of a list is declared with is one error, said once: the checker finds it
 /// for each object, at the same place.
 #[test]

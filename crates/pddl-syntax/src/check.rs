@@ -18,11 +18,15 @@ use crate::diagnostic::{Diagnostic, DiagnosticKind, Span};
 /// Diagnostics from [`check`], by the file they point into.
 #[derive(Debug, Default, Clone)]
 pub struct CheckReport {
+    /// Findings on the domain (declarations, action bodies); spans point into the domain text.
     pub domain: Vec<Diagnostic>,
+    /// Findings of the problem pass; spans point into the problem text. (A constant of the domain's
+    /// actions that neither file declares is a domain finding, found once a problem is given.)
     pub problem: Vec<Diagnostic>,
 }
 
 impl CheckReport {
+    /// Whether either list holds an error-level diagnostic.
     pub fn has_errors(&self) -> bool {
         self.domain.iter().chain(&self.problem).any(Diagnostic::is_error)
     }
@@ -40,6 +44,8 @@ pub fn check(domain: &Domain, problem: Option<&Problem>) -> CheckReport {
     if let Some(problem) = problem {
         let mut checker = Checker::new(domain, Some(problem), &mut report.problem);
         checker.problem(problem);
+        // Constants of the domain's actions unknown to both files are errors in the domain text.
+        Checker::new(domain, Some(problem), &mut report.domain).action_constants();
     }
     report
 }
@@ -383,7 +389,11 @@ impl<'a> Checker<'a> {
         if let Some(Metric { expr: NumericExpr::Function(term), .. }) = &problem.metric {
             self.function_term(term);
         }
-        // The domain's action bodies may name the problem's objects: resolve them now.
+    }
+
+    /// The domain's action bodies may name the problem's objects (ALFWorld's `SinkType`): resolve
+    /// them once the problem's objects are known. The diagnostics point into the domain text.
+    fn action_constants(&mut self) {
         for action in &self.domain.actions {
             let mut constants = Vec::new();
             collect_action_constants(action, &mut constants);

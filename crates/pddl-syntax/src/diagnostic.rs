@@ -10,15 +10,19 @@ use std::fmt;
 /// [`Span::range`] to compare locations.
 #[derive(Debug, Clone, Copy, Default)]
 pub struct Span {
+    /// Byte offset of the first byte.
     pub start: u32,
+    /// Byte offset just past the last byte (exclusive).
     pub end: u32,
 }
 
 impl Span {
+    /// The span `start..end` of byte offsets; offsets are stored as `u32`, so they must be below 4 GiB.
     pub fn new(start: usize, end: usize) -> Span {
         Span { start: start as u32, end: end as u32 }
     }
 
+    /// The same bytes as a `usize` range, to slice the source with.
     pub fn range(self) -> std::ops::Range<usize> {
         self.start as usize..self.end as usize
     }
@@ -137,14 +141,17 @@ pub struct Diagnostic {
 }
 
 impl Diagnostic {
+    /// An error-level diagnostic: the input is refused.
     pub fn error(kind: DiagnosticKind, span: Span, message: impl Into<String>) -> Diagnostic {
         Diagnostic { severity: Severity::Error, kind, message: message.into(), span }
     }
 
+    /// A warning-level diagnostic: the result stays usable.
     pub fn warning(kind: DiagnosticKind, span: Span, message: impl Into<String>) -> Diagnostic {
         Diagnostic { severity: Severity::Warning, kind, message: message.into(), span }
     }
 
+    /// Whether the severity is [`Severity::Error`].
     pub fn is_error(&self) -> bool {
         self.severity == Severity::Error
     }
@@ -178,19 +185,29 @@ pub fn line_column(source: &str, offset: usize) -> (usize, usize) {
 }
 
 /// Strict parsing failed: every error found (there is at least one), plus the warnings.
-#[derive(Debug, Clone, thiserror::Error)]
-#[error("{} error(s) in PDDL input; first: {}", self.errors().count(), self.first_error())]
+///
+/// Its `Display` names the first error with its line and column in the text that was parsed
+/// (`2 error(s) in PDDL input; first at line 3, column 5: ...`); [`ParseError::render`] gives
+/// every diagnostic with a file name.
+#[derive(Debug, Clone)]
 pub struct ParseError {
+    /// Every diagnostic, errors and warnings, in the order the parser found them.
     pub diagnostics: Vec<Diagnostic>,
+    /// Line and column (1-based) of the first error in the source, kept from the parse so
+    /// that `Display` can say where without the text.
+    first_at: Option<(usize, usize)>,
 }
 
 impl ParseError {
-    pub fn errors(&self) -> impl Iterator<Item = &Diagnostic> {
-        self.diagnostics.iter().filter(|d| d.is_error())
+    /// The diagnostics of a failed parse of `source`.
+    pub fn new(diagnostics: Vec<Diagnostic>, source: &str) -> ParseError {
+        let first_at = diagnostics.iter().find(|d| d.is_error()).map(|d| line_column(source, d.span.start as usize));
+        ParseError { diagnostics, first_at }
     }
 
-    fn first_error(&self) -> String {
-        self.errors().next().map(|d| d.message.clone()).unwrap_or_default()
+    /// The error-level diagnostics, in the order found.
+    pub fn errors(&self) -> impl Iterator<Item = &Diagnostic> {
+        self.diagnostics.iter().filter(|d| d.is_error())
     }
 
     /// Every diagnostic rendered as `path:line:column: ...`, one a line: the errors first (what
@@ -206,3 +223,16 @@ impl ParseError {
         lines.join("\n")
     }
 }
+
+impl fmt::Display for ParseError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{} error(s) in PDDL input", self.errors().count())?;
+        match (self.errors().next(), self.first_at) {
+            (Some(first), Some((line, column))) => write!(f, "; first at line {line}, column {column}: {}", first.message),
+            (Some(first), None) => write!(f, "; first: {}", first.message),
+            (None, _) => Ok(()),
+        }
+    }
+}
+
+impl std::error::Error for ParseError {}

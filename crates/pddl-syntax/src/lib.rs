@@ -41,17 +41,17 @@ pub use parse::{parse_domain_recovering, parse_problem_recovering};
 
 /// Parses a domain; fails if any error-level diagnostic was found.
 pub fn parse_domain(source: &str) -> Result<Domain, ParseError> {
-    strict(parse_domain_recovering(source))
+    strict(source, parse_domain_recovering(source))
 }
 
 /// Parses a problem; fails if any error-level diagnostic was found.
 pub fn parse_problem(source: &str) -> Result<Problem, ParseError> {
-    strict(parse_problem_recovering(source))
+    strict(source, parse_problem_recovering(source))
 }
 
-fn strict<T>((tree, diagnostics): (Option<T>, Vec<Diagnostic>)) -> Result<T, ParseError> {
+fn strict<T>(source: &str, (tree, diagnostics): (Option<T>, Vec<Diagnostic>)) -> Result<T, ParseError> {
     match tree {
         Some(tree) if !diagnostics.iter().any(Diagnostic::is_error) => Ok(tree),
-        _ => Err(ParseError { diagnostics }),
+        _ => Err(ParseError::new(diagnostics, source)),
     }
 }

@@ -101,3 +101,18 @@ fn a_failed_parse_says_its_errors_before_its_warnings() {
     assert!(lines[0].contains(": error["), "{rendered}");
     assert!(lines.iter().any(|l| l.contains(": warning[")), "{rendered}");
 }
+
+#[test]
+fn a_failed_parse_says_where_its_first_error_is_without_the_source() {
+    let source = "(define (domain d)\n (:predicates (p ?x))\n (:action a :parameters (?x) :precondition (p ?x) :effect (p ?x))) (more)\n";
+    let error = pddl_syntax::parse_domain(source).expect_err("text after the domain");
+    let first = error.errors().next().unwrap();
+    let (line, column) = pddl_syntax::line_column(source, first.span.start as usize);
+    assert_eq!(line, 3);
+    let shown = error.to_string();
+    assert!(shown.contains(&format!("first at line 3, column {column}: ")), "{shown}");
+    assert!(shown.contains(&first.message), "{shown}");
+    // A library user's `?` keeps the message: the error is a std error.
+    let boxed: Box<dyn std::error::Error> = Box::new(error);
+    assert_eq!(boxed.to_string(), shown);
+}

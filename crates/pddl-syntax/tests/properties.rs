@@ -299,3 +299,15 @@ fn the_kept_regressions_are_found_and_read() {
     let seeds = FileFailurePersistence::WithSource("proptest-regressions").load_persisted_failures2(Some(file!()));
     assert!(!seeds.is_empty(), "{} has no readable `cc` line beside it", file!());
 }
+
+/// `Eq` and `Hash` agree on numbers: `0` and `-0` are equal, so they hash alike, and trees that
+/// differ only there are one key of a hash map.
+#[test]
+fn equal_numbers_hash_alike() {
+    use std::hash::BuildHasher;
+    let hasher = std::collections::hash_map::RandomState::new();
+    let zero = pddl_syntax::Number { value: 0.0, span: pddl_syntax::Span::default() };
+    let negative_zero = pddl_syntax::Number { value: -0.0, span: pddl_syntax::Span::new(3, 5) };
+    assert_eq!(zero, negative_zero);
+    assert_eq!(hasher.hash_one(&zero), hasher.hash_one(&negative_zero));
+}
