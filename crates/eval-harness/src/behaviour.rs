@@ -18,6 +18,7 @@ use serde::Serialize;
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum Terminal {
+    /// The episode reached its goal.
     Success,
     /// A request the environment refused ended the episode (or, for the agent, the open-loop
     /// plan with a refused step ran to its end short of the goal).
@@ -34,9 +35,14 @@ pub enum Terminal {
 /// The failure response of one episode (Table 12).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize)]
 pub struct FailureResponse {
+    /// Some request was not executed.
     pub encounters_failure: bool,
+    /// Some request failed and the episode still succeeded.
     pub recovers: bool,
+    /// A failed request was sent again as the very next request.
     pub repeats_failed_request: bool,
+    /// The requests hold a loop ([`persistent_loop`]): five identical in a row, or a six-step
+    /// two-action oscillation.
     pub persistent_loop: bool,
 }
 

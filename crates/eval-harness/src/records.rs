@@ -34,25 +34,63 @@ use serde_json::{Map, Value};
 /// Why records cannot be read or written.
 #[derive(Debug, thiserror::Error)]
 pub enum RecordError {
+    /// A file or folder could not be created, read, written, locked or synced.
     #[error("{path}: {source}")]
-    Io { path: PathBuf, source: std::io::Error },
+    Io {
+        /// The file or folder.
+        path: PathBuf,
+        /// The operating system's error.
+        source: std::io::Error,
+    },
+    /// A line is not what it must be: a records line that is not UTF-8, not a JSON object, has
+    /// no `task`, repeats a task, carries another configuration's hash or a field a report
+    /// refuses; or a configuration file that is not JSON.
     #[error("{path}:{line}: {message}")]
-    Bad { path: PathBuf, line: usize, message: String },
+    Bad {
+        /// The file holding the line.
+        path: PathBuf,
+        /// The line, 1-based.
+        line: usize,
+        /// What is wrong with it.
+        message: String,
+    },
+    /// The configuration file beside the records holds another configuration than the run's.
     #[error(
         "{path}: these records were made with another configuration ({found}) than this run's ({expected}); \
          use another --out folder, or delete the file to start over"
     )]
-    ConfigMismatch { path: PathBuf, expected: String, found: String },
+    ConfigMismatch {
+        /// The configuration file beside the records (`<stem>-<hash>.config.json`).
+        path: PathBuf,
+        /// The hash of this run's configuration ([`config_hash`]).
+        expected: String,
+        /// The hash of the configuration in the file.
+        found: String,
+    },
+    /// Another process holds the record file's lock: a run of the same configuration is
+    /// writing into the same folder.
     #[error(
         "{path}: another run is writing these records now (one run of a configuration per folder at a time); wait for it, or use another --out folder"
     )]
-    Busy { path: PathBuf },
+    Busy {
+        /// The locked record file.
+        path: PathBuf,
+    },
+    /// [`merge`] refused its shard files; the message names the file and the fault.
     #[error("{0}")]
     Merge(String),
+    /// [`RecordFile::append`] was given a value that does not serialize to a JSON object with
+    /// a string `task`; the message says what it lacks.
     #[error("a record must be a JSON object with a string `task`: {0}")]
     NotARecord(String),
+    /// [`RecordFile::append`] was given a task the file records already; nothing was written.
     #[error("{path}: task {task} is recorded already (a file holding a task twice cannot be resumed or reported)")]
-    Duplicate { path: PathBuf, task: String },
+    Duplicate {
+        /// The record file.
+        path: PathBuf,
+        /// The task's name (its `task` field).
+        task: String,
+    },
 }
 
 fn io(path: &Path) -> impl FnOnce(std::io::Error) -> RecordError + '_ {
@@ -109,7 +147,9 @@ pub fn config_hash(config: &impl Serialize) -> String {
 /// the tasks whose position is `index - 1` modulo `count`.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct Shard {
+    /// Which shard, 1-based.
     pub index: usize,
+    /// How many shards the run is split into.
     pub count: usize,
 }
 
@@ -246,6 +286,7 @@ impl RecordFile {
         Ok(())
     }
 
+    /// The record file (`<dir>/<stem>-<hash>[.shard-i-of-n].jsonl`).
     pub fn path(&self) -> &Path {
         &self.path
     }
@@ -360,8 +401,11 @@ pub(crate) fn parse_records(path: &Path, text: &str, hash: Option<&str>) -> Resu
 /// What [`merge`] wrote.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct Merged {
+    /// The merged file, `<stem>-<hash>.jsonl` beside the shards.
     pub path: PathBuf,
+    /// How many records it holds.
     pub records: usize,
+    /// The configuration's hash, the `config` field of every record.
     pub config: String,
     /// The run's task count from the configuration beside the shards; `None` when it gives
     /// none (a configuration written before the count was), so completeness went unchecked.

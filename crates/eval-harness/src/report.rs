@@ -64,13 +64,25 @@ pub enum ReportError {
     #[error(
         "{path}: its configuration {config} {reason}; a record file is read with the `.config.json` that `cargo xtask eval` writes beside it"
     )]
-    Config { path: PathBuf, config: PathBuf, reason: String },
+    Config {
+        /// The record file.
+        path: PathBuf,
+        /// The configuration file expected beside it (`<stem>-<hash>.config.json`).
+        config: PathBuf,
+        /// What is wrong: unreadable, not a JSON object, or no string `agent` or `benchmark`.
+        reason: String,
+    },
     /// Nothing to report on.
     #[error("{0}")]
     NoRecords(String),
     /// A statistic could not be computed (the options are out of range, e.g. zero replicates).
     #[error("{context}: {source}")]
-    Stats { context: String, source: StatsError },
+    Stats {
+        /// Which number of the report was being computed.
+        context: String,
+        /// Why the statistic failed.
+        source: StatsError,
+    },
 }
 
 /// Settings of the statistics.
@@ -102,6 +114,7 @@ pub struct Report {
     /// The record files read and their records, shard files beside their merged file not
     /// counted (they are read through it).
     pub files: usize,
+    /// The records in those files.
     pub records: usize,
     /// Each shard file read through its merged file ([`without_merged_shards`]).
     pub merged_shards: Vec<String>,

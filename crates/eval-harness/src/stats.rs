@@ -35,19 +35,48 @@ pub use runs::{RunSummary, mean, sample_std_dev, summarize_runs};
 pub enum StatsError {
     /// Too few values: the mean needs one, the sample standard deviation two.
     #[error("{what}: {found} value(s), at least {needed} needed")]
-    TooFewValues { what: &'static str, needed: usize, found: usize },
+    TooFewValues {
+        /// The statistic asked for.
+        what: &'static str,
+        /// The fewest values it takes.
+        needed: usize,
+        /// The values given.
+        found: usize,
+    },
     /// A value is NaN or infinite.
     #[error("{what}: value {index} is {value}, not a finite number")]
-    NotFinite { what: &'static str, index: usize, value: f64 },
+    NotFinite {
+        /// The statistic asked for.
+        what: &'static str,
+        /// The value's position, 0-based (for the bootstrap, counted over all runs in task order).
+        index: usize,
+        /// The value.
+        value: f64,
+    },
     /// A task in the bootstrap input has no runs; every task needs at least one outcome.
     #[error("bootstrap: task {task} has no runs; give every task at least one outcome")]
-    EmptyTask { task: usize },
+    EmptyTask {
+        /// The task's position in the input, 0-based.
+        task: usize,
+    },
     /// Two sequences that must be paired element by element differ in length.
     #[error("{what}: lengths differ ({expected} and {found}); paired outcomes need one entry per task on both sides")]
-    LengthMismatch { what: &'static str, expected: usize, found: usize },
+    LengthMismatch {
+        /// The statistic asked for.
+        what: &'static str,
+        /// The length of the first sequence.
+        expected: usize,
+        /// The length of the second sequence.
+        found: usize,
+    },
     /// A p-value outside [0, 1] (or NaN).
     #[error("p-value {index} is {value}; p-values lie in [0, 1]")]
-    InvalidPValue { index: usize, value: f64 },
+    InvalidPValue {
+        /// The p-value's position in the family, 0-based.
+        index: usize,
+        /// The p-value.
+        value: f64,
+    },
     /// A percent outside [0, 100] (or NaN).
     #[error("percentile: {0} is not a percent in [0, 100]")]
     InvalidPercent(f64),
@@ -59,10 +88,18 @@ pub enum StatsError {
     InvalidReplicates(usize),
     /// The result is beyond the range of `f64` (values near `f64::MAX`).
     #[error("{what}: the result overflows f64; rescale the values")]
-    Overflow { what: &'static str },
+    Overflow {
+        /// The statistic asked for.
+        what: &'static str,
+    },
     /// More tasks than the 32-bit counts hold (2^32 - 1).
     #[error("{what}: {tasks} tasks; at most 2^32 - 1 are supported")]
-    TooManyTasks { what: &'static str, tasks: usize },
+    TooManyTasks {
+        /// The statistic asked for.
+        what: &'static str,
+        /// The task count that does not fit (for McNemar, the discordant tasks on one side).
+        tasks: usize,
+    },
 }
 
 /// The first value of `values` that is NaN or infinite, as an error.

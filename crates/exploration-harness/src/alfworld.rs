@@ -293,7 +293,9 @@ const LOOKING: &[&str] = &["look", "inventory", "examinereceptacle", "examineobj
 ///   place it stands at (another view: ALFWorld's text states a place's contents in full, so the
 ///   temporary pickup that tests a hypothesis elsewhere is never needed here).
 pub struct AlfworldAdapter {
+    /// F_str: ALFWorld's class-level ontology (affordances, `canContain` pairs).
     pub ontology: Ontology,
+    /// The ALFWorld domain (`alfred.pddl`) that ŝ0 is written and grounded in.
     pub domain: pddl_syntax::Domain,
     /// The game's command grammar (`alfred.twl2`).
     pub grammar: String,
@@ -308,6 +310,8 @@ impl std::fmt::Debug for AlfworldAdapter {
 }
 
 impl AlfworldAdapter {
+    /// An adapter for one game: `grammar` is the game's `alfred.twl2`, and only the goal
+    /// formula of `annotation` is kept.
     pub fn new(ontology: Ontology, domain: pddl_syntax::Domain, grammar: String, annotation: &GoalAnnotation) -> AlfworldAdapter {
         AlfworldAdapter { ontology, domain, grammar, formula: annotation.formula.clone() }
     }

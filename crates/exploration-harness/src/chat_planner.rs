@@ -27,6 +27,7 @@ use crate::phase1::RunError;
 pub struct ChatPlannerConfig {
     /// Ask for the model's thinking mode (`chat_template_kwargs.enable_thinking`).
     pub thinking: bool,
+    /// Decoding settings: temperature, top-p, top-k, the output-token limit, the seed.
     pub sampling: Sampling,
     /// What the planning prompt shows (the facts relevant to the goal by default, or all).
     pub prompt: mcts::prompt::PromptOptions,
@@ -73,6 +74,8 @@ fn action_text(line: &str) -> &str {
 /// What reading a plan text found.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct ReadPlan {
+    /// The applicable prefix: one action per line read, in order, each applicable after those
+    /// before it.
     pub actions: Vec<grounding::ActionId>,
     /// The first line that names no applicable action (1-based line of the plan text) and the
     /// line.

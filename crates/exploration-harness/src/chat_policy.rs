@@ -33,6 +33,8 @@ impl std::fmt::Debug for ChatPolicy {
 }
 
 impl ChatPolicy {
+    /// `model` as the policy; `name` is what [`Policy::name`] returns for it (`openai:URL`,
+    /// `local:NAME`, ...).
     pub fn new(model: Box<dyn ChatModel>, name: &str) -> ChatPolicy {
         ChatPolicy { model, name: name.to_string(), usage: PolicyUsage::default(), last_prompt: String::new() }
     }

@@ -71,6 +71,7 @@ pub struct DirectConfig {
     pub budget: usize,
     /// Failed turns in a row that end the episode.
     pub failure_limit: usize,
+    /// Output tokens per reply, greedy decoding.
     pub max_reply_tokens: u32,
 }
 
@@ -124,11 +125,14 @@ pub struct DirectStep {
 pub struct DirectUsage {
     /// Chat requests (a repair turn is a second one).
     pub model_calls: u64,
+    /// Prompt tokens over those requests, as the model counts them.
     pub prompt_tokens: u64,
+    /// Tokens the model generated over those requests.
     pub generated_tokens: u64,
     /// Observations shown (one per turn), and of them those with a picture (model-visible
     /// images, counted once per turn).
     pub observations: u64,
+    /// Of those observations, the ones shown with a picture.
     pub images: u64,
 }
 
@@ -137,6 +141,7 @@ pub struct DirectUsage {
 pub struct DirectEpisode {
     /// The environment's own goal check after the episode.
     pub success: bool,
+    /// What ended the episode.
     pub end: DirectEnd,
     /// Every turn but a final DONE.
     pub steps: Vec<DirectStep>,
@@ -147,10 +152,13 @@ pub struct DirectEpisode {
     /// The episode as the benchmark's own engine takes it, to replay there (the judge's
     /// [`Judge::engine_script`]; evaluation only).
     pub engine_script: Vec<EngineLine>,
+    /// What the model was shown and spent over the episode.
     pub usage: DirectUsage,
     /// The DONE reply, when the model ended the episode.
     pub done_reply: Option<String>,
+    /// Wall-clock milliseconds of the whole episode, the reset included.
     pub millis: f64,
+    /// Wall-clock milliseconds spent waiting for the model, summed over the requests.
     pub model_millis: f64,
 }
 
@@ -166,11 +174,14 @@ impl DirectEpisode {
     }
 }
 
-/// A model that cannot be reached: the run stops and the episode is not recorded.
+/// Why a direct episode could not be run (a model that cannot be reached, a picture that cannot be
+/// sent): the run stops and the episode is not recorded.
 #[derive(Debug, thiserror::Error)]
 pub enum DirectError {
+    /// The model could not be reached ([`ChatErrorKind::is_unavailable`]).
     #[error("the chat model is unavailable: {0}")]
     Unavailable(vlm_client::ChatError),
+    /// The observation's picture could not be made an image of the request.
     #[error("the observation's picture cannot be sent: {0}")]
     Picture(ChatErrorKind),
 }
@@ -285,13 +296,18 @@ pub fn goal_objects(goal: &ClassGoal) -> Vec<String> {
 /// What the model is shown on one turn.
 #[derive(Debug, Clone)]
 pub struct DirectInput<'a> {
+    /// The benchmark (`alfworld`, `virtualhome-eai`, ...): it decides the world's name and the
+    /// action forms.
     pub benchmark: &'a str,
     /// The task sentence.
     pub goal: &'a str,
+    /// The goal's object classes ([`goal_objects`]).
     pub objects: &'a [String],
     /// Previous actions with their outcomes, one a line.
     pub history: &'a [String],
+    /// The outcome of the last action ([`FIRST_FEEDBACK`] on the first turn).
     pub feedback: &'a str,
+    /// The current observation; its picture, where it has one, goes with the message.
     pub observation: &'a Observation,
 }
 
@@ -321,7 +337,9 @@ pub fn user_prompt(input: &DirectInput<'_>) -> String {
 /// The model's reply: an action, or DONE.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub enum DirectReply {
+    /// One command as the model wrote it, trimmed, not empty.
     Act(String),
+    /// `done` true, or the action `DONE`: the episode ends.
     Done,
 }
 

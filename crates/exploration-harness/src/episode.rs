@@ -60,6 +60,7 @@ use crate::phase1::{Adapter, Decision, Exploration, Frontier, Policy, PolicyUsag
 /// ŝ0 and β.
 #[derive(Debug, Clone, PartialEq, Eq, Serialize)]
 pub struct Handover {
+    /// ŝ0 as PDDL problem text, objects named by their PDDL names.
     pub problem: String,
     /// PDDL object name → the name the agent perceived.
     pub binding: BTreeMap<String, String>,
@@ -68,8 +69,11 @@ pub struct Handover {
 /// ŝ0 grounded: the problem, its transition model, and how its actions are spelled for Phase
 /// II's prompt (perceived names, never a hidden identifier).
 pub struct Grounded {
+    /// ŝ0's text and β.
     pub handover: Handover,
+    /// ŝ0 grounded in the benchmark's domain; plans are actions of its task.
     pub model: TransitionModel,
+    /// How each grounded action is written for the model, in perceived names.
     pub spelling: Spelling,
     /// N_plan: the environment steps the episode has left for the plan (its budget less the
     /// steps already taken; Appendix A.1, N_exp + N_plan is the budget). [`run_episode`] sets it
@@ -108,8 +112,12 @@ pub trait Handing: Adapter {
 /// What Phase II returned.
 #[derive(Debug, Clone, Default)]
 pub struct PhaseTwo {
+    /// The plan, actions of [`Grounded::model`]'s task in order; empty with `no_plan`.
     pub actions: Vec<ActionId>,
+    /// Model calls the planner made (chat requests, or a local model's forward passes; 0 for
+    /// A*).
     pub model_calls: u64,
+    /// Tokens the model generated, as the planner counts them (0 for A*).
     pub generated_tokens: u64,
     /// Anything the planner wants kept in the record (its stop reason, search figures).
     pub detail: serde_json::Value,
@@ -135,22 +143,31 @@ pub type Planner<'a> = dyn FnMut(&Grounded) -> Result<PhaseTwo, RunError> + 'a;
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "snake_case")]
 pub enum Attribution {
+    /// Phase I's state was wrong or short, or exploration left too few steps for a plan.
     Representation,
+    /// The state was right, but Phase II returned no plan.
     Search,
+    /// The state was right, but a plan step was not executed and the steps after it did not
+    /// reach the goal.
     Grounding,
+    /// Every plan step executed, and the goal check still fails.
     Goal,
 }
 
 /// Everything recorded about one episode.
 #[derive(Debug, Clone, Serialize)]
 pub struct Episode {
+    /// The environment's own goal check at the end.
     pub success: bool,
     /// Why Phase I stopped (`goal`, `ready`, `done`, `budget`, `refusals`, `policy error: ...`).
     pub phase1_stop: String,
+    /// Environment steps Phase I took, re-exploration included.
     pub phase1_steps: usize,
+    /// Phase I's decisions, re-exploration included.
     pub decisions: Vec<Decision>,
     /// Every environment step, Phase I's and the plan's.
     pub steps: Vec<StepRecord>,
+    /// The last hand-over; `None` when none could be made.
     pub handover: Option<Handover>,
     /// The plan as sent (perceived names), of the last hand-over.
     pub plan: Vec<String>,
@@ -160,25 +177,41 @@ pub struct Episode {
     /// The perceived instances hand-overs set aside (`reexplore`), in order.
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub set_aside: Vec<String>,
+    /// What went wrong first (`step 3 not executed: ...`, `no plan: ...`, `goal not reached`);
+    /// `None` on success.
     pub failure: Option<String>,
     /// Phase II's planner returned no plan (it ended without one, or could not run); not set
     /// when the hand-over itself failed.
     pub no_plan: bool,
     /// The plan went on with a step that could not be grounded ([`PhaseTwo::invalid_step`]).
     pub plan_invalid: bool,
+    /// The failure class (module documentation); `None` on success.
     pub attribution: Option<Attribution>,
+    /// Precision of F_τ against the hidden state, in [0, 1], as of Phase I's last stop; `None`
+    /// when F_τ holds no positive fact (in the judge's vocabulary) about an instance of a goal
+    /// class.
     pub precision: Option<f64>,
+    /// Recall of the goal's objects in F_τ, in [0, 1], as of Phase I's last stop; `None` when
+    /// the goal has no `object` symbol with a class.
     pub recall: Option<f64>,
+    /// What Phase I's policy spent in this episode.
     pub phase1_usage: PolicyUsage,
+    /// Phase II's model calls, summed over the hand-overs.
     pub phase2_calls: u64,
+    /// Phase II's generated tokens, summed over the hand-overs.
     pub phase2_tokens: u64,
+    /// [`PhaseTwo::detail`] of the last planner call; null when there was none.
     pub phase2_detail: serde_json::Value,
     /// The top of Phase II's search tree, of the last hand-over's search, whether or not it
     /// found a plan (`None` for planners that build no tree: A*, greedy decoding, sampling, a
     /// chat model).
     pub search_tree: Option<mcts::TreeSummary>,
+    /// Wall-clock milliseconds in Phase I, the reset and any re-exploration included.
     pub phase1_ms: f64,
+    /// Wall-clock milliseconds writing and grounding the hand-overs and running Phase II's
+    /// planner, summed.
     pub phase2_ms: f64,
+    /// Wall-clock milliseconds sending the plans' steps, summed.
     pub execute_ms: f64,
     /// The episode as the benchmark's own engine takes it, to replay there (the judge's
     /// [`household_sim::Judge::engine_script`]; evaluation only: no part of the agent sees it).
@@ -190,6 +223,7 @@ pub struct Episode {
 pub struct EpisodeConfig {
     /// Environment steps for the whole episode (ALFWorld 55, VirtualHome 20).
     pub budget: usize,
+    /// Replan from the belief after a refused plan step (module documentation).
     pub closed_loop: bool,
     /// How Phase I offers places to a model ([`crate::phase1::Frontier`]); `None`: every
     /// unvisited place.

@@ -16,13 +16,16 @@ use std::collections::{BTreeMap, BTreeSet};
 /// A ground literal over perceived names: `inReceptacle(mug 2, countertop 1)`, or its negation.
 #[derive(Debug, Clone, PartialEq, Eq, PartialOrd, Ord, Hash)]
 pub struct Fact {
+    /// The predicate as the perceiver writes it (`inReceptacle`, `opened`, `INSIDE`).
     pub predicate: String,
+    /// The arguments, each a perceived name (`mug 2`, `plate (1001)`).
     pub args: Vec<String>,
     /// `false`: the environment said the atom does not hold (`The fridge 1 is closed.`).
     pub holds: bool,
 }
 
 impl Fact {
+    /// `predicate` over `args`; `holds` false for the atom's negation.
     pub fn new(predicate: &str, args: &[&str], holds: bool) -> Fact {
         Fact { predicate: predicate.to_string(), args: args.iter().map(|a| a.to_string()).collect(), holds }
     }
@@ -36,7 +39,9 @@ impl Fact {
 /// A fact an observation stated, and at which step (0: the reset).
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct Percept {
+    /// What the observation stated.
     pub fact: Fact,
+    /// The environment step whose observation stated it (0: the reset's).
     pub step: usize,
 }
 
@@ -90,6 +95,8 @@ impl Belief {
         self.facts.get(&key).map(|&(holds, _)| holds)
     }
 
+    /// The hypotheses, sorted: proposals F_t did not decide when they were made, less those a
+    /// percept has since confirmed (one that a percept contradicts stays).
     pub fn hypotheses(&self) -> impl Iterator<Item = &Fact> {
         self.hypotheses.iter()
     }

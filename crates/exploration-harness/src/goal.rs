@@ -30,6 +30,8 @@ use pddl_syntax::{Condition, Term};
 /// A goal variable: the agent must find (or be) an instance for it.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct Symbol {
+    /// Unique within the goal: ALFWorld's variable without its `?` (`o`, `o_2`), VirtualHome's
+    /// class (`plate`, `plate_2`).
     pub name: String,
     /// The PDDL type (`object`, `receptacle`, ...) or, in VirtualHome, `object`/`character`.
     pub kind: String,
@@ -40,18 +42,25 @@ pub struct Symbol {
 /// One literal of the goal's conjunction, over symbols.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct ClassLiteral {
+    /// ALFWorld: the PDDL predicate as the goal writes it (`inReceptacle`), or `distinct`;
+    /// VirtualHome: the state or relation in lower case (`closed`, `inside`).
     pub predicate: String,
+    /// The arguments, each a [`Symbol::name`].
     pub args: Vec<String>,
+    /// The literal is negated (ALFWorld's `(not ...)`; never in VirtualHome).
     pub negated: bool,
 }
 
 /// G at class level.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct ClassGoal {
+    /// The annotation's benchmark (`alfworld`, `virtualhome-eai`, ...).
     pub benchmark: String,
     /// The task family (ALFWorld task type, EAI category, rearrangement family).
     pub family: String,
+    /// The goal's variables, in the order the annotation first names them.
     pub symbols: Vec<Symbol>,
+    /// The conjunction, in the annotation's order (ALFWorld: a repeated atom once).
     pub literals: Vec<ClassLiteral>,
     /// VirtualHome's required actions, in order, each `|`-separated alternatives.
     pub actions: Vec<String>,
@@ -63,12 +72,32 @@ pub struct ClassGoal {
 /// Why a goal annotation cannot be read.
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
 pub enum GoalError {
+    /// The formula is not what its benchmark writes (not PDDL or JSON, a field missing, a
+    /// variable unbound or used as a class), or the benchmark is unknown.
     #[error("{benchmark} goal: {message}")]
-    Unreadable { benchmark: String, message: String },
+    Unreadable {
+        /// The annotation's benchmark.
+        benchmark: String,
+        /// What could not be read.
+        message: String,
+    },
+    /// An ALFWorld goal uses a construct other than a conjunction of literals under `exists`.
     #[error("{benchmark} goal: `{construct}` is not a conjunction of literals under `exists`")]
-    Unsupported { benchmark: String, construct: String },
+    Unsupported {
+        /// The annotation's benchmark.
+        benchmark: String,
+        /// The construct: `or`, `imply`, `forall`, `=` outside `not`, or `not` of a non-atom.
+        construct: String,
+    },
+    /// The goal names an instance: an ALFWorld constant that is not a `...Type` class, or a
+    /// VirtualHome entry with an `id`, `from_id` or `to_id`.
     #[error("{benchmark} goal: `{name}` names an instance, not a class")]
-    Instance { benchmark: String, name: String },
+    Instance {
+        /// The annotation's benchmark.
+        benchmark: String,
+        /// The constant, or the VirtualHome key.
+        name: String,
+    },
 }
 
 /// Parses `annotation` by its benchmark's rule (see the module documentation).

@@ -151,7 +151,10 @@ impl SentenceTerms {
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
 #[error("{origin}: {message}")]
 pub struct OntologyError {
+    /// Where the fault is: the origin the caller gave, with `:line` (1-based) for
+    /// [`Ontology::from_text`].
     pub origin: String,
+    /// What is wrong there.
     pub message: String,
 }
 

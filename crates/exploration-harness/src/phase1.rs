@@ -40,11 +40,15 @@ pub const MAX_REFUSALS: usize = 3;
 /// `x` is a name as the agent perceived it (`fridge 1`, `dishwasher (1000)`).
 #[derive(Debug, Clone, PartialEq, Eq, PartialOrd, Ord, Hash)]
 pub enum Skill {
+    /// Go to the named place.
     Goto(String),
+    /// Open the named place.
     Open(String),
+    /// Close the named place.
     Close(String),
     /// The active-inspection macro (the adapter says what it does in its benchmark).
     Look,
+    /// End exploration; taken only when the sweep has no inspection left.
     Done,
 }
 
@@ -124,7 +128,9 @@ impl Skills {
 /// against 317 (docs/ARCHITECTURE.md).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct Frontier {
+    /// The most `Goto` skills offered at a time (the sweep's own place is kept beyond them).
     pub width: usize,
+    /// Narrow the offer while the model passes over the controller's first place.
     pub narrowing: bool,
 }
 
@@ -146,14 +152,19 @@ impl Frontier {
 pub struct StepRecord {
     /// `explore` or `plan`.
     pub phase: &'static str,
+    /// The command sent, in the environment's language.
     pub command: String,
+    /// Whether the environment executed it.
     pub executed: bool,
+    /// The text of the observation the environment answered with.
     pub observation: String,
 }
 
 /// One Phase I decision: the skill chosen, what it sent, and what U did with it.
 #[derive(Debug, Clone, PartialEq, Eq, Serialize)]
 pub struct Decision {
+    /// The skill taken, as [`Skill`] displays it: the sweep's where the harness overruled Done,
+    /// the one the model named where it was refused; empty when the reply could not be read.
     pub skill: String,
     /// Skills offered (K_t).
     pub offered: Vec<String>,
@@ -176,6 +187,7 @@ pub struct Decision {
 /// What the policy sees at step t (paper's Phase I prompt).
 #[derive(Debug, Clone)]
 pub struct PolicyInput<'a> {
+    /// The benchmark (`alfworld`, `virtualhome-eai`, ...).
     pub benchmark: &'a str,
     /// The task sentence.
     pub task: &'a str,
@@ -185,7 +197,9 @@ pub struct PolicyInput<'a> {
     pub belief: Vec<String>,
     /// Previous skills with their outcomes (`goto fridge 1 -> success`).
     pub history: Vec<String>,
+    /// K_t: the skills the policy may choose from.
     pub skills: &'a Skills,
+    /// The outcome of the previous decision, in words (`This is the first step.` at first).
     pub feedback: &'a str,
     /// The current observation (its text, and its picture where the environment renders one).
     pub observation: &'a Observation,
@@ -196,7 +210,10 @@ pub struct PolicyInput<'a> {
 pub struct PolicyReply {
     /// P_t: facts the model claims (never admitted without evidence).
     pub proposed: Vec<Fact>,
+    /// k_t: the skill chosen; one outside K_t is refused.
     pub skill: Skill,
+    /// done_t: the model deems exploration over. Read as [`Skill::Done`] only where `skill`
+    /// is not offered; otherwise `skill` is taken.
     pub done: bool,
 }
 
@@ -214,6 +231,7 @@ pub struct PolicyUsage {
     pub generated_tokens: u64,
     /// Observations shown to the model, and of them those with a picture.
     pub observations: u64,
+    /// Of those observations, the ones shown with a picture.
     pub images: u64,
     /// Calls answered from a reply cache (`vlm_client::CachedChat`) instead of the model: the
     /// tokens above count what the model generated when it first answered them.
@@ -262,6 +280,8 @@ pub struct RunError(pub String);
 pub trait Policy {
     /// `systematic`, `openai:URL`, `local:NAME`, ...
     fn name(&self) -> String;
+    /// f_φ: the reply to one step's input. [`PolicyError::Unreadable`] is refused like an
+    /// invalid skill; [`PolicyError::Run`] stops the run.
     fn choose(&mut self, input: &PolicyInput<'_>) -> Result<PolicyReply, PolicyError>;
     /// Usage summed over every call so far (a harness reading one episode takes the difference:
     /// [`PolicyUsage::since`]).
@@ -290,7 +310,9 @@ impl Policy for Systematic {
 /// R_t: what Phase I did so far.
 #[derive(Debug, Clone, Default)]
 pub struct Record {
+    /// Every decision, in order, refused and unreadable ones included.
     pub decisions: Vec<Decision>,
+    /// Every environment step, in order.
     pub steps: Vec<StepRecord>,
     /// Perceived instances a hand-over bound to a goal symbol where ŝ0 proved the goal
     /// unreachable (a goal fact about them that no sequence of actions can make true, e.g. a
@@ -347,7 +369,9 @@ pub trait Adapter {
 /// The result of Phase I.
 #[derive(Debug, Clone)]
 pub struct Exploration {
+    /// F_t, the hypotheses and the places, as exploration left them.
     pub belief: Belief,
+    /// R_t: the decisions and steps taken.
     pub record: Record,
     /// Why exploration stopped: `goal` (the environment's goal check holds: the episode is
     /// over), `ready`, `done` (the policy), `budget`, `refusals`, or `policy error: ...`.

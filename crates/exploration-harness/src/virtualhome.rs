@@ -226,7 +226,10 @@ const VERB_AFFORDANCES: &[(&str, &[&str])] = &[
 
 /// VirtualHome's side of Phase I and of the hand-over (module documentation).
 pub struct VirtualhomeAdapter {
+    /// F_str: VirtualHome's class-level ontology (EAI's properties, with the class-name
+    /// equivalences the task sentence is read with).
     pub ontology: Ontology,
+    /// The sound VirtualHome domain (`household_sim::vh_pddl::SOUND_DOMAIN`), parsed.
     pub domain: pddl_syntax::Domain,
     /// The last hand-over's problem and perceived task (for binding plan steps back).
     last: Option<(VhProblem, VirtualhomeTask)>,
@@ -243,6 +246,7 @@ impl std::fmt::Debug for VirtualhomeAdapter {
 }
 
 impl VirtualhomeAdapter {
+    /// An adapter with nothing perceived yet. Errors when the sound domain does not parse.
     pub fn new(ontology: Ontology) -> Result<VirtualhomeAdapter, String> {
         let domain = pddl_syntax::parse_domain(SOUND_DOMAIN).map_err(|e| format!("the sound VirtualHome domain: {e:?}"))?;
         Ok(VirtualhomeAdapter { ontology, domain, last: None, entered: BTreeSet::new(), context: std::cell::OnceCell::new() })

@@ -16,9 +16,13 @@ use crate::stats;
 /// One figure: its file name, title, caption, and SVG text.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct Figure {
+    /// The file name, e.g. `tokens.svg`.
     pub name: &'static str,
+    /// The title, plain text.
     pub title: String,
+    /// The caption, plain text.
     pub caption: String,
+    /// The whole SVG document.
     pub svg: String,
 }
 

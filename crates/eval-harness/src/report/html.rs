@@ -37,7 +37,9 @@ pub fn escape(text: &str) -> String {
 /// One page of the report: its path under the output folder (`/`-separated) and its text.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct Page {
+    /// The path under the output folder, `/`-separated, e.g. `episodes/<file stem>/<index>.html`.
     pub path: String,
+    /// The whole HTML document.
     pub html: String,
 }
 

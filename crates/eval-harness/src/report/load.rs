@@ -15,7 +15,9 @@ use crate::records::{RecordError, parse_records};
 /// One record and the line it was read from (1-based).
 #[derive(Debug, Clone, PartialEq)]
 pub struct Record {
+    /// The line of the file, 1-based.
     pub line: usize,
+    /// The record's JSON object, as read.
     pub fields: Map<String, Value>,
 }
 
@@ -28,6 +30,7 @@ pub struct RecordSet {
     pub config: Map<String, Value>,
     /// Its hash, the `config` field of every record.
     pub hash: String,
+    /// The records, in the file's order.
     pub records: Vec<Record>,
     /// What was left out, and why (a last line cut short by a run in progress or killed).
     pub warnings: Vec<String>,
