@@ -42,13 +42,18 @@ use std::path::{Path, PathBuf};
 )]
 #[strum(serialize_all = "kebab-case")]
 pub enum Benchmark {
+    /// ALFWorld's `valid_seen` games (`fixtures/alfworld/valid_seen`); name `alfworld-seen`.
     AlfworldSeen,
+    /// ALFWorld's `valid_train` games (`fixtures/alfworld/valid_train`); name `alfworld-train`.
     AlfworldTrain,
+    /// The Embodied Agent Interface VirtualHome problems and gold plans (`fixtures/virtualhome-eai`); name `virtualhome-eai`.
     VirtualhomeEai,
+    /// The IPC STRIPS sets, one folder per domain with `domain.pddl` and `instance-N.pddl` files (`fixtures/ipc`); name `ipc`.
     Ipc,
 }
 
 impl Benchmark {
+    /// Every benchmark, in declaration order.
     pub const ALL: &[Benchmark] = <Benchmark as strum::VariantArray>::VARIANTS;
 
     /// The command-line name: `alfworld-seen`, `alfworld-train`, `virtualhome-eai`, `ipc`.
@@ -56,29 +61,97 @@ impl Benchmark {
         self.into()
     }
 
+    /// The benchmark with command-line name `name` (see [`Benchmark::name`]); `None` for any other string.
     pub fn from_name(name: &str) -> Option<Benchmark> {
         name.parse().ok()
     }
 }
 
+/// Why a benchmark file could not be loaded; every variant names the file.
 #[derive(Debug, thiserror::Error)]
 pub enum DataError {
+    /// A file or folder could not be read (missing, unreadable, not a folder).
     #[error("cannot read {path}: {source}")]
-    Io { path: PathBuf, source: std::io::Error },
+    Io {
+        /// The file or folder.
+        path: PathBuf,
+        /// The operating system's error.
+        source: std::io::Error,
+    },
+    /// A JSON file (an ALFWorld `game.tw-pddl`, EAI's `gold_pddl_plan.json`) does not parse.
     #[error("{path}:{line}:{column}: not valid JSON: {message}")]
-    Json { path: PathBuf, line: usize, column: usize, message: String },
+    Json {
+        /// The file.
+        path: PathBuf,
+        /// 1-based line of the error.
+        line: usize,
+        /// 1-based column of the error.
+        column: usize,
+        /// `serde_json`'s message.
+        message: String,
+    },
+    /// A JSON file parses but lacks a field, or the field has the wrong type.
     #[error("{path}: field `{field}` is missing or is not {expected}")]
-    Field { path: PathBuf, field: &'static str, expected: &'static str },
+    Field {
+        /// The file.
+        path: PathBuf,
+        /// The field's JSON key (`"gold plan"` for an entry of `gold_pddl_plan.json`).
+        field: &'static str,
+        /// What the field should have been, e.g. `a list of strings`.
+        expected: &'static str,
+    },
+    /// A gold plan whose problem file is missing. No loader in this crate returns it at present.
     #[error("{path}: no problem file for gold plan `{id}`")]
-    MissingProblem { path: PathBuf, id: String },
+    MissingProblem {
+        /// The gold-plan file.
+        path: PathBuf,
+        /// The task id of the plan.
+        id: String,
+    },
+    /// A subset file lists a task id the benchmark does not have.
     #[error("{path}:{line}: no task `{id}` in {benchmark}")]
-    UnknownSubsetTask { path: PathBuf, line: usize, id: String, benchmark: &'static str },
+    UnknownSubsetTask {
+        /// The subset file.
+        path: PathBuf,
+        /// 1-based line of the id.
+        line: usize,
+        /// The id as listed (trimmed).
+        id: String,
+        /// The benchmark's command-line name ([`Benchmark::name`]).
+        benchmark: &'static str,
+    },
+    /// A subset name with no `subsets/<name>.txt` file in the fixtures.
     #[error("no subset {name} (there is no {path}); the subsets: {known}")]
-    UnknownSubset { name: String, path: PathBuf, known: String },
+    UnknownSubset {
+        /// The name asked for (the file stem).
+        name: String,
+        /// The file that does not exist.
+        path: PathBuf,
+        /// The subsets that do exist, comma-separated and sorted.
+        known: String,
+    },
+    /// A subset file lists the same task id twice.
     #[error("{path}:{line}: task `{id}` is listed twice")]
-    DuplicateSubsetTask { path: PathBuf, line: usize, id: String },
+    DuplicateSubsetTask {
+        /// The subset file.
+        path: PathBuf,
+        /// 1-based line of the second listing.
+        line: usize,
+        /// The repeated id.
+        id: String,
+    },
+    /// A text file holds a byte sequence that is not UTF-8.
     #[error("{path}:{line}:{column}: not UTF-8 text (byte 0x{byte:02x})")]
-    NotUtf8 { path: PathBuf, line: usize, column: usize, byte: u8 },
+    NotUtf8 {
+        /// The file.
+        path: PathBuf,
+        /// 1-based line of the first invalid byte.
+        line: usize,
+        /// 1-based column of the first invalid byte, in characters.
+        column: usize,
+        /// The first invalid byte.
+        byte: u8,
+    },
 }
 
 /// The text of the file at `path`: UTF-8, without a byte-order mark (which editors on Windows
@@ -117,23 +190,33 @@ fn read_json(path: &Path) -> Result<serde_json::Value, DataError> {
 pub struct TaskFiles {
     /// Stable id: the ALFWorld game folder (`<family>/<trial>`), the EAI problem id, or `<domain>/instance-N`.
     pub id: String,
+    /// The benchmark the task was loaded from.
     pub benchmark: Benchmark,
     /// Where the domain text came from (for `file:line:column` diagnostics).
     pub domain_path: PathBuf,
+    /// The PDDL domain text (shared by every task of an EAI or IPC domain).
     pub domain: String,
+    /// Where the problem text came from (the game file for ALFWorld, whose PDDL is embedded).
     pub problem_path: PathBuf,
+    /// The PDDL problem text.
     pub problem: String,
+    /// What the benchmark adds beyond the PDDL.
     pub extra: Extra,
 }
 
 /// What a benchmark adds to the PDDL.
 #[derive(Debug, Clone)]
 pub enum Extra {
+    /// Nothing: an IPC task.
     None,
+    /// An ALFWorld game's TextWorld grammar and expert walkthrough.
     Alfworld(AlfworldGame),
-    /// EAI gold PDDL plan (`"walk_towards character shower"` per step), when the task has one.
+    /// An EAI VirtualHome task's category and gold plan.
     Virtualhome {
+        /// The task's category: the name of its folder under `problem_pddl/`.
         category: String,
+        /// EAI gold PDDL plan (`"walk_towards character shower"` per step); `None` when
+        /// `gold_pddl_plan.json` has no entry for the task.
         gold_plan: Option<Vec<String>>,
     },
 }
@@ -227,6 +310,7 @@ impl Fixtures {
         }
     }
 
+    /// The root folder, as given; not checked to exist.
     pub fn root(&self) -> &Path {
         &self.root
     }

@@ -1,5 +1,6 @@
 //! Grounding time (parse + check + ground) on real fixture problems. The comparison with
 //! Fast Downward's translator on the same files is `cargo xtask bench ground`.
+#![allow(missing_docs, reason = "criterion_group! defines a public function that cannot carry a doc comment")]
 
 use benchmark_data::{Benchmark, TaskFiles, load};
 use criterion::{Criterion, criterion_group, criterion_main};

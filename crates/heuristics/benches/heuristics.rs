@@ -2,6 +2,7 @@
 //! EAI gold plans, and along random walks in IPC tasks. The comparison with a reference on the
 //! same states is `cargo xtask bench heuristic` (pyperplan's evaluations of the same states,
 //! in one run), and with Fast Downward's search on the same tasks `cargo xtask bench plan`.
+#![allow(missing_docs, reason = "criterion_group! defines a public function that cannot carry a doc comment")]
 
 use benchmark_data::{Benchmark, Extra, TaskFiles, load};
 use criterion::{Criterion, criterion_group, criterion_main};

@@ -83,15 +83,23 @@ impl<H: Heuristic + ?Sized> Heuristic for Box<H> {
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, strum::EnumString, strum::IntoStaticStr, strum::VariantNames, strum::VariantArray)]
 #[strum(serialize_all = "lowercase")]
 pub enum HeuristicName {
+    /// [`Blind`], `blind`.
     Blind,
+    /// [`GoalCount`], `goalcount`.
     Goalcount,
+    /// [`HMax`], `hmax`.
     Hmax,
+    /// [`HAdd`], `hadd`.
     Hadd,
+    /// [`HFF`], `ff`.
     Ff,
+    /// [`LmCut`], `lmcut`.
     Lmcut,
 }
 
 impl HeuristicName {
+    /// The command-line name (`blind`, `goalcount`, `hmax`, `hadd`, `ff`, `lmcut`), which is also
+    /// what the built heuristic's [`Heuristic::name`] returns.
     pub fn name(self) -> &'static str {
         self.into()
     }

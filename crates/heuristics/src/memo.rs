@@ -37,10 +37,12 @@ impl<H: Heuristic> Memo<H> {
     /// Default capacity: about 100 MB of states on the benchmarks' tasks.
     pub const DEFAULT_CAPACITY: usize = 1 << 19;
 
+    /// Wraps `inner` with a cache of [`Self::DEFAULT_CAPACITY`] states.
     pub fn new(inner: H) -> Memo<H> {
         Memo::with_capacity(inner, Self::DEFAULT_CAPACITY)
     }
 
+    /// Wraps `inner` with a cache of at most `capacity` states (0 is taken as 1).
     pub fn with_capacity(inner: H, capacity: usize) -> Memo<H> {
         Memo { inner, cache: FxHashMap::default(), capacity: capacity.max(1), preferred: Vec::new(), hits: 0, misses: 0 }
     }
@@ -50,6 +52,8 @@ impl<H: Heuristic> Memo<H> {
         (self.hits, self.misses)
     }
 
+    /// The wrapped heuristic. Its own state (such as its preferred operators) is that of its
+    /// last real evaluation, not of a later cache hit.
     pub fn inner(&self) -> &H {
         &self.inner
     }

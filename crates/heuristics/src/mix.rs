@@ -18,10 +18,14 @@ impl std::fmt::Debug for WeightedMix<'_> {
 }
 
 impl<'m> WeightedMix<'m> {
+    /// A mix without components: [`Self::evaluate`] gives `Some(0.0)` until [`Self::with`]
+    /// adds one.
     pub fn new() -> WeightedMix<'m> {
         WeightedMix { parts: Vec::new() }
     }
 
+    /// Adds `heuristic` with `weight`. Weights are relative: the value is divided by their sum,
+    /// and is 0 where that sum is not positive.
     pub fn with(mut self, weight: f64, heuristic: impl Heuristic + 'm) -> WeightedMix<'m> {
         self.parts.push((weight, Box::new(heuristic)));
         self

@@ -68,16 +68,24 @@ use transition_model::{State, TransitionModel};
 use crate::relaxed::RelaxedTask;
 use crate::{Heuristic, INFINITE};
 
+/// How [`Exploration::run`] combines an operator's precondition costs.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Combine {
+    /// h_max: an operator costs its costliest precondition plus its own cost.
     Max,
+    /// h_add: an operator costs the sum of its preconditions plus its own cost; also records
+    /// each fact's best supporter ([`Exploration::supporter`]).
     Add,
 }
 
 /// The shared exploration state.
 #[derive(Debug, Clone)]
 pub struct Exploration {
+    /// The delete relaxation explored, built by [`Exploration::new`].
     pub relaxed: RelaxedTask,
+    /// Per relaxed fact, its cost from the last run or [`Exploration::lower`] ([`INFINITE`]
+    /// where not reached). A run without `costs` stops once the goal is final, so facts
+    /// costlier than the goal may keep tentative values.
     pub fact_cost: Vec<u32>,
     /// Best supporter of each fact (an operator index), `u32::MAX` for state facts; kept by
     /// `Combine::Add` explorations only.
@@ -105,6 +113,8 @@ pub struct Exploration {
 }
 
 impl Exploration {
+    /// Builds `task`'s delete relaxation ([`RelaxedTask::new`]) and buffers sized for it;
+    /// [`Exploration::track_supported`] is off.
     pub fn new(task: &Task) -> Exploration {
         let relaxed = RelaxedTask::new(task);
         let facts = relaxed.num_facts;

@@ -40,23 +40,40 @@ pub const NO_ADD: u32 = u32::MAX;
 /// [`RelaxedTask::second_add`].
 pub const TWO_ADDS: u32 = 1 << 31;
 
+/// One relaxed operator: an action's unconditional part, one of its conditional effects, or a
+/// zero-cost clause or goal achiever. Its preconditions and adds are ranges of
+/// [`RelaxedTask::pre`] and [`RelaxedTask::add`].
 #[derive(Debug, Clone, Copy)]
 pub struct RelaxedOp {
+    /// Start of its preconditions in [`RelaxedTask::pre`].
     pub pre_start: u32,
+    /// End (exclusive) of its preconditions in [`RelaxedTask::pre`].
     pub pre_end: u32,
+    /// Start of its add effects in [`RelaxedTask::add`].
     pub add_start: u32,
+    /// End (exclusive) of its add effects in [`RelaxedTask::add`].
     pub add_end: u32,
+    /// The action's cost (0 for clause and goal achievers).
     pub cost: u32,
     /// The action it comes from, or [`NO_ACTION`].
     pub action: u32,
 }
 
+/// The delete relaxation of a [`Task`] (see the module docs): operators over relaxed facts
+/// (`u32` ids; those below [`RelaxedTask::task_facts`] are the task's [`FactId`]s), with the
+/// per-fact indexes the explorations walk.
 #[derive(Debug, Clone)]
 pub struct RelaxedTask {
-    /// Task facts, then auxiliary clause facts, then the goal fact.
+    /// Number of relaxed facts: task facts, then negation facts, then auxiliary clause facts and
+    /// the goal fact (a clause first met in the goal gets an id after the goal fact's).
     pub num_facts: usize,
+    /// The operators; an operator id is an index here.
     pub ops: Vec<RelaxedOp>,
+    /// Every operator's preconditions (relaxed fact ids), concatenated; [`RelaxedOp::pre`]
+    /// gives one operator's.
     pub pre: Vec<u32>,
+    /// Every operator's add effects (relaxed fact ids, each operator's sorted and without
+    /// duplicates), concatenated; [`RelaxedOp::add`] gives one operator's.
     pub add: Vec<u32>,
     /// Operators that have each fact as a precondition.
     pub preconditions_of: FactIndex,
@@ -75,6 +92,8 @@ pub struct RelaxedTask {
     pub second_add: Vec<u32>,
     /// Operators without preconditions.
     pub no_pre: Vec<u32>,
+    /// The auxiliary goal fact: reached by a zero-cost operator per goal disjunct, so it holds
+    /// where any disjunct does.
     pub goal: u32,
     /// Number of real task facts (state facts have ids below this).
     pub task_facts: usize,
@@ -89,11 +108,13 @@ impl RelaxedOp {
         self.pre_start == self.pre_end
     }
 
+    /// Its preconditions, relaxed fact ids; `task` must be the relaxed task it belongs to.
     #[inline]
     pub fn pre<'a>(&self, task: &'a RelaxedTask) -> &'a [u32] {
         &task.pre[self.pre_start as usize..self.pre_end as usize]
     }
 
+    /// Its add effects, relaxed fact ids; `task` must be the relaxed task it belongs to.
     #[inline]
     pub fn add<'a>(&self, task: &'a RelaxedTask) -> &'a [u32] {
         &task.add[self.add_start as usize..self.add_end as usize]
@@ -133,6 +154,8 @@ impl RelaxedTask {
             .chain(self.negations.iter().filter(|&&(fact, _)| !state.contains(FactId(fact))).map(|&(_, negation)| negation))
     }
 
+    /// The relaxation of `task`, keeping only the operators and add effects relevant to the
+    /// goal (see the module docs).
     pub fn new(task: &Task) -> RelaxedTask {
         let mut builder = Builder {
             relaxed: RelaxedTask {
@@ -192,6 +215,8 @@ impl RelaxedTask {
         self.preconditions_of.of(fact)
     }
 
+    /// The action operator `op` comes from; `None` for clause and goal achievers. Panics if
+    /// `op` is not an operator id.
     pub fn action_of(&self, op: u32) -> Option<ActionId> {
         let action = self.ops[op as usize].action;
         (action != NO_ACTION).then_some(ActionId(action))

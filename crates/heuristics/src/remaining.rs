@@ -28,6 +28,9 @@ pub struct RemainingPlanCost<'m> {
 }
 
 impl<'m> RemainingPlanCost<'m> {
+    /// The heuristic on `model`, each search limited to `max_expansions` expanded states (a
+    /// budget that gives the same values on any machine). The goal-relevant facts are computed
+    /// once here and shared by every search.
     pub fn new(model: &'m TransitionModel, max_expansions: u64) -> RemainingPlanCost<'m> {
         let mut config = SearchConfig::new(Algorithm::LazyGbfs);
         config.preferred_operators = true;

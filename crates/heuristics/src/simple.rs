@@ -13,6 +13,8 @@ pub struct Blind<'m> {
 }
 
 impl<'m> Blind<'m> {
+    /// Blind on `model`; the cheapest action cost is read once here (0 for a task without
+    /// actions). A task whose goal has no disjunct (it can never hold) is a dead end everywhere.
     pub fn new(model: &'m TransitionModel) -> Blind<'m> {
         let min_cost = model.task().actions.iter().map(|a| a.cost).min().unwrap_or(0);
         Blind { model, min_cost }
@@ -40,6 +42,7 @@ pub struct GoalCount<'m> {
 }
 
 impl<'m> GoalCount<'m> {
+    /// Goal count on `model`'s goal. A goal without disjuncts makes every state a dead end.
     pub fn new(model: &'m TransitionModel) -> GoalCount<'m> {
         GoalCount { task: model.task() }
     }

@@ -29,7 +29,7 @@ fn reference() -> BTreeMap<(String, String), BTreeMap<String, u32>> {
     out
 }
 
-pub fn model(files: &benchmark_data::TaskFiles) -> TransitionModel {
+fn model(files: &benchmark_data::TaskFiles) -> TransitionModel {
     let domain = pddl_syntax::parse_domain(&files.domain).expect("domain");
     let problem = pddl_syntax::parse_problem(&files.problem).expect("problem");
     TransitionModel::new(grounding::ground(&domain, &problem).expect("grounds"))

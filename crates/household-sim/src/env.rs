@@ -8,6 +8,7 @@ use std::fmt;
 pub struct Image {
     /// `image/png` or `image/jpeg`.
     pub mime: &'static str,
+    /// The encoded file, as `mime` says.
     pub bytes: Vec<u8>,
 }
 
@@ -21,11 +22,14 @@ impl fmt::Debug for Image {
 /// environment renders one, a picture.
 #[derive(Debug, Clone, PartialEq, Eq, Default)]
 pub struct Observation {
+    /// What the environment says, as its engine writes it.
     pub text: String,
+    /// The rendered view, where the environment renders one; the environments of this crate render none.
     pub image: Option<Image>,
 }
 
 impl Observation {
+    /// An observation with `text` and no image.
     pub fn text(text: impl Into<String>) -> Observation {
         Observation { text: text.into(), image: None }
     }
@@ -38,10 +42,15 @@ pub enum Event {
     /// The command named an action the engine could execute, and it did.
     Executed,
     /// The command was not executed; the state is unchanged. `reason` is the engine's answer.
-    NotExecuted { reason: String },
+    NotExecuted {
+        /// The engine's answer ("Nothing happens." in ALFWorld; the executor's or the adapter's
+        /// message in VirtualHome).
+        reason: String,
+    },
 }
 
 impl Event {
+    /// Whether this is [`Event::Executed`].
     pub fn executed(&self) -> bool {
         matches!(self, Event::Executed)
     }
@@ -50,7 +59,9 @@ impl Event {
 /// The result of one [`Environment::step`].
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct StepResult {
+    /// What the agent perceives after the command.
     pub observation: Observation,
+    /// Whether the command was carried out.
     pub event: Event,
 }
 
@@ -100,7 +111,11 @@ pub trait Environment {
 /// them (ALFWorld display names such as `mug 1`; VirtualHome `class (id)`).
 #[derive(Debug, Clone, PartialEq, Eq, PartialOrd, Ord, Hash)]
 pub struct JudgeAtom {
+    /// The predicate: a PDDL predicate in ALFWorld; a node state, an edge relation or
+    /// `IN_ROOM` in VirtualHome.
     pub predicate: String,
+    /// The arguments in the predicate's order (ALFWorld `mug 1`, or the object's id where the game
+    /// gives it no display name; VirtualHome `plate (1001)`).
     pub args: Vec<String>,
 }
 

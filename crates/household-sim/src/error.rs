@@ -3,25 +3,80 @@
 
 use std::path::PathBuf;
 
+/// Why an ALFWorld game could not be loaded ([`crate::AlfworldEnv::from_game_file`],
+/// [`crate::AlfworldEnv::from_game_json`]).
 #[derive(Debug, thiserror::Error)]
 pub enum EnvError {
+    /// The game file could not be read, or is not UTF-8 text.
     #[error("cannot read {}: {source}", path.display())]
     Io {
+        /// The `game.tw-pddl` file.
         path: PathBuf,
+        /// The operating system's error.
         #[source]
         source: std::io::Error,
     },
+    /// The game file is not valid JSON.
     #[error("{path}:{line}:{column}: not valid JSON: {message}")]
-    Json { path: String, line: usize, column: usize, message: String },
+    Json {
+        /// The game's name in errors (the file path, or the `source` given to `from_game_json`).
+        path: String,
+        /// 1-based line of the error.
+        line: usize,
+        /// 1-based column of the error.
+        column: usize,
+        /// `serde_json`'s message.
+        message: String,
+    },
+    /// A field the game needs (`pddl_domain`, `pddl_problem`, `grammar`) is missing or is not a string.
     #[error("{path}: the game has no string field `{key}`")]
-    MissingKey { path: String, key: String },
+    MissingKey {
+        /// The game's name in errors.
+        path: String,
+        /// The field's JSON key.
+        key: String,
+    },
+    /// A field that is present has the wrong type (a `walkthrough` that is not a list of strings).
     #[error("{path}: the game's `{key}` field is not {expected}")]
-    BadField { path: String, key: String, expected: String },
+    BadField {
+        /// The game's name in errors.
+        path: String,
+        /// The field's JSON key.
+        key: String,
+        /// What the field should have been, e.g. `a list of strings`.
+        expected: String,
+    },
+    /// The domain or problem does not parse, or names something it does not declare.
     #[error("{path}: the `{field}` field is not valid PDDL:\n{diagnostics}")]
-    Pddl { path: String, field: String, diagnostics: String },
+    Pddl {
+        /// The game's name in errors.
+        path: String,
+        /// `pddl_domain` or `pddl_problem`: the field of the first error.
+        field: String,
+        /// The rendered diagnostics, one or more lines, each at its line and column in its field.
+        diagnostics: String,
+    },
+    /// The PDDL parses and checks but cannot be grounded.
     /// `message` names the game file, its field and the line and column there.
     #[error("cannot ground the game's PDDL: {message}")]
-    Grounding { path: String, message: String },
+    Grounding {
+        /// The game's name in errors.
+        path: String,
+        /// The grounder's rendered error.
+        message: String,
+    },
+    /// The TextWorld grammar does not parse, names a symbol it does not define, or has no
+    /// `action` block for one of the domain's actions.
     #[error("{path}: the `grammar` field, line {line}, column {column}: {message}")]
-    Grammar { path: String, line: usize, column: usize, message: String },
+    Grammar {
+        /// The game's name in errors.
+        path: String,
+        /// 1-based line in the grammar text; 1 for errors found after parsing (unknown symbols,
+        /// missing action blocks), which carry no position.
+        line: usize,
+        /// 1-based column, in characters; 1 for errors found after parsing.
+        column: usize,
+        /// What is wrong.
+        message: String,
+    },
 }

@@ -16,6 +16,7 @@ pub struct PythonRandom {
 }
 
 impl PythonRandom {
+    /// The generator `random.Random(seed)` makes, for a non-negative integer seed.
     pub fn new(seed: u64) -> PythonRandom {
         let mut key: Vec<u32> = Vec::new();
         let mut rest = seed;

@@ -65,6 +65,7 @@ impl LocalChat {
         Ok(LocalChat { model, factory, name: name.to_string(), usage: Usage::default(), fast_forward: true })
     }
 
+    /// The model that answers (its prefix cache and usage counters included).
     pub fn model(&self) -> &LocalModel {
         &self.model
     }

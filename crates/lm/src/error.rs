@@ -9,7 +9,9 @@ pub enum LmError {
     /// A model or tokenizer file could not be read.
     #[error("{}: cannot read: {source}", path.display())]
     Io {
+        /// The file.
         path: PathBuf,
+        /// The operating system's error.
         #[source]
         source: std::io::Error,
     },
@@ -18,31 +20,72 @@ pub enum LmError {
     MalformedGguf(String),
     /// A metadata key the model needs is absent.
     #[error("GGUF metadata `{key}` is missing")]
-    MissingMetadata { key: String },
+    MissingMetadata {
+        /// The key, e.g. `llama.block_count`.
+        key: String,
+    },
     /// A metadata key has a value of the wrong type or out of range.
     #[error("GGUF metadata `{key}`: expected {expected}, found {found}")]
-    BadMetadata { key: String, expected: &'static str, found: String },
+    BadMetadata {
+        /// The key, with `[i]` for an array item.
+        key: String,
+        /// What the key should hold.
+        expected: &'static str,
+        /// What it holds, described (long strings cut).
+        found: String,
+    },
     /// A weight tensor the architecture needs is absent.
     #[error("GGUF tensor `{name}` is missing")]
-    MissingTensor { name: String },
+    MissingTensor {
+        /// The tensor's GGUF name, e.g. `blk.0.attn_q.weight`.
+        name: String,
+    },
     /// A weight tensor has the wrong shape for the configuration in the metadata.
     #[error("GGUF tensor `{name}` has shape {found:?}, the metadata implies {expected:?}")]
-    BadTensorShape { name: String, expected: Vec<usize>, found: Vec<usize> },
+    BadTensorShape {
+        /// The tensor's GGUF name.
+        name: String,
+        /// The shape the metadata implies.
+        expected: Vec<usize>,
+        /// The shape in the file.
+        found: Vec<usize>,
+    },
     /// `general.architecture` names a model family this crate does not run.
     #[error("unsupported architecture `{0}` in `general.architecture` (supported: llama, qwen2, qwen3)")]
     UnsupportedArchitecture(String),
     /// The tokenizer described by the metadata or `tokenizer.json` is not one this crate builds
     /// (`key` names the field).
     #[error("unsupported tokenizer: `{key}` = `{value}` ({hint})")]
-    UnsupportedTokenizer { key: &'static str, value: String, hint: &'static str },
+    UnsupportedTokenizer {
+        /// The field, e.g. `tokenizer.ggml.pre` or `model.type`.
+        key: &'static str,
+        /// Its value (a `pre_tokenizer` section cut to 300 characters).
+        value: String,
+        /// What is supported instead.
+        hint: &'static str,
+    },
     /// A tokenizer file (`tokenizer.json`, `tokenizer_config.json`) that is not JSON, or not JSON
     /// of the expected shape (serde's message, at the place it stopped).
     #[error("{}:{line}:{column}: {message}", path.display())]
-    MalformedJson { path: PathBuf, line: usize, column: usize, message: String },
+    MalformedJson {
+        /// The file (its bare name when the text was given without one).
+        path: PathBuf,
+        /// Where serde stopped: the line, from 1.
+        line: usize,
+        /// Where serde stopped: the column, from 1.
+        column: usize,
+        /// serde's message, without its position.
+        message: String,
+    },
     /// A tokenizer file whose content is inconsistent: a special token it names is not in the
     /// vocabulary, a token is not a byte-level piece, no end-of-sequence token can be found.
     #[error("{}: {message}", path.display())]
-    BadTokenizerFile { path: PathBuf, message: String },
+    BadTokenizerFile {
+        /// The file at fault (`tokenizer.json` or `tokenizer_config.json`).
+        path: PathBuf,
+        /// What is inconsistent.
+        message: String,
+    },
     /// The tokenizer library rejected the vocabulary or an input.
     #[error("tokenizer: {0}")]
     Tokenizer(String),
@@ -54,7 +97,12 @@ pub enum LmError {
     ChatTemplate(String),
     /// A token id outside the vocabulary.
     #[error("token id {id} is outside the vocabulary of {size} tokens")]
-    TokenOutOfRange { id: u32, size: usize },
+    TokenOutOfRange {
+        /// The id given.
+        id: u32,
+        /// Tokens in the vocabulary: valid ids are `0..size`.
+        size: usize,
+    },
     /// A next-token distribution needs at least one token of context.
     #[error("empty token sequence: a next-token distribution needs at least one token")]
     EmptySequence,
@@ -63,7 +111,12 @@ pub enum LmError {
     NoAllowedTokens,
     /// The sequence is longer than the model's context.
     #[error("a sequence of {len} tokens exceeds the context length of {max}")]
-    ContextOverflow { len: usize, max: usize },
+    ContextOverflow {
+        /// Tokens in the sequence.
+        len: usize,
+        /// The model's context length in tokens.
+        max: usize,
+    },
     /// An error inside candle's tensor code.
     #[error("candle: {}", candle_message(.0))]
     Candle(#[from] candle_core::Error),
@@ -85,9 +138,13 @@ pub(crate) fn candle_message(error: &candle_core::Error) -> String {
 #[derive(Debug, thiserror::Error)]
 #[error("{url}: {kind} (after {attempts} attempt(s), {:.1} s)", elapsed.as_secs_f64())]
 pub struct HttpError {
+    /// What failed.
     pub kind: HttpErrorKind,
+    /// The endpoint asked (the base URL, for a URL refused before sending).
     pub url: String,
+    /// Attempts made, retries included (0 when the request was refused before sending).
     pub attempts: u32,
+    /// Time from the start of the first attempt to the failure, waits between attempts included.
     pub elapsed: Duration,
 }
 
@@ -108,7 +165,14 @@ pub enum HttpErrorKind {
     Io(String),
     /// The server answered with a non-2xx status; `retry_after` is its `Retry-After`.
     #[error("HTTP status {status}: {body}")]
-    Status { status: u16, body: String, retry_after: Option<Duration> },
+    Status {
+        /// The HTTP status code.
+        status: u16,
+        /// The body's first 500 characters (invalid UTF-8 replaced).
+        body: String,
+        /// The wait the `Retry-After` header asks for, where it is there and readable.
+        retry_after: Option<Duration>,
+    },
     /// The body is not JSON, or not the JSON of a completions response.
     #[error("malformed JSON response: {0}")]
     MalformedJson(String),

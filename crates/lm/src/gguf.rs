@@ -12,7 +12,9 @@ use crate::error::{LmError, candle_message};
 /// An open GGUF file: its header (metadata + tensor table) and a reader for the weights.
 #[derive(Debug)]
 pub struct GgufFile {
+    /// The header: metadata, and the tensor table (names, shapes, types, offsets).
     pub content: Content,
+    /// The open file, from which the tensors' data are read.
     pub reader: BufReader<File>,
 }
 
@@ -49,10 +51,12 @@ pub struct Metadata<'a> {
 }
 
 impl<'a> Metadata<'a> {
+    /// Typed access to `content`'s metadata.
     pub fn new(content: &'a Content) -> Self {
         Metadata { content }
     }
 
+    /// The raw value of `key`; `None` where it is absent.
     pub fn get(&self, key: &str) -> Option<&'a Value> {
         self.content.metadata.get(key)
     }
@@ -71,6 +75,8 @@ impl<'a> Metadata<'a> {
         })
     }
 
+    /// As [`Self::integer`], or `default` where `key` is absent (a value of the wrong type is
+    /// still an error).
     pub fn integer_or(&self, key: &str, default: u64) -> Result<u64, LmError> {
         if self.get(key).is_some() { self.integer(key) } else { Ok(default) }
     }
@@ -84,10 +90,13 @@ impl<'a> Metadata<'a> {
         Ok(n as usize)
     }
 
+    /// As [`Self::dimension`], or `default` where `key` is absent (a bad value is still an error).
     pub fn dimension_or(&self, key: &str, default: usize) -> Result<usize, LmError> {
         if self.get(key).is_some() { self.dimension(key) } else { Ok(default) }
     }
 
+    /// A finite number, stored as a float or an integer of any width; NaN and infinities are
+    /// [`LmError::BadMetadata`].
     pub fn float(&self, key: &str) -> Result<f64, LmError> {
         let value = self.required(key)?;
         let x = match value {
@@ -104,10 +113,13 @@ impl<'a> Metadata<'a> {
         Ok(x)
     }
 
+    /// As [`Self::float`], or `default` where `key` is absent (a bad value is still an error).
     pub fn float_or(&self, key: &str, default: f64) -> Result<f64, LmError> {
         if self.get(key).is_some() { self.float(key) } else { Ok(default) }
     }
 
+    /// A string; [`LmError::MissingMetadata`] where absent, [`LmError::BadMetadata`] for
+    /// another type.
     pub fn string(&self, key: &str) -> Result<&'a str, LmError> {
         match self.required(key)? {
             Value::String(s) => Ok(s),
@@ -115,10 +127,12 @@ impl<'a> Metadata<'a> {
         }
     }
 
+    /// As [`Self::string`], or `None` where `key` is absent.
     pub fn optional_string(&self, key: &str) -> Result<Option<&'a str>, LmError> {
         if self.get(key).is_some() { self.string(key).map(Some) } else { Ok(None) }
     }
 
+    /// A boolean, or `default` where `key` is absent; another type is [`LmError::BadMetadata`].
     pub fn bool_or(&self, key: &str, default: bool) -> Result<bool, LmError> {
         match self.get(key) {
             None => Ok(default),
@@ -127,6 +141,7 @@ impl<'a> Metadata<'a> {
         }
     }
 
+    /// An array of strings; an item of another type is named `key[i]` in the error.
     pub fn string_array(&self, key: &str) -> Result<Vec<&'a str>, LmError> {
         let items = match self.required(key)? {
             Value::Array(items) => items,
@@ -142,6 +157,8 @@ impl<'a> Metadata<'a> {
             .collect()
     }
 
+    /// An array of integers of any width that fit an `i64`; an item that does not is named
+    /// `key[i]` in the error.
     pub fn integer_array(&self, key: &str) -> Result<Vec<i64>, LmError> {
         let items = match self.required(key)? {
             Value::Array(items) => items,
@@ -160,8 +177,8 @@ impl<'a> Metadata<'a> {
             .collect()
     }
 
-    /// The tensor names and shapes in the file, in GGUF order of dimensions reversed (rows first),
-    /// as candle reports them.
+    /// The shape of the tensor `name`, in GGUF's order of dimensions reversed (rows first), as
+    /// candle reports it; `None` where the file has no such tensor.
     pub fn tensor_shape(&self, name: &str) -> Option<Vec<usize>> {
         self.content.tensor_infos.get(name).map(|info| info.shape.dims().to_vec())
     }

@@ -165,10 +165,12 @@ impl LocalModel {
         self.store.rows.len() * std::mem::size_of::<f32>()
     }
 
+    /// The weights, to share with another model ([`LocalModel::with_shared_weights`]).
     pub fn weights(&self) -> &Arc<LlamaModel> {
         &self.model
     }
 
+    /// The tokenizer, to share with another model ([`LocalModel::with_shared_weights`]).
     pub fn shared_tokenizer(&self) -> &Arc<Tokenizer> {
         &self.tokenizer
     }

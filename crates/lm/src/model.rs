@@ -14,7 +14,12 @@ pub enum Logprobs {
     Dense(Vec<f32>),
     /// The top tokens of a served model, by descending log p; tokens not listed share what is
     /// left of the mass, `1 − Σ p`.
-    Sparse { top: Vec<(TokenId, f32)>, vocabulary_size: usize },
+    Sparse {
+        /// The listed tokens with their log p, each once, most likely first.
+        top: Vec<(TokenId, f32)>,
+        /// Tokens in the whole vocabulary, listed or not.
+        vocabulary_size: usize,
+    },
 }
 
 /// A prior over the tokens a constraint allows, renormalised over them (paper Eq. 8):
@@ -104,6 +109,7 @@ impl Logprobs {
         Logprobs::Dense(logits.iter().map(|&l| (l as f64 - log_sum) as f32).collect())
     }
 
+    /// Tokens in the vocabulary the distribution is over: valid ids are `0..vocabulary_size`.
     pub fn vocabulary_size(&self) -> usize {
         match self {
             Logprobs::Dense(values) => values.len(),
@@ -225,14 +231,19 @@ pub trait LanguageModel {
     /// Counters since the backend was made.
     fn usage(&self) -> Usage;
 
+    /// The tokenizer's vocabulary: each id's bytes and kind, and the stop tokens.
     fn vocabulary(&self) -> &Vocabulary {
         self.tokenizer().vocabulary()
     }
 
+    /// The token ids of `text` by the model's tokenizer, with no BOS added
+    /// ([`Tokenizer::encode`]).
     fn encode(&self, text: &str) -> Result<Vec<TokenId>, LmError> {
         self.tokenizer().encode(text)
     }
 
+    /// The bytes of `ids` (control tokens spell themselves); an id outside the vocabulary is
+    /// [`LmError::TokenOutOfRange`].
     fn decode(&self, ids: &[TokenId]) -> Result<Vec<u8>, LmError> {
         self.tokenizer().decode(ids)
     }

@@ -58,6 +58,7 @@ pub struct OpenAiConfig {
     pub api_key: Option<String>,
     /// The k of top-k `logprobs` (vLLM's default server limit is 20; OpenAI's is 5).
     pub top_logprobs: usize,
+    /// Which API extensions the server has: with vLLM's, allowed sets are masked on the server.
     pub dialect: ServerDialect,
     /// For one attempt: DNS, connect, send and receive.
     pub timeout: Duration,
@@ -72,6 +73,8 @@ pub struct OpenAiConfig {
 }
 
 impl OpenAiConfig {
+    /// `model` at `base_url`, as vLLM: no API key, top-20 logprobs, 60 s per attempt, 2 retries
+    /// from 250 ms, a `Retry-After` of up to 60 s honoured, 4096 answers remembered.
     pub fn new(base_url: &str, model: &str) -> Self {
         OpenAiConfig {
             base_url: base_url.to_string(),
@@ -122,6 +125,7 @@ impl OpenAiModel {
         })
     }
 
+    /// The configuration the model was made with.
     pub fn config(&self) -> &OpenAiConfig {
         &self.config
     }

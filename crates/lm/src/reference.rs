@@ -19,6 +19,7 @@ pub struct ReferenceLlama {
 }
 
 impl ReferenceLlama {
+    /// Loads a llama-architecture GGUF file onto the CPU, with an empty KV cache.
     pub fn load(path: &Path) -> Result<Self, LmError> {
         let mut file = GgufFile::open(path)?;
         let weights = ModelWeights::from_gguf(file.content, &mut file.reader, &Device::Cpu)?;

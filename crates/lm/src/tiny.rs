@@ -34,13 +34,18 @@ pub const TINY_CHAT_TEMPLATE: &str = "{% for message in messages %}{{'<|im_start
 /// What to write.
 #[derive(Debug, Clone)]
 pub struct TinySpec {
+    /// The family written: Qwen2 adds Q, K and V biases, Qwen3 per-head Q and K norms and an
+    /// explicit head size.
     pub architecture: Architecture,
     /// No `output.weight`: the output head is the embedding.
     pub tied_output: bool,
     /// Type of the projection matrices (`Q4_1` as in SmolLM2, `Q8_0`, `F32`, ...).
     pub weight_type: GgmlDType,
+    /// Seed of the weights' generator: the same spec writes the same bytes on every machine.
     pub seed: u64,
+    /// Transformer blocks (`{arch}.block_count`).
     pub layers: usize,
+    /// `{arch}.context_length`, in tokens.
     pub context_length: usize,
 }
 
@@ -57,10 +62,13 @@ impl Default for TinySpec {
     }
 }
 
-/// Embedding width, heads, KV heads, head size and feed-forward width of the tiny model.
+/// Embedding width of the tiny model.
 pub const TINY_EMBEDDING: usize = 64;
+/// Attention heads of the tiny model (head size `TINY_EMBEDDING / TINY_HEADS` = 16).
 pub const TINY_HEADS: usize = 4;
+/// Key/value heads of the tiny model: two query heads share each.
 pub const TINY_KV_HEADS: usize = 2;
+/// Feed-forward width of the tiny model.
 pub const TINY_FEED_FORWARD: usize = 128;
 
 /// The tiny vocabulary's tokens (byte-level spellings) and kinds (GGUF codes).

@@ -136,13 +136,19 @@ pub struct BpeParts<'a> {
     pub tokens: Vec<&'a str>,
     /// `"left right"` merge rules, highest priority first.
     pub merges: Vec<&'a str>,
+    /// The kind of each of `tokens`, in the same order.
     pub kinds: Vec<TokenKind>,
+    /// How text is cut into words before BPE.
     pub pre_tokenizer: PreTokenizer,
+    /// The end-of-sequence token; it also ends a generation.
     pub eos: TokenId,
+    /// The beginning-of-sequence token, where the model has one.
     pub bos: Option<TokenId>,
     /// Further tokens that end a generation (end of turn).
     pub stop: Vec<TokenId>,
+    /// Whether [`Tokenizer::encode_prompt`] puts `bos` in front.
     pub add_bos: bool,
+    /// The chat template's Jinja source, where there is one.
     pub chat_template: Option<&'a str>,
 }
 
@@ -420,6 +426,7 @@ impl Tokenizer {
         Ok(Tokenizer { inner, vocabulary, pre_tokenizer, chat_template, add_bos })
     }
 
+    /// Each token id's bytes and kind, and the special ids.
     pub fn vocabulary(&self) -> &Vocabulary {
         &self.vocabulary
     }
@@ -459,6 +466,7 @@ impl Tokenizer {
         Ok(String::from_utf8_lossy(&self.decode(ids)?).into_owned())
     }
 
+    /// The chat template, where the GGUF file or `tokenizer_config.json` has one (or one was set).
     pub fn chat_template(&self) -> Option<&ChatTemplate> {
         self.chat_template.as_ref()
     }

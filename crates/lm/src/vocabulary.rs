@@ -80,10 +80,12 @@ impl Vocabulary {
         Ok(Vocabulary { bytes: bytes.into_iter().map(Vec::into_boxed_slice).collect(), kinds, eos, bos, stop: all_stop })
     }
 
+    /// Tokens in the vocabulary: valid ids are `0..len()`.
     pub fn len(&self) -> usize {
         self.bytes.len()
     }
 
+    /// Always `false`: [`Vocabulary::new`] refuses an empty vocabulary.
     pub fn is_empty(&self) -> bool {
         self.bytes.is_empty()
     }
@@ -93,10 +95,12 @@ impl Vocabulary {
         self.bytes.get(id as usize).map(|b| &b[..])
     }
 
+    /// The token's kind; `None` for an id out of range.
     pub fn kind(&self, id: TokenId) -> Option<TokenKind> {
         self.kinds.get(id as usize).copied()
     }
 
+    /// Whether the token is not text ([`TokenKind::is_special`]); `false` for an id out of range.
     pub fn is_special(&self, id: TokenId) -> bool {
         self.kind(id).is_some_and(TokenKind::is_special)
     }
@@ -116,6 +120,7 @@ impl Vocabulary {
         &self.stop
     }
 
+    /// Whether the token ends a generation (one of [`Vocabulary::stop_tokens`]).
     pub fn is_stop(&self, id: TokenId) -> bool {
         self.stop.contains(&id)
     }

@@ -183,6 +183,7 @@ impl<'m> CanonicalLanguages<'m> {
         })
     }
 
+    /// The end-of-sequence tokens, which end a plan at an action boundary where it may end.
     pub fn eos(&self) -> &[TokenId] {
         &self.eos
     }
@@ -246,8 +247,11 @@ impl<'m> CanonicalLanguages<'m> {
 /// What a token did, in canonical decoding.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum CanonicalStep {
+    /// Inside an action's token sequence (or the end marker's): nothing completed.
     Partial,
+    /// An action's line completed; the first applicable action it spells was applied.
     Action,
+    /// The plan ended: an end-of-sequence token at a boundary, or the end marker's last token.
     End,
 }
 
@@ -263,19 +267,23 @@ pub struct CanonicalCursor {
 }
 
 impl CanonicalCursor {
+    /// Starts a plan in `state`, at an action boundary (its language built if not cached yet).
     pub fn new(languages: &mut CanonicalLanguages<'_>, state: State) -> CanonicalCursor {
         let language = languages.language(&state);
         CanonicalCursor { state, language, node: 0, plan: Vec::new(), finished: false }
     }
 
+    /// The state after the plan's actions.
     pub fn state(&self) -> &State {
         &self.state
     }
 
+    /// The actions applied so far, in order.
     pub fn plan(&self) -> &[ActionId] {
         &self.plan
     }
 
+    /// Whether nothing of the next action has been written yet.
     pub fn at_boundary(&self) -> bool {
         self.node == 0
     }

@@ -28,7 +28,9 @@ pub enum Strategy {
 /// A Phase II condition: whether the mask applies, and how tokens are chosen.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct Mode {
+    /// Whether each token is masked to the continuations of applicable actions.
     pub constrained: bool,
+    /// How the next token is chosen.
     pub strategy: Strategy,
 }
 
@@ -51,11 +53,17 @@ pub struct Mode {
 #[serde(rename_all = "kebab-case")]
 #[strum(serialize_all = "kebab-case")]
 pub enum ModeName {
+    /// Masked tokens, chosen by MCTS (the paper's method).
     ConstrainedMcts,
+    /// Masked tokens, the most likely each time.
     ConstrainedGreedy,
+    /// Any token, chosen by MCTS; the text is parsed into actions line by line.
     UnconstrainedMcts,
+    /// Any token, the most likely each time.
     UnconstrainedGreedy,
+    /// Any token, sampled.
     Sample,
+    /// Masked tokens, sampled.
     ConstrainedSample,
 }
 
@@ -149,7 +157,9 @@ pub enum Tokenization {
 /// Everything one decoding run needs besides the task and the model.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct DecodeConfig {
+    /// The condition: masked or not, and the strategy.
     pub mode: Mode,
+    /// The limits of the run.
     pub budget: Budget,
     /// Constrained modes: canonical tokenizations only, or any.
     pub tokenization: Tokenization,
@@ -159,6 +169,7 @@ pub struct DecodeConfig {
 }
 
 impl DecodeConfig {
+    /// `mode` with the default budget, canonical tokenizations, and a stop at the goal.
     pub fn new(mode: Mode) -> DecodeConfig {
         DecodeConfig { mode, budget: Budget::default(), tokenization: Tokenization::default(), stop_at_goal: true }
     }
@@ -180,11 +191,14 @@ pub enum StopReason {
     MaxActions,
     /// No action applies and the goal does not hold.
     DeadEnd,
+    /// MCTS ran [`Budget::simulations`] simulations.
     Simulations,
     /// The time limit, on the wall clock.
     WallClock,
     /// The time limit, on the processor-time clock ([`Clock::Cpu`]).
     CpuTime,
+    /// The decoder asked the model for [`Budget::model_calls`] distributions (tokens the mask
+    /// forced are not counted).
     ModelCalls,
     /// MCTS explored every branch its width and limits allow.
     Exhausted,
@@ -212,12 +226,15 @@ impl StopReason {
 pub struct InvalidStep {
     /// 0-based index of the step in the plan.
     pub step: usize,
+    /// The offending text: the line that names no applicable action (trimmed, lossy UTF-8), a
+    /// special token's spelling, or a line past [`crate::cursor::MAX_LINE_BYTES`].
     pub text: String,
 }
 
 /// Counters of one run.
 #[derive(Debug, Clone, Default, PartialEq, Serialize)]
 pub struct Stats {
+    /// MCTS simulations started (0 for greedy decoding and sampling).
     pub simulations: u64,
     /// Search-tree nodes (token prefixes) created.
     pub nodes: u64,
@@ -229,6 +246,7 @@ pub struct Stats {
     pub usage: Usage,
     /// Heuristic evaluations run, and states looked up (including cache hits).
     pub heuristic_evaluations: u64,
+    /// States whose heuristic was asked for (cache hits and goal states included).
     pub heuristic_lookups: u64,
     /// Real time the run took (whatever clock its limit was read on).
     pub millis: f64,
@@ -237,6 +255,7 @@ pub struct Stats {
 /// The result of one decoding run.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct Outcome {
+    /// The condition's command-line name ([`Mode::name`]).
     pub mode: &'static str,
     /// The plan's actions (for an invalid unconstrained plan, the valid prefix).
     #[serde(skip)]
@@ -247,13 +266,16 @@ pub struct Outcome {
     pub valid: bool,
     /// Valid, and the goal holds after the last action.
     pub solved: bool,
+    /// The first step that could not be executed (unconstrained modes only).
     pub invalid: Option<InvalidStep>,
+    /// Why decoding stopped.
     pub stop: StopReason,
     /// The text greedy decoding or sampling wrote (lossy UTF-8; special tokens spelled out).
     /// MCTS writes many texts: `None`.
     pub text: Option<String>,
     /// Eq. 10 of the plan (`None` for an invalid plan or a dead end).
     pub value: Option<f64>,
+    /// The run's counters.
     pub stats: Stats,
     /// The top of the search tree: `None` for greedy decoding and sampling, which build no
     /// tree, and for a search that never started (the goal or a dead end at the root).
@@ -291,6 +313,7 @@ pub struct TreeLevel {
     pub rows: Vec<TreeRow>,
     /// Branches tried beyond the rows listed, and their visits.
     pub omitted: usize,
+    /// Visits of the branches counted in `omitted`, summed.
     pub omitted_visits: u64,
     /// The level's subtree was larger than [`TreeSummary::STEPS`] token steps: the branches
     /// beyond them are neither rows nor counted in `omitted`.
@@ -304,6 +327,7 @@ pub struct TreeRow {
     /// branch that ended otherwise, the text its tokens write (trimmed, lossy UTF-8, special
     /// tokens spelled out).
     pub text: String,
+    /// How the branch ends.
     pub kind: RowKind,
     /// Tokens from the level's start to the row's node.
     pub tokens: usize,
@@ -346,16 +370,29 @@ impl TreeSummary {
 /// Why decoding failed (as opposed to producing a bad plan, which is an [`Outcome`]).
 #[derive(Debug, thiserror::Error)]
 pub enum DecodeError {
+    /// The language model failed (a forward pass, a server request, the tokenizer).
     #[error("language model: {0}")]
     Model(#[from] LmError),
+    /// A state's action texts cannot make a byte-level language (an empty text or separator, a
+    /// text holding the separator or starting with the end marker).
     #[error("action language: {0}")]
     Language(#[from] token_constraint::LanguageError),
+    /// A bug: the decoder wrote a token the constraint does not allow.
     #[error("internal error: the decoder wrote a token the constraint refuses: {0}")]
     Token(#[from] token_constraint::PlanTokenError),
+    /// The model and the constraint's vocabulary differ in size (the vocabulary was made for
+    /// another model).
     #[error("the model's vocabulary has {model} tokens, the constraint's {constraint}")]
-    VocabularyMismatch { model: usize, constraint: usize },
+    VocabularyMismatch {
+        /// Tokens in the model's vocabulary.
+        model: usize,
+        /// Tokens in the constraint's vocabulary.
+        constraint: usize,
+    },
+    /// The prompt has no token: the model needs at least one to predict from.
     #[error("the prompt is empty")]
     EmptyPrompt,
+    /// An MCTS setting that [`MctsConfig::check`] refuses.
     #[error("bad setting: {0}")]
     Config(String),
 }

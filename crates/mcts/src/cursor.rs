@@ -11,7 +11,9 @@ use crate::canonical::{CanonicalCursor, CanonicalLanguages, CanonicalStep};
 /// allowed text) and, once made, canonical (one token sequence per text).
 #[derive(Debug)]
 pub struct Languages<'m> {
+    /// The byte-level languages; their spelling also parses unconstrained text.
     pub bytes: PlanLanguages<'m>,
+    /// The canonical languages, once the task's action texts have been encoded.
     pub canonical: Option<CanonicalLanguages<'m>>,
 }
 
@@ -54,18 +56,23 @@ pub struct FreeText {
 }
 
 impl Cursor {
+    /// A byte-level constrained cursor at the start of a plan in `state`; an error where
+    /// `state`'s action texts cannot make a language.
     pub fn constrained(languages: &mut PlanLanguages<'_>, state: State) -> Result<Cursor, token_constraint::LanguageError> {
         Ok(Cursor::Constrained(PlanConstraint::new(languages, state)?))
     }
 
+    /// A canonical constrained cursor at the start of a plan in `state`.
     pub fn canonical(languages: &mut CanonicalLanguages<'_>, state: State) -> Cursor {
         Cursor::Canonical(CanonicalCursor::new(languages, state))
     }
 
+    /// An unconstrained cursor at the start of a plan in `state`.
     pub fn free(state: State) -> Cursor {
         Cursor::Free(FreeText { state, line: Vec::new(), plan: Vec::new(), finished: false })
     }
 
+    /// The state after the plan's actions.
     pub fn state(&self) -> &State {
         match self {
             Cursor::Constrained(c) => c.state(),
@@ -74,6 +81,7 @@ impl Cursor {
         }
     }
 
+    /// The actions completed and applied so far, in order.
     pub fn plan(&self) -> &[ActionId] {
         match self {
             Cursor::Constrained(c) => c.plan(),
@@ -82,6 +90,7 @@ impl Cursor {
         }
     }
 
+    /// Whether tokens are masked (byte-level or canonical).
     pub fn is_constrained(&self) -> bool {
         !matches!(self, Cursor::Free(_))
     }

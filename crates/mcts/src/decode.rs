@@ -37,6 +37,8 @@ impl<'m> Decoder<'m> {
         Decoder::with_end_policy(model, spelling, vocab, value, EndPolicy::Anywhere)
     }
 
+    /// As [`Decoder::new`], with `end` saying where the plan may end (anywhere, or at a goal
+    /// state only).
     pub fn with_end_policy(
         model: &'m TransitionModel,
         spelling: &'m Spelling,
@@ -49,14 +51,17 @@ impl<'m> Decoder<'m> {
         Decoder { stepper: Stepper::new(model, vocab, languages, Evaluator::new(model, value)), end }
     }
 
+    /// The task's transition model.
     pub fn model(&self) -> &'m TransitionModel {
         self.stepper.model
     }
 
+    /// How actions are written as text.
     pub fn spelling(&self) -> &'m Spelling {
         self.stepper.languages.bytes.spelling()
     }
 
+    /// The value function, with its cache of heuristic values.
     pub fn evaluator(&mut self) -> &mut Evaluator<'m> {
         &mut self.stepper.evaluator
     }

@@ -73,8 +73,11 @@ pub const DEFAULT_RELEVANCE_DEPTH: usize = 2;
 /// action descriptions.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub enum PromptStyle {
+    /// ALFWorld: its intro, objects as `apple 1`, the agent argument left out.
     Alfworld,
+    /// VirtualHome (EAI): its intro, objects by class name, the `character` argument left out.
     Virtualhome,
+    /// A plain PDDL task: object names as they are.
     Pddl,
 }
 
@@ -97,7 +100,10 @@ pub enum Relevance {
     /// The facts [`relevant_facts`] finds within `depth` regression steps of the goal, and the
     /// static facts about the objects they mention (see [`relevant_facts`]). The closure stops
     /// early at its fixpoint, so `usize::MAX` is the unbounded closure.
-    Backward { depth: usize },
+    Backward {
+        /// Regression steps from the goal.
+        depth: usize,
+    },
 }
 
 impl Default for Relevance {
@@ -109,6 +115,7 @@ impl Default for Relevance {
 /// How to build a [`PlanningPrompt`].
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct PromptOptions {
+    /// Which true facts of the start state are shown.
     pub relevance: Relevance,
     /// The text that ends a plan, listed after the action forms (the paper's `DONE`); `None`
     /// when plans end with the end-of-sequence token only. Must be the constraint's

@@ -14,6 +14,7 @@ pub struct SamplingConfig {
     pub top_p: f64,
     /// Keep the `top_k` most likely tokens (`None`: no cut-off).
     pub top_k: Option<usize>,
+    /// Seed of the sampler's random stream: the same seed and distributions, the same tokens.
     pub seed: u64,
 }
 
@@ -32,6 +33,7 @@ pub struct Sampler {
 }
 
 impl Sampler {
+    /// A sampler seeded with `config.seed`.
     pub fn new(config: SamplingConfig) -> Sampler {
         let rng = ChaCha8Rng::seed_from_u64(config.seed);
         Sampler { config, rng }

@@ -84,6 +84,8 @@ impl std::fmt::Debug for Evaluator<'_> {
 }
 
 impl<'m> Evaluator<'m> {
+    /// An evaluator with an empty cache; a heuristic whose weight is not above 0 is left out of
+    /// the mix.
     pub fn new(model: &'m TransitionModel, config: ValueConfig) -> Evaluator<'m> {
         let mut mix = WeightedMix::new();
         if config.ff > 0.0 {
@@ -106,10 +108,12 @@ impl<'m> Evaluator<'m> {
         projected
     }
 
+    /// The weights and constants it was made with.
     pub fn config(&self) -> &ValueConfig {
         &self.config
     }
 
+    /// The transition model whose states it evaluates.
     pub fn model(&self) -> &'m TransitionModel {
         self.model
     }

@@ -22,16 +22,50 @@ pub const COMMON_EOS: &[&str] = &["<|im_end|>", "<|endoftext|>", "</s>", "<|eot_
 /// Why a tokenizer file could not be turned into a vocabulary.
 #[derive(Debug, thiserror::Error)]
 pub enum HfError {
+    /// The file could not be read or parsed as a `tokenizer.json`.
     #[error("{path}: cannot read the tokenizer: {message}")]
-    Read { path: String, message: String },
+    Read {
+        /// The tokenizer file, as given.
+        path: String,
+        /// The `tokenizers` library's error.
+        message: String,
+    },
+    /// The decoder is neither byte-level nor SentencePiece (Metaspace, Replace or byte
+    /// fallback), or there is none.
     #[error("{path}: decoder {decoder} is not supported (byte-level BPE and SentencePiece byte fallback are)")]
-    UnsupportedDecoder { path: String, decoder: String },
+    UnsupportedDecoder {
+        /// The tokenizer file, as given.
+        path: String,
+        /// `none`, or the first 60 characters of the decoder's debug form.
+        decoder: String,
+    },
+    /// Under a byte-level decoder, a token's text has a character outside GPT-2's byte
+    /// alphabet.
     #[error("{path}: token {id} ({text:?}) has a character outside the byte-level alphabet")]
-    NotByteLevel { path: String, id: TokenId, text: String },
+    NotByteLevel {
+        /// The tokenizer file, as given.
+        path: String,
+        /// The token.
+        id: TokenId,
+        /// Its text in the vocabulary.
+        text: String,
+    },
+    /// None of the end-of-sequence names is an added special token of the tokenizer.
     #[error("{path}: no end-of-sequence token among {names:?}")]
-    NoEos { path: String, names: Vec<String> },
+    NoEos {
+        /// The tokenizer file, as given.
+        path: String,
+        /// The names looked up.
+        names: Vec<String>,
+    },
+    /// The tokens do not make a [`Vocabulary`].
     #[error("{path}: {source}")]
-    Vocabulary { path: String, source: VocabularyError },
+    Vocabulary {
+        /// The tokenizer file, as given.
+        path: String,
+        /// Why.
+        source: VocabularyError,
+    },
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

@@ -36,12 +36,30 @@ impl Default for LanguageConfig {
 /// Why an action text cannot be put in a language.
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
 pub enum LanguageError {
+    /// The text is empty.
     #[error("action text {index} is empty")]
-    EmptyText { index: usize },
+    EmptyText {
+        /// The id it would have had: the number of distinct texts pushed before it.
+        index: usize,
+    },
+    /// The text contains the separator, so the separator could not mark where it ends.
     #[error("action text {text:?} contains the separator {separator:?}")]
-    ContainsSeparator { text: String, separator: String },
+    ContainsSeparator {
+        /// The text, decoded as UTF-8 (lossily).
+        text: String,
+        /// The separator, decoded as UTF-8 (lossily).
+        separator: String,
+    },
+    /// The text starts with the end marker, so writing the marker at a boundary would be
+    /// ambiguous.
     #[error("action text {text:?} starts with the end marker {marker:?}")]
-    StartsWithEndMarker { text: String, marker: String },
+    StartsWithEndMarker {
+        /// The text, decoded as UTF-8 (lossily).
+        text: String,
+        /// The end marker, decoded as UTF-8 (lossily).
+        marker: String,
+    },
+    /// The configured separator is empty (checked on every push).
     #[error("the separator is empty")]
     EmptySeparator,
 }
@@ -67,6 +85,8 @@ pub struct LanguageBuilder {
 }
 
 impl LanguageBuilder {
+    /// An empty builder for `config`; the plan may end at its boundary unless
+    /// [`LanguageBuilder::end_here`] says otherwise.
     pub fn new(config: LanguageConfig) -> LanguageBuilder {
         LanguageBuilder { config, bytes: Vec::new(), offsets: vec![0], end_after: Vec::new(), index: HashTable::new(), end_here: true }
     }
@@ -114,6 +134,8 @@ impl LanguageBuilder {
         self
     }
 
+    /// The language of the texts pushed, each followed by the separator, plus the end marker
+    /// where the plan may end here and the marker is not empty.
     pub fn build(self) -> Language {
         // Keys: every text followed by the separator, and the end marker; sorted, then laid
         // out breadth first like the vocabulary trie.
@@ -182,6 +204,7 @@ pub struct Language {
 }
 
 impl Language {
+    /// The separator and end marker it was built with.
     pub fn config(&self) -> &LanguageConfig {
         &self.config
     }
@@ -191,6 +214,8 @@ impl Language {
         self.end_after.len()
     }
 
+    /// The text of `choice`, without the separator. Panics if `choice` is not below
+    /// [`Language::choices`].
     pub fn text(&self, choice: ChoiceId) -> &[u8] {
         &self.bytes[self.offsets[choice as usize] as usize..self.offsets[choice as usize + 1] as usize]
     }
@@ -205,6 +230,7 @@ impl Language {
         self.end_after[choice as usize]
     }
 
+    /// Number of trie nodes, the root included.
     pub fn node_count(&self) -> usize {
         self.trie.node_count()
     }
@@ -248,12 +274,28 @@ pub enum Step {
 /// Why a token was refused.
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
 pub enum TokenError {
+    /// The token's bytes leave the language, or it has no bytes, or it is a special token
+    /// other than an end-of-sequence token at a point where the plan may end.
     #[error("token {token} ({text:?}) does not extend {prefix:?} towards an allowed action")]
-    NotAllowed { token: TokenId, text: String, prefix: String },
+    NotAllowed {
+        /// The refused token.
+        token: TokenId,
+        /// Its bytes, decoded as UTF-8 (lossily).
+        text: String,
+        /// The partial action it was refused after ([`Matcher::prefix`]), decoded as UTF-8
+        /// (lossily).
+        prefix: String,
+    },
+    /// The id is not below the vocabulary's length.
     #[error("token {token} is outside the vocabulary")]
-    UnknownToken { token: TokenId },
+    UnknownToken {
+        /// The refused id.
+        token: TokenId,
+    },
+    /// An action was completed: [`Matcher::enter`] must give the next state's language first.
     #[error("an action was completed: enter the next state's language before the next token")]
     AwaitingLanguage,
+    /// The plan has ended; no token is allowed.
     #[error("the plan has ended")]
     Finished,
 }
@@ -286,10 +328,13 @@ pub struct Matcher {
 }
 
 impl Matcher {
+    /// A matcher at the start of the first action, in `language` (the start state's).
     pub fn new(language: Arc<Language>) -> Matcher {
         Matcher { language, node: 0, prefix: Vec::new(), phase: Phase::Open }
     }
 
+    /// The current state's language: the one given to [`Matcher::new`] or last to
+    /// [`Matcher::enter`].
     pub fn language(&self) -> &Arc<Language> {
         &self.language
     }
@@ -304,6 +349,8 @@ impl Matcher {
         self.phase == Phase::Open && self.node == 0
     }
 
+    /// Whether the plan has ended (end-of-sequence or the end marker); every further token is
+    /// refused with [`TokenError::Finished`].
     pub fn is_finished(&self) -> bool {
         self.phase == Phase::Finished
     }

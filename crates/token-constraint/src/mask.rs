@@ -59,6 +59,7 @@ impl TokenMask {
         }
     }
 
+    /// Whether `token` is in the mask; false for ids outside its range.
     #[inline]
     pub fn contains(&self, token: TokenId) -> bool {
         let i = token as usize;
@@ -70,6 +71,7 @@ impl TokenMask {
         self.words.iter().map(|w| w.count_ones() as usize).sum()
     }
 
+    /// Whether no token is in the mask.
     pub fn is_empty(&self) -> bool {
         self.words.iter().all(|&w| w == 0)
     }

@@ -30,6 +30,7 @@ pub enum EndPolicy {
 /// action spelled that way (class-level names can spell several grounded actions).
 #[derive(Debug)]
 pub struct StateLanguage {
+    /// The state's language; its choice ids index [`StateLanguage::actions`].
     pub language: Arc<Language>,
     actions: Vec<Vec<ActionId>>,
 }
@@ -70,10 +71,13 @@ impl<'m> PlanLanguages<'m> {
         PlanLanguages { model, spelling, config, end, cache: FxHashMap::default(), applicable: Vec::new(), hits: 0, misses: 0 }
     }
 
+    /// The model whose states these languages are of.
     pub fn model(&self) -> &'m TransitionModel {
         self.model
     }
 
+    /// The spelling that writes the action texts; an applicable action it cannot spell is left
+    /// out of the language.
     pub fn spelling(&self) -> &'m Spelling {
         self.spelling
     }
@@ -129,16 +133,22 @@ impl<'m> PlanLanguages<'m> {
 /// What a token did to the plan.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub enum PlanStep {
+    /// Inside an action text or the end marker: nothing completed, the state is unchanged.
     Partial,
     /// An action completed and was applied; `alternatives` are the other applicable
     /// actions with the same spelling (not applied).
     Action {
+        /// The action applied: the first in id order of the applicable actions so spelled.
         action: ActionId,
+        /// The other applicable actions with the same spelling, in increasing id order.
         alternatives: Vec<ActionId>,
     },
     /// The plan ended; `action` is set when the end-of-sequence came right after an action.
     End {
+        /// The action completed by the end-of-sequence token, and applied; `None` when the plan
+        /// ended at a boundary.
         action: Option<ActionId>,
+        /// Whether the goal holds in the state the plan ended in (after `action`, if any).
         goal_reached: bool,
     },
 }
@@ -146,8 +156,11 @@ pub enum PlanStep {
 /// Why a plan-level step failed.
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
 pub enum PlanTokenError {
+    /// The token was refused; the constraint is unchanged.
     #[error(transparent)]
     Token(#[from] TokenError),
+    /// The next state's language could not be built after a completed action; the constraint
+    /// is unchanged.
     #[error(transparent)]
     Language(#[from] LanguageError),
 }
@@ -170,6 +183,7 @@ impl PlanConstraint {
         Ok(PlanConstraint { state, current, matcher, plan: Vec::new() })
     }
 
+    /// The current state: the start state with every completed action applied.
     pub fn state(&self) -> &State {
         &self.state
     }
@@ -179,18 +193,24 @@ impl PlanConstraint {
         &self.plan
     }
 
+    /// The matcher in the current state's language; its [`Matcher::prefix`] is the partial
+    /// action.
     pub fn matcher(&self) -> &Matcher {
         &self.matcher
     }
 
+    /// Whether the plan has ended; [`PlanConstraint::advance`] then refuses every token.
     pub fn is_finished(&self) -> bool {
         self.matcher.is_finished()
     }
 
+    /// The next-token mask in the current state, into `mask` (cleared first; resized to the
+    /// vocabulary), as [`Matcher::fill_mask`].
     pub fn fill_mask(&self, vocab: &Vocabulary, mask: &mut TokenMask) {
         self.matcher.fill_mask(vocab, mask);
     }
 
+    /// The allowed next tokens, in no particular order, into `out` (cleared first).
     pub fn allowed(&self, vocab: &Vocabulary, out: &mut Vec<TokenId>) {
         self.matcher.allowed(vocab, out);
     }

@@ -11,10 +11,21 @@ use crate::trie::FlatTrie;
 /// Why a vocabulary could not be built.
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
 pub enum VocabularyError {
+    /// An end-of-sequence id is not below the number of tokens.
     #[error("end-of-sequence token {token} is outside the vocabulary of {len} tokens")]
-    EosOutOfRange { token: TokenId, len: usize },
+    EosOutOfRange {
+        /// The end-of-sequence id.
+        token: TokenId,
+        /// The number of tokens.
+        len: usize,
+    },
+    /// More tokens than `u32` ids can number, or more than `u32::MAX` bytes of token text in
+    /// all.
     #[error("the vocabulary has {len} tokens, more than token ids can number")]
-    TooLarge { len: usize },
+    TooLarge {
+        /// The number of tokens.
+        len: usize,
+    },
 }
 
 /// One entry of a vocabulary.
@@ -71,10 +82,12 @@ impl Vocabulary {
         Vocabulary::new(tokens.iter().map(|b| Token { bytes: b.as_ref().to_vec(), special: false }).collect(), eos)
     }
 
+    /// Number of tokens; ids run from 0 to `len() - 1`.
     pub fn len(&self) -> usize {
         self.special.len()
     }
 
+    /// Whether the vocabulary has no tokens.
     pub fn is_empty(&self) -> bool {
         self.special.is_empty()
     }
@@ -88,10 +101,13 @@ impl Vocabulary {
         &self.bytes[self.offsets[i] as usize..self.offsets[i + 1] as usize]
     }
 
+    /// Whether `token` is special (marked so, or an end-of-sequence token): never matched by its
+    /// bytes. False for an id outside the vocabulary.
     pub fn is_special(&self, token: TokenId) -> bool {
         self.special.get(token as usize).copied().unwrap_or(false)
     }
 
+    /// Whether `token` is one of the end-of-sequence tokens ([`Self::eos`]).
     pub fn is_eos(&self, token: TokenId) -> bool {
         self.eos.binary_search(&token).is_ok()
     }
@@ -132,6 +148,7 @@ pub struct VocabTrie {
 const NO_NODE: u32 = u32::MAX;
 
 impl VocabTrie {
+    /// The root: the empty byte string, at which no token ends.
     pub const ROOT: VocabNode = 0;
 
     fn build(tokens: &[Token], special: &[bool]) -> VocabTrie {
@@ -155,6 +172,7 @@ impl VocabTrie {
         VocabTrie { trie, token_start, tokens: ids, root_children }
     }
 
+    /// Number of nodes, the root included.
     pub fn node_count(&self) -> usize {
         self.trie.node_count()
     }
@@ -186,6 +204,7 @@ impl VocabTrie {
         self.trie.has_children(node)
     }
 
+    /// Heap bytes held by the trie, its 256-entry root table included.
     pub fn heap_bytes(&self) -> usize {
         self.trie.heap_bytes() + self.token_start.capacity() * 4 + self.tokens.capacity() * 4 + 256 * 4
     }

@@ -65,6 +65,8 @@ impl TransitionModel {
         self.successors.applicable(&self.task, state, out);
     }
 
+    /// Whether `action`'s precondition (positive and negative facts and clauses) holds in `state`;
+    /// checks the one action directly, without the successor generator.
     pub fn is_applicable(&self, state: &State, action: ActionId) -> bool {
         self.task.action(action).pre.holds(|f| state.contains(f))
     }
@@ -104,6 +106,7 @@ impl TransitionModel {
         self.task.goal.holds(|f| state.contains(f))
     }
 
+    /// The decision tree [`Self::applicable`] walks, built once in [`Self::new`].
     pub fn successor_generator(&self) -> &SuccessorGenerator {
         &self.successors
     }

@@ -14,6 +14,8 @@ impl State {
         State { words: vec![0; facts.div_ceil(64)].into_boxed_slice() }
     }
 
+    /// The state over `facts` facts in which exactly `true_facts` hold. Panics if a fact id is
+    /// not below `facts` rounded up to a multiple of 64.
     pub fn from_facts(facts: usize, true_facts: impl IntoIterator<Item = FactId>) -> State {
         let mut state = State::empty(facts);
         for fact in true_facts {
@@ -22,18 +24,21 @@ impl State {
         state
     }
 
+    /// Whether `fact` holds. Panics if its id is past the state's words.
     #[inline]
     pub fn contains(&self, fact: FactId) -> bool {
         let i = fact.index();
         self.words[i >> 6] >> (i & 63) & 1 == 1
     }
 
+    /// Makes `fact` hold (no-op if it does). Panics if its id is past the state's words.
     #[inline]
     pub fn insert(&mut self, fact: FactId) {
         let i = fact.index();
         self.words[i >> 6] |= 1 << (i & 63);
     }
 
+    /// Makes `fact` not hold (no-op if it does not). Panics if its id is past the state's words.
     #[inline]
     pub fn remove(&mut self, fact: FactId) {
         let i = fact.index();
@@ -78,6 +83,8 @@ impl State {
         &self.words
     }
 
+    /// The state whose raw words are `words`, as [`State::words`] returned them: bit `i % 64`
+    /// of word `i / 64` is fact `i`.
     pub fn from_words(words: &[u64]) -> State {
         State { words: words.into() }
     }

@@ -19,6 +19,8 @@ struct Node {
     children_end: u32,
 }
 
+/// Fast Downward's decision tree over the actions' positive preconditions (see the module
+/// docs); it yields exactly the actions whose whole precondition holds.
 #[derive(Debug, Clone)]
 pub struct SuccessorGenerator {
     nodes: Vec<Node>,
@@ -30,6 +32,8 @@ pub struct SuccessorGenerator {
 }
 
 impl SuccessorGenerator {
+    /// Builds the tree for every action of `task`; `task` must be the one later passed to
+    /// [`Self::applicable`].
     pub fn new(task: &Task) -> SuccessorGenerator {
         let mut order: Vec<ActionId> = task.action_ids().collect();
         order.sort_by(|a, b| task.action(*a).pre.pos.cmp(&task.action(*b).pre.pos));
@@ -91,6 +95,7 @@ impl SuccessorGenerator {
         }
     }
 
+    /// The number of nodes in the tree, the root included (a size measure for benchmarks).
     pub fn node_count(&self) -> usize {
         self.nodes.len()
     }

@@ -12,12 +12,14 @@ use crate::state::State;
 /// A precondition or goal part that does not hold.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub enum Unmet {
+    /// This fact, or for a negated literal its absence, does not hold.
     Literal(Literal),
     /// None of these holds.
     Clause(Vec<Literal>),
 }
 
 impl Unmet {
+    /// In PDDL with `task`'s names: `(at b)`, `(not (at b))`, or `(or ...)` for a clause.
     pub fn describe(&self, task: &Task) -> String {
         match self {
             Unmet::Literal(literal) => task.literal_name(*literal),

@@ -76,10 +76,25 @@ impl std::fmt::Debug for CachedChat {
 /// Why a reply file cannot be used.
 #[derive(Debug, thiserror::Error)]
 pub enum CacheError {
+    /// The file or its folder could not be created, opened, locked or read.
     #[error("{path}: {source}")]
-    Io { path: String, source: std::io::Error },
+    Io {
+        /// The reply file.
+        path: String,
+        /// The operating system's error.
+        source: std::io::Error,
+    },
+    /// A whole line of the file is not a stored reply: not JSON, no `key` or `text`, a field of
+    /// the wrong type, or an unknown `json_mode`.
     #[error("{path}:{line}: not a cached reply: {message}")]
-    BadLine { path: String, line: usize, message: String },
+    BadLine {
+        /// The reply file.
+        path: String,
+        /// The line's number, from 1.
+        line: usize,
+        /// What is wrong with it (the JSON parser's message, or the field at fault).
+        message: String,
+    },
 }
 
 fn mode_name(mode: JsonMode) -> &'static str {
@@ -190,6 +205,7 @@ impl CachedChat {
         self.replies.len()
     }
 
+    /// Whether the file holds no reply yet.
     pub fn is_empty(&self) -> bool {
         self.replies.is_empty()
     }

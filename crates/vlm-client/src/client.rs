@@ -12,6 +12,8 @@ use crate::transport::{self, RetryPolicy};
 /// A chat model: messages in, one reply out. A request with a `json_schema` asks the model to
 /// answer in JSON; [`crate::chat_json`] reads and checks the reply and repairs it once.
 pub trait ChatModel {
+    /// Answers `request` with one reply. A served model retries transient failures first, as
+    /// its [`RetryPolicy`] allows; the error says how many attempts were made.
     fn chat(&mut self, request: &ChatRequest) -> Result<ChatReply, ChatError>;
     /// Where the model is, for error messages (a URL, or `local:...`).
     fn endpoint(&self) -> String;
@@ -29,6 +31,7 @@ pub struct ClientConfig {
     /// The environment variable holding the API key, sent as `Authorization: Bearer ...`
     /// (`None`: no key, as local servers want).
     pub api_key_env: Option<String>,
+    /// The deadline of each attempt and the retries after a transient failure.
     pub retry: RetryPolicy,
     /// The strongest way of asking for JSON to try first; a server that refuses a
     /// `response_format` with a 400 is asked again the next weaker way, which is kept for that
@@ -38,6 +41,8 @@ pub struct ClientConfig {
 }
 
 impl ClientConfig {
+    /// `model` at `base_url` (a trailing `/` dropped): no API key, the default [`RetryPolicy`],
+    /// JSON asked for by schema first. The URL is checked by [`ChatClient::new`], not here.
     pub fn new(base_url: &str, model: &str) -> ClientConfig {
         ClientConfig {
             base_url: base_url.trim_end_matches('/').to_string(),
@@ -97,6 +102,7 @@ impl ChatClient {
         })
     }
 
+    /// The configuration the client was made with.
     pub fn config(&self) -> &ClientConfig {
         &self.config
     }

@@ -8,10 +8,13 @@ use std::time::Duration;
 #[derive(Debug, thiserror::Error)]
 #[error("{url}: {kind} (after {attempts} attempt(s), {:.1} s)", elapsed.as_secs_f64())]
 pub struct ChatError {
+    /// What failed.
     pub kind: ChatErrorKind,
     /// The endpoint (or `local` for an in-process model).
     pub url: String,
+    /// Attempts made, retries included (0 when the request was refused before sending).
     pub attempts: u32,
+    /// Time from the start of the first attempt to the failure, waits between attempts included.
     pub elapsed: Duration,
 }
 
@@ -38,13 +41,25 @@ pub enum ChatErrorKind {
     Io(String),
     /// The server answered with a non-2xx status; `retry_after` is its `Retry-After`.
     #[error("HTTP status {status}: {body}")]
-    Status { status: u16, body: String, retry_after: Option<Duration> },
+    Status {
+        /// The HTTP status code.
+        status: u16,
+        /// The body's first 500 characters (invalid UTF-8 replaced).
+        body: String,
+        /// The wait the `Retry-After` header asks for, where it is there and readable.
+        retry_after: Option<Duration>,
+    },
     /// The body is not the JSON of a chat completion.
     #[error("malformed reply: {0}")]
     MalformedReply(String),
     /// The reply held no JSON value satisfying the schema, even after the repair turn.
     #[error("the reply is not the JSON asked for: {error}; reply: {reply}")]
-    InvalidJson { error: String, reply: String },
+    InvalidJson {
+        /// What the last reply got wrong, as [`crate::read_json`] says it.
+        error: String,
+        /// The last reply's text, cut to its first 500 characters.
+        reply: String,
+    },
     /// An in-process model failed.
     #[error("model: {0}")]
     Model(String),

@@ -18,6 +18,7 @@ use crate::request::ChatRequest;
 /// A JSON reply that satisfies the schema.
 #[derive(Debug, Clone, PartialEq)]
 pub struct JsonReply {
+    /// The first JSON object of the reply's text, which satisfies the schema.
     pub value: Value,
     /// The reply the value was read from.
     pub reply: ChatReply,

@@ -12,12 +12,16 @@ use crate::error::ChatErrorKind;
 /// Who speaks.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Role {
+    /// Instructions that frame the conversation.
     System,
+    /// The person or program asking.
     User,
+    /// The model (its earlier replies, quoted back).
     Assistant,
 }
 
 impl Role {
+    /// The role's name in the API: `system`, `user` or `assistant`.
     pub fn as_str(self) -> &'static str {
         match self {
             Role::System => "system",
@@ -30,7 +34,9 @@ impl Role {
 /// An image format the API carries.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum ImageFormat {
+    /// PNG, sent as `image/png`.
     Png,
+    /// JPEG, sent as `image/jpeg`.
     Jpeg,
 }
 
@@ -123,6 +129,7 @@ impl Image {
         Ok(Image { format, width, height, bytes })
     }
 
+    /// PNG or JPEG, as the bytes' signature says.
     pub fn format(&self) -> ImageFormat {
         self.format
     }
@@ -137,6 +144,7 @@ impl Image {
         self.height
     }
 
+    /// The encoded file, as it is sent (not the pixels).
     pub fn bytes(&self) -> &[u8] {
         &self.bytes
     }
@@ -202,30 +210,38 @@ fn jpeg_reaches_eoi(bytes: &[u8]) -> bool {
 /// One part of a message.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub enum Part {
+    /// Text.
     Text(String),
+    /// A picture, sent as a base64 `data:` URL.
     Image(Image),
 }
 
 /// One message of a conversation.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct Message {
+    /// Who speaks.
     pub role: Role,
+    /// The content, in order; one text part alone is sent as a plain string ([`Message::to_json`]).
     pub parts: Vec<Part>,
 }
 
 impl Message {
+    /// A message of one text part.
     pub fn text(role: Role, text: impl Into<String>) -> Message {
         Message { role, parts: vec![Part::Text(text.into())] }
     }
 
+    /// A [`Role::System`] message of one text part.
     pub fn system(text: impl Into<String>) -> Message {
         Message::text(Role::System, text)
     }
 
+    /// A [`Role::User`] message of one text part.
     pub fn user(text: impl Into<String>) -> Message {
         Message::text(Role::User, text)
     }
 
+    /// A [`Role::Assistant`] message of one text part.
     pub fn assistant(text: impl Into<String>) -> Message {
         Message::text(Role::Assistant, text)
     }
@@ -249,6 +265,7 @@ impl Message {
         texts.join("\n\n")
     }
 
+    /// The number of image parts.
     pub fn image_count(&self) -> usize {
         self.parts.iter().filter(|p| matches!(p, Part::Image(_))).count()
     }

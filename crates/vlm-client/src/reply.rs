@@ -13,15 +13,19 @@ use crate::request::JsonMode;
 pub struct Usage {
     /// HTTP requests sent (retries included) or local generations run.
     pub requests: u64,
+    /// Prompt tokens, as the server counts them (0 where it reports none).
     pub prompt_tokens: u64,
+    /// Generated tokens, as the server counts them (0 where it reports none).
     pub completion_tokens: u64,
     /// Thinking tokens, where the server reports them
     /// (`usage.completion_tokens_details.reasoning_tokens`).
     pub reasoning_tokens: Option<u64>,
+    /// Image parts sent in the requests' messages.
     pub images: u64,
 }
 
 impl Usage {
+    /// Adds `other`'s counts to these; `reasoning_tokens` stays `None` only where both are.
     pub fn add(&mut self, other: &Usage) {
         self.requests += other.requests;
         self.prompt_tokens += other.prompt_tokens;
@@ -37,10 +41,13 @@ impl Usage {
 /// One reply of a chat model.
 #[derive(Debug, Clone, PartialEq)]
 pub struct ChatReply {
+    /// The reply's content (text parts joined; empty where the server sent none).
     pub text: String,
     /// Thinking the server returned apart from the text (`reasoning_content` or `reasoning`).
     pub reasoning: Option<String>,
+    /// Why generation stopped, as the server says it (`stop`, `length`, ...).
     pub finish_reason: Option<String>,
+    /// Tokens, images and requests this reply cost (retries included).
     pub usage: Usage,
     /// How JSON was asked for (`None` when no schema was set).
     pub json_mode: Option<JsonMode>,

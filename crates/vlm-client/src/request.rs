@@ -8,11 +8,15 @@ use crate::message::Message;
 /// Sampling settings; `None` leaves the server's default.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct Sampling {
+    /// Softmax temperature; 0 is greedy.
     pub temperature: Option<f64>,
+    /// Nucleus sampling: the smallest set of most likely tokens whose probabilities reach this.
     pub top_p: Option<f64>,
     /// Not in OpenAI's API; vLLM, llama.cpp and Ollama read it.
     pub top_k: Option<u32>,
+    /// The most tokens the reply may have.
     pub max_tokens: Option<u32>,
+    /// Seed of the server's sampler, for repeatable sampling where the server honours it.
     pub seed: Option<u64>,
 }
 
@@ -48,7 +52,9 @@ impl JsonMode {
 /// What to ask a chat model.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct ChatRequest {
+    /// The conversation, oldest message first.
     pub messages: Vec<Message>,
+    /// How the reply is decoded.
     pub sampling: Sampling,
     /// A JSON reply satisfying this schema is wanted (see [`crate::chat_json`]).
     pub json_schema: Option<Value>,
@@ -58,15 +64,19 @@ pub struct ChatRequest {
 }
 
 impl ChatRequest {
+    /// A request of `messages` with the server's default sampling, no schema and no template
+    /// arguments.
     pub fn new(messages: Vec<Message>) -> ChatRequest {
         ChatRequest { messages, ..ChatRequest::default() }
     }
 
+    /// Replaces the sampling settings.
     pub fn with_sampling(mut self, sampling: Sampling) -> ChatRequest {
         self.sampling = sampling;
         self
     }
 
+    /// Asks for a JSON reply satisfying `schema` (see [`crate::chat_json`]).
     pub fn with_json_schema(mut self, schema: Value) -> ChatRequest {
         self.json_schema = Some(schema);
         self
@@ -78,6 +88,7 @@ impl ChatRequest {
         self
     }
 
+    /// Image parts over all messages.
     pub fn image_count(&self) -> usize {
         self.messages.iter().map(Message::image_count).sum()
     }

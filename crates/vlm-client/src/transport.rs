@@ -39,9 +39,13 @@ impl Default for RetryPolicy {
 /// them.
 #[derive(Debug, Clone)]
 pub struct Delivered {
+    /// The 2xx reply's body (at most 64 MiB).
     pub body: Vec<u8>,
+    /// Attempts made, the successful one included.
     pub attempts: u32,
+    /// Time slept between attempts (backoff or `Retry-After`).
     pub waited: Duration,
+    /// Time from the start of the first attempt to the body read, waits included.
     pub elapsed: Duration,
 }
 

@@ -31,6 +31,8 @@ pub use symmetry::ObjectSymmetries;
 #[derive(Debug, Clone, Copy, PartialEq, Eq, strum::EnumString, strum::IntoStaticStr, strum::VariantNames, strum::VariantArray)]
 #[strum(serialize_all = "kebab-case")]
 pub enum Algorithm {
+    /// A* on f = g + h: with an admissible heuristic such as [`crate::LmCut`] its plans are
+    /// optimal; a cheaper path reopens a closed state.
     #[strum(serialize = "astar")]
     AStar,
     /// Eager greedy best-first search: successors are evaluated when generated.
@@ -43,6 +45,7 @@ pub enum Algorithm {
 /// Limits and options of one search.
 #[derive(Debug, Clone)]
 pub struct SearchConfig {
+    /// Which search runs.
     pub algorithm: Algorithm,
     /// Use the heuristic's preferred operators (GBFS only): a second open list holding
     /// only successors reached by preferred operators, alternated with the first, with
@@ -71,6 +74,8 @@ pub struct SearchConfig {
 }
 
 impl SearchConfig {
+    /// `algorithm` with no budget, no cost bound, no preferred operators and no symmetries, timed
+    /// on the wall clock; relevant facts are computed by the search.
     pub fn new(algorithm: Algorithm) -> SearchConfig {
         SearchConfig {
             algorithm,

@@ -24,8 +24,11 @@ pub fn relevant_facts(task: &Task) -> Vec<u64> {
     relevance::relevant_facts(task, Closure::Facts, None).mask()
 }
 
+/// A registered state's index in its [`StateRegistry`]: dense, from 0, in order of registration.
 pub type StateId = u32;
 
+/// Every state a search registered, each stored once (projected when built by
+/// [`StateRegistry::projected`]), with a [`StateId`] per state.
 #[derive(Debug, Clone)]
 pub struct StateRegistry {
     width: usize,
@@ -55,10 +58,12 @@ impl StateRegistry {
         StateRegistry { width: mask.len(), words: Vec::new(), table: HashTable::new(), mask: Some(mask), scratch: Vec::new() }
     }
 
+    /// The number of distinct (projected) states registered.
     pub fn len(&self) -> usize {
         self.words.len().checked_div(self.width).unwrap_or(self.table.len())
     }
 
+    /// Whether no state is registered.
     pub fn is_empty(&self) -> bool {
         self.len() == 0
     }

@@ -15,49 +15,107 @@ use super::graph::{NodeIx, NodeState, Property, Relation, SceneGraph};
 /// The actions of EAI's executor (`scripts.Action`), with the number of objects each takes.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub enum Action {
+    /// `[CLOSE] <obj>`: an OPEN node that can be opened becomes CLOSED; the character must be close to it.
     Close,
+    /// `[DRINK] <obj>`: changes nothing; the character must hold the node, which must be drinkable or a recipient.
     Drink,
+    /// `[FIND] <obj>`: as `WALK`, except that a node already close (or a body part, or ON the character) is only
+    /// made close, the character's FACING edges dropped.
     Find,
+    /// `[WALK] <obj>`: the character moves into the node's room and, unless the node is that room, close to the node
+    /// and its non-room containers; also close to what the node rests ON and, if it can be opened, what is inside it.
+    /// What the character holds comes along. Fails while sitting or lying.
     Walk,
+    /// `[GRAB] <obj>`: a close, grabbable node not inside a closed one goes into a free hand (right first); what it
+    /// rested on is remembered for `PUTOBJBACK`.
     Grab,
+    /// `[LOOKAT] <obj>`, also spelled `LOOKAT_MEDIUM`: changes nothing; the character must face the node, or face a node
+    /// that faces it.
     LookAt,
+    /// `[LOOKAT_SHORT] <obj>`: as `LOOKAT`.
     LookAtShort,
+    /// `[LOOKAT_LONG] <obj>`: as `LOOKAT`.
     LookAtLong,
+    /// `[OPEN] <obj>`: a CLOSED node that can be opened and is not ON becomes OPEN; the character must be close to it
+    /// with a free hand.
     Open,
+    /// `[POINTAT] <obj>`: changes nothing; the character must face the node, or face a node
+    /// that faces it.
     PointAt,
+    /// `[PUTBACK] <obj> <surface>`: the held first node leaves the hand and is ON the second, which must be close.
     PutBack,
+    /// `[PUTIN] <obj> <container>`: the held first node leaves the hand and is INSIDE the second, which must be close
+    /// and, if it can be opened, OPEN.
     PutIn,
+    /// `[PUTOBJBACK] <obj>`: the held node goes back, with the same relation, to where `GRAB` took it from.
     PutObjBack,
+    /// `[RUN] <obj>`: as `WALK`.
     Run,
+    /// `[SIT] <obj>`: the character, not yet sitting, sits ON a close, sittable node with a seat free
+    /// ([`World::has_seat`]) and faces what the node faces.
     Sit,
+    /// `[STANDUP]`: the character stops sitting or lying; fails when it does neither.
     StandUp,
+    /// `[SWITCHOFF] <obj>`: an ON node with a switch becomes OFF; the character must be close to it.
     SwitchOff,
+    /// `[SWITCHON] <obj>`: an OFF node with a switch that is not PLUGGED_OUT becomes ON; the character must be close to it.
     SwitchOn,
+    /// `[TOUCH] <obj>`: changes nothing; the node must be close and not inside a closed node.
     Touch,
+    /// `[TURNTO] <obj>`: the character faces the node and nothing else; no precondition.
     TurnTo,
+    /// `[WATCH] <obj>`: changes nothing; the node must be lookable, in the character's room, faced by the character
+    /// (directly, while sitting or lying, unless it is a `computer`) and not inside a closed node.
     Watch,
+    /// `[WIPE] <obj>`: a close node becomes CLEAN (no longer DIRTY); the character must hold something.
     Wipe,
+    /// `[PUTON] <obj>`: the character puts on held clothes: they leave the hand and are ON the character.
     PutOn,
+    /// `[PUTOFF] <obj>`: clothes ON the character lose that edge.
     PutOff,
+    /// `[GREET] <obj>`: changes nothing; the node must be a person.
     Greet,
+    /// `[DROP] <obj>`: the held node leaves the hand and is INSIDE the character's room.
     Drop,
+    /// `[READ] <obj>`: changes nothing; the character must hold the node, which must be readable.
     Read,
+    /// `[LIE] <obj>`: the character, not yet lying, lies ON a close, lieable node with room free ([`World::has_seat`]).
     Lie,
+    /// `[POUR] <obj> <recipient>`: the held pourable or drinkable first node is INSIDE the close recipient; held `water`
+    /// also leaves the hand.
     Pour,
+    /// `[TYPE] <obj>`: changes nothing; the node must be close and a `keyboard` or have a switch.
     Type,
+    /// `[PUSH] <obj>`: changes nothing; the node must be close, not inside a closed node, and movable as EAI's
+    /// `check_movable` reads it ([`Property::Movable`]), and the character must have a free hand.
     Push,
+    /// `[PULL] <obj>`: as `PUSH`.
     Pull,
+    /// `[MOVE] <obj>`: as `PUSH`.
     Move,
+    /// `[WASH] <obj>`: a close node becomes CLEAN (no longer DIRTY).
     Wash,
+    /// `[RINSE] <obj>`: as `WASH`.
     Rinse,
+    /// `[SCRUB] <obj>`: as `WASH`.
     Scrub,
+    /// `[SQUEEZE] <obj>`: changes nothing; the node must be close and clothes or of a squeezable class (`soap`,
+    /// `sponge`, `towel`, ...), and the character must have a free hand.
     Squeeze,
+    /// `[PLUGIN] <obj>`: a PLUGGED_OUT node with a plug becomes PLUGGED_IN; the character must be close with a free hand.
     PlugIn,
+    /// `[PLUGOUT] <obj>`: a PLUGGED_IN node with a plug becomes PLUGGED_OUT; the character must be close with a free hand.
     PlugOut,
+    /// `[CUT] <obj>`: changes nothing; the node must be close, eatable and cuttable, and the character must hold a
+    /// knife (a class whose name contains `knife`) and have a free hand.
     Cut,
+    /// `[EAT] <obj>`: changes nothing; the node must be close and eatable, or have something eatable ON it.
     Eat,
+    /// `[SLEEP]`: changes nothing; the character must sit or lie.
     Sleep,
+    /// `[WAKEUP]`: as `SLEEP`.
     WakeUp,
+    /// `[RELEASE] <obj>`: as `DROP`.
     Release,
 }
 
@@ -135,6 +193,7 @@ impl Action {
 /// One parsed script line: `[PUTIN] <plate> (1001) <dishwasher> (1000)`.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct ScriptLine {
+    /// The action; `objects` must hold exactly its [`Action::arity`] entries.
     pub action: Action,
     /// `(name, id)` per object, the name lower-cased with spaces as `_` (as the executor).
     pub objects: Vec<(String, u32)>,
@@ -188,8 +247,12 @@ impl ScriptLine {
 /// remembers about grabbed objects (`executor_data[(GRAB, id)]`: where it rested).
 #[derive(Debug, Clone)]
 pub struct World {
+    /// The scene, changed in place by [`World::execute`].
     pub graph: SceneGraph,
+    /// The acting character's node.
     pub character: NodeIx,
+    /// Per node grabbed and not yet put down: the node it rested on when grabbed and the relation (ON,
+    /// INSIDE or CLOSE), which `PUTOBJBACK` restores; a node in here cannot be grabbed again.
     pub grabbed_from: FxHashMap<NodeIx, (NodeIx, Relation)>,
 }
 

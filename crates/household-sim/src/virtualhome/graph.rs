@@ -14,12 +14,13 @@ use super::VirtualhomeError;
 pub type NodeIx = u32;
 
 macro_rules! flag_enum {
-    ($(#[$doc:meta])* $name:ident, $set:ident, $bits:ty, [$($variant:ident = $text:literal),* $(,)?]) => {
+    ($(#[$doc:meta])* $name:ident, $set:ident, $bits:ty, [$($(#[$variant_doc:meta])* $variant:ident = $text:literal),* $(,)?]) => {
         $(#[$doc])*
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
-        pub enum $name { $($variant),* }
+        pub enum $name { $($(#[$variant_doc])* $variant),* }
 
         impl $name {
+            /// Every value, in declaration order.
             pub const ALL: &'static [$name] = &[$($name::$variant),*];
             /// The name as the executor writes it (`CLOSED`, `HOLDS_RH`, `CAN_OPEN`).
             pub fn as_str(self) -> &'static str {
@@ -42,9 +43,13 @@ macro_rules! flag_enum {
         pub struct $set($bits);
 
         impl $set {
+            /// Whether `value` is in the set.
             pub fn contains(self, value: $name) -> bool { self.0 & value.bit() != 0 }
+            /// Adds `value`; adding a member changes nothing.
             pub fn insert(&mut self, value: $name) { self.0 |= value.bit(); }
+            /// Removes `value`; removing a non-member changes nothing.
             pub fn remove(&mut self, value: $name) { self.0 &= !value.bit(); }
+            /// Whether the set has no member.
             pub fn is_empty(self) -> bool { self.0 == 0 }
             /// The members in declaration order.
             pub fn iter(self) -> impl Iterator<Item = $name> {
@@ -57,26 +62,103 @@ macro_rules! flag_enum {
 flag_enum!(
     /// An edge label of the evolving graph (`environment.Relation`).
     Relation, RelationSet, u16,
-    [On = "ON", Inside = "INSIDE", Between = "BETWEEN", Close = "CLOSE", Facing = "FACING",
-     HoldsRh = "HOLDS_RH", HoldsLh = "HOLDS_LH", Sitting = "SITTING"]
+    [
+     /// The source rests on the target: an object on a surface, clothes on the character, the character on its seat.
+     On = "ON",
+     /// The source is in the target, a room or a container.
+     Inside = "INSIDE",
+     /// The source (a door, a doorjamb) joins the target room; no action here reads or writes it.
+     Between = "BETWEEN",
+     /// The source is within reach of the target; the actions add it in both directions.
+     Close = "CLOSE",
+     /// The source faces the target; `TURNTO` and `SIT` set the character's, the look and watch actions read them.
+     Facing = "FACING",
+     /// The character holds the target in its right hand.
+     HoldsRh = "HOLDS_RH",
+     /// The character holds the target in its left hand.
+     HoldsLh = "HOLDS_LH",
+     /// The source sits on the target; no action here reads or writes it (a seated character is ON its seat and has
+     /// the node state [`NodeState::Sitting`]).
+     Sitting = "SITTING"]
 );
 
 flag_enum!(
     /// A node state of the evolving graph (`environment.State`).
     NodeState, StateSet, u16,
-    [Closed = "CLOSED", Open = "OPEN", On = "ON", Off = "OFF", Sitting = "SITTING", Dirty = "DIRTY",
-     Clean = "CLEAN", Lying = "LYING", PluggedIn = "PLUGGED_IN", PluggedOut = "PLUGGED_OUT"]
+    [
+     /// Shut; what is INSIDE a closed node other than a room is hidden and cannot be grabbed or touched.
+     Closed = "CLOSED",
+     /// Opened, by `OPEN`.
+     Open = "OPEN",
+     /// Switched on, by `SWITCHON`; such a node cannot be opened.
+     On = "ON",
+     /// Switched off, by `SWITCHOFF`.
+     Off = "OFF",
+     /// The character sits, after `SIT`; cleared by `STANDUP` and `LIE`.
+     Sitting = "SITTING",
+     /// Dirty; `WIPE`, `WASH`, `RINSE` and `SCRUB` clear it.
+     Dirty = "DIRTY",
+     /// Clean, after `WIPE`, `WASH`, `RINSE` or `SCRUB`.
+     Clean = "CLEAN",
+     /// The character lies, after `LIE`; cleared by `STANDUP` and `SIT`.
+     Lying = "LYING",
+     /// Plugged in, by `PLUGIN`.
+     PluggedIn = "PLUGGED_IN",
+     /// Unplugged, by `PLUGOUT`; such a node cannot be switched on.
+     PluggedOut = "PLUGGED_OUT"]
 );
 
 flag_enum!(
     /// An object property of the evolving graph (`environment.Property`).
     Property, PropertySet, u32,
-    [Surfaces = "SURFACES", Grabbable = "GRABBABLE", Sittable = "SITTABLE", Lieable = "LIEABLE",
-     Hangable = "HANGABLE", Drinkable = "DRINKABLE", Eatable = "EATABLE", Recipient = "RECIPIENT",
-     Cuttable = "CUTTABLE", Pourable = "POURABLE", CanOpen = "CAN_OPEN", HasSwitch = "HAS_SWITCH",
-     Readable = "READABLE", Lookable = "LOOKABLE", Containers = "CONTAINERS", Clothes = "CLOTHES",
-     Person = "PERSON", BodyPart = "BODY_PART", CoverObject = "COVER_OBJECT", HasPlug = "HAS_PLUG",
-     HasPaper = "HAS_PAPER", Movable = "MOVABLE", Cream = "CREAM"]
+    [
+     /// A surface; no action here checks it (`PUTBACK` puts onto any close node).
+     Surfaces = "SURFACES",
+     /// `GRAB` accepts it (and `water` and `child` without it).
+     Grabbable = "GRABBABLE",
+     /// `SIT` accepts it, up to a per-class number of sitters.
+     Sittable = "SITTABLE",
+     /// `LIE` accepts it, up to a per-class number.
+     Lieable = "LIEABLE",
+     /// No action here reads it.
+     Hangable = "HANGABLE",
+     /// `DRINK` accepts it; `POUR` pours it.
+     Drinkable = "DRINKABLE",
+     /// `EAT` accepts such a node, or one with such a node ON it; `CUT` needs it with [`Property::Cuttable`].
+     Eatable = "EATABLE",
+     /// `POUR` pours into it; `DRINK` accepts it.
+     Recipient = "RECIPIENT",
+     /// `CUT` needs it, with [`Property::Eatable`].
+     Cuttable = "CUTTABLE",
+     /// `POUR` pours it.
+     Pourable = "POURABLE",
+     /// `OPEN` and `CLOSE` accept it (and `desk` and `window` without it); `PUTIN` into such a node needs it OPEN.
+     CanOpen = "CAN_OPEN",
+     /// `SWITCHON` and `SWITCHOFF` need it; `TYPE` accepts it.
+     HasSwitch = "HAS_SWITCH",
+     /// `READ` needs it.
+     Readable = "READABLE",
+     /// `WATCH` needs it.
+     Lookable = "LOOKABLE",
+     /// No action here reads it (`PUTIN` needs only closeness and, for a node that opens, OPEN).
+     Containers = "CONTAINERS",
+     /// `PUTON` and `PUTOFF` need it; `SQUEEZE` accepts it.
+     Clothes = "CLOTHES",
+     /// `GREET` needs it.
+     Person = "PERSON",
+     /// A part of the character's body: `WALK` makes the character close to every one, and `FIND` of one never walks.
+     BodyPart = "BODY_PART",
+     /// No action here reads it.
+     CoverObject = "COVER_OBJECT",
+     /// `PLUGIN` and `PLUGOUT` need it.
+     HasPlug = "HAS_PLUG",
+     /// No action here reads it.
+     HasPaper = "HAS_PAPER",
+     /// `PUSH`, `PULL` and `MOVE` accept it; as EAI's `check_movable` is written they also accept any `chair` or
+     /// `curtain`, any `button`, and, for `PUSH`, any node at all.
+     Movable = "MOVABLE",
+     /// No action here reads it.
+     Cream = "CREAM"]
 );
 
 /// One node of the scene: what never changes (id, class, category, properties) and its
@@ -85,13 +167,18 @@ flag_enum!(
 pub struct SceneNode {
     /// The VirtualHome id (`<plate> (1001)`).
     pub id: u32,
+    /// The class as script lines spell it (`plate`, `kitchencounter`, `character`).
     pub class_name: String,
+    /// The category (`Rooms`, `Furniture`, `Appliances`, ...); empty when the JSON gives none.
     pub category: String,
+    /// What the object affords; no action changes them.
     pub properties: PropertySet,
+    /// The node's current states.
     pub states: StateSet,
 }
 
 impl SceneNode {
+    /// Whether the node is a room: its category is `Rooms`.
     pub fn is_room(&self) -> bool {
         self.category == "Rooms"
     }
@@ -176,10 +263,12 @@ impl SceneGraph {
         Ok(graph)
     }
 
+    /// The node at `ix`; panics when `ix` is not below [`SceneGraph::len`].
     pub fn node(&self, ix: NodeIx) -> &SceneNode {
         &self.nodes[ix as usize]
     }
 
+    /// The node at `ix`, mutable; panics when `ix` is not below [`SceneGraph::len`].
     pub fn node_mut(&mut self, ix: NodeIx) -> &mut SceneNode {
         &mut self.nodes[ix as usize]
     }
@@ -189,22 +278,28 @@ impl SceneGraph {
         self.by_id.get(&id).copied()
     }
 
+    /// The number of nodes (a node id given twice in the JSON counts once).
     pub fn len(&self) -> usize {
         self.nodes.len()
     }
 
+    /// Whether the graph has no node.
     pub fn is_empty(&self) -> bool {
         self.nodes.is_empty()
     }
 
+    /// Every node index, `0..len()`.
     pub fn indices(&self) -> impl Iterator<Item = NodeIx> {
         0..self.nodes.len() as NodeIx
     }
 
+    /// Whether the edge `from` -`relation`-> `to` is in the graph.
     pub fn has_edge(&self, from: NodeIx, relation: Relation, to: NodeIx) -> bool {
         self.edges.edge_weight(from, to).is_some_and(|set| set.contains(relation))
     }
 
+    /// Adds the edge `from` -`relation`-> `to`; adding one already there changes nothing. The
+    /// indices are not checked against [`SceneGraph::len`].
     pub fn add_edge(&mut self, from: NodeIx, relation: Relation, to: NodeIx) {
         match self.edges.edge_weight_mut(from, to) {
             Some(set) => set.insert(relation),
@@ -216,6 +311,7 @@ impl SceneGraph {
         }
     }
 
+    /// Removes the edge `from` -`relation`-> `to`; removing one not there changes nothing.
     pub fn remove_edge(&mut self, from: NodeIx, relation: Relation, to: NodeIx) {
         if let Some(set) = self.edges.edge_weight_mut(from, to) {
             set.remove(relation);

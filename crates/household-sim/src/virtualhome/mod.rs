@@ -24,32 +24,80 @@ pub use graph::{NodeIx, NodeState, Property, Relation, SceneGraph, SceneNode};
 /// What can go wrong loading a VirtualHome task.
 #[derive(Debug, thiserror::Error)]
 pub enum VirtualhomeError {
+    /// The task file could not be read.
     #[error("{path}: cannot read: {source}")]
-    Io { path: String, source: std::io::Error },
+    Io {
+        /// The task file.
+        path: String,
+        /// The operating system's error.
+        source: std::io::Error,
+    },
+    /// The file is not a task file: bad gzip data, not UTF-8, not JSON, or JSON without the
+    /// task file's fields.
     #[error("{origin}: not valid task JSON: {message}")]
-    Json { origin: String, message: String },
+    Json {
+        /// The task file (or the `origin` given to [`VirtualhomeTask::from_json`]).
+        origin: String,
+        /// What is wrong, with `serde_json`'s line and column where it gives them.
+        message: String,
+    },
+    /// The task file parses but its content is wrong: an unknown state, property or relation,
+    /// an edge or goal naming a node the scene lacks, no `character` node, or a `task_id` that
+    /// is not the file's name.
     #[error("{origin}: field `{field}`: {message}")]
-    BadGraph { origin: String, field: String, message: String },
+    BadGraph {
+        /// The task file (or the `origin` given to [`VirtualhomeTask::from_json`]).
+        origin: String,
+        /// Where in the JSON: `nodes[3].states[0]`, `edges[7].to_id`, `vh_goal.goal[1].id`, `task_id`, ...
+        field: String,
+        /// What is wrong there.
+        message: String,
+    },
 }
 
 /// A goal of EAI's `vh_goal`: a node state, an edge, or a group of alternative actions
 /// (`"WATCH|LOOKAT"`) that must appear, in order, among the executed lines.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub enum VhGoal {
-    State { node: u32, class_name: String, state: NodeState },
-    Edge { from: u32, relation: Relation, to: u32 },
-    Action { options: String },
+    /// The node must have the state.
+    State {
+        /// The node's VirtualHome id.
+        node: u32,
+        /// The class the goal names, as written (empty when the goal gives none); not checked against the node.
+        class_name: String,
+        /// The state that must hold.
+        state: NodeState,
+    },
+    /// The edge must be in the graph.
+    Edge {
+        /// The source node's VirtualHome id.
+        from: u32,
+        /// The edge label.
+        relation: Relation,
+        /// The target node's VirtualHome id.
+        to: u32,
+    },
+    /// One of the actions must have been executed after the previous action goal's match.
+    Action {
+        /// The alternatives as EAI writes them, separated by `|` (`"WATCH|LOOKAT"`); matched
+        /// upper-cased with spaces removed.
+        options: String,
+    },
 }
 
 /// One EAI VirtualHome task: its initial scene graph and its goal.
 #[derive(Debug, Clone)]
 pub struct VirtualhomeTask {
+    /// EAI's task id; [`VirtualhomeTask::load`] requires the file to be named for it
+    /// (`<task_id>.json.gz` or `<task_id>.json`).
     pub task_id: String,
     /// EAI's task category ("Wash dishes with dishwasher").
     pub task_name: String,
     /// The program's description line ("Wash a plate using the dishwasher in the kitchen.").
     pub description: String,
+    /// The initial scene and its acting character; [`Environment::reset`] starts from a copy.
     pub init: World,
+    /// The goals in `vh_goal`'s order (node and edge goals, then action goals), each once.
     pub goals: Vec<VhGoal>,
     /// `vh_goal` as EAI writes it (with node ids: for the judge and records, never for an
     /// agent; the goal annotation is [`class_level_goal`]).

@@ -86,7 +86,9 @@ pub struct VhProblem {
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
 #[error("task {task}: goal {goal} has no counterpart in the sound domain")]
 pub struct UnexpressibleGoal {
+    /// The task's id ([`VirtualhomeTask::task_id`]).
     pub task: String,
+    /// The goal in words: `plate (1001) is CLEAN`, `plate (1001) INSIDE dishwasher (1000)`, `action WATCH|LOOKAT`.
     pub goal: String,
 }
 

@@ -16,6 +16,8 @@ pub enum Architecture {
 }
 
 impl Architecture {
+    /// The family a `general.architecture` value names (`llama`, `qwen2`, `qwen3`); any other
+    /// is [`LmError::UnsupportedArchitecture`].
     pub fn from_name(name: &str) -> Result<Self, LmError> {
         match name {
             "llama" => Ok(Architecture::Llama),
@@ -25,6 +27,7 @@ impl Architecture {
         }
     }
 
+    /// The `general.architecture` value, which also prefixes the family's metadata keys.
     pub fn name(self) -> &'static str {
         match self {
             Architecture::Llama => "llama",
@@ -47,6 +50,7 @@ pub struct RopeConfig {
     pub base: f32,
     /// `{arch}.rope.dimension_count`: how many leading dimensions of each head rotate.
     pub dimensions: usize,
+    /// NeoX pairing, `(i, i + d/2)`, rather than `(2i, 2i + 1)` ([`Architecture::rope_is_neox`]).
     pub neox: bool,
     /// `{arch}.rope.scaling.factor` with `rope.scaling.type = linear`: positions are divided by it.
     pub linear_scale: f32,
@@ -55,6 +59,7 @@ pub struct RopeConfig {
 /// Everything the forward pass needs to know about the model's shape.
 #[derive(Debug, Clone, PartialEq)]
 pub struct ModelConfig {
+    /// The family, from `general.architecture`.
     pub architecture: Architecture,
     /// `{arch}.block_count`.
     pub layers: usize,
@@ -72,6 +77,7 @@ pub struct ModelConfig {
     pub context_length: usize,
     /// `{arch}.attention.layer_norm_rms_epsilon`.
     pub rms_eps: f32,
+    /// Rotary position embedding parameters.
     pub rope: RopeConfig,
 }
 

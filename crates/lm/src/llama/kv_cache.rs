@@ -40,6 +40,7 @@ impl KvCache {
         self.len
     }
 
+    /// Whether no position is held.
     pub fn is_empty(&self) -> bool {
         self.len == 0
     }
@@ -57,6 +58,7 @@ impl KvCache {
         self.len = len;
     }
 
+    /// Forgets every position (the buffers keep their capacity).
     pub fn clear(&mut self) {
         self.truncate(0);
     }

@@ -294,6 +294,7 @@ impl LlamaModel {
         Ok(LlamaModel { config, vocabulary_size, embedding, layers, output_norm, output, output_rows, rope_theta })
     }
 
+    /// The hyper-parameters read from the GGUF metadata.
     pub fn config(&self) -> &ModelConfig {
         &self.config
     }

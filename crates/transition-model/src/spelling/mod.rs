@@ -26,29 +26,49 @@ use rustc_hash::FxHashMap;
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, strum::EnumString, strum::IntoStaticStr, strum::VariantNames, strum::VariantArray)]
 #[strum(serialize_all = "lowercase")]
 pub enum SurfaceLanguage {
+    /// PDDL action names, `(schema arg1 ... argn)`.
     Pddl,
+    /// ALFWorld's TextWorld commands (`take apple 1 from desk 2`).
     Alfworld,
+    /// VirtualHome's class-level script verbs (`putin wineglass dishwasher`).
     Virtualhome,
 }
 
 impl SurfaceLanguage {
+    /// The command-line name: `pddl`, `alfworld` or `virtualhome`.
     pub fn name(self) -> &'static str {
         self.into()
     }
 
+    /// The language with command-line name `name` (exact, lowercase); `None` for any other text.
     pub fn from_name(name: &str) -> Option<SurfaceLanguage> {
         name.parse().ok()
     }
 }
 
+/// Why an ALFWorld spelling could not be built from a game's grammar.
 #[derive(Debug, thiserror::Error)]
 pub enum SpellingError {
+    /// The grammar has no `template` for this action schema (its lowercased name).
     #[error("the ALFWorld grammar has no template for action `{0}`")]
     MissingTemplate(String),
+    /// A template placeholder is not one of its schema's parameters.
     #[error("the ALFWorld template for `{action}` names `{{{placeholder}}}`, which is not a parameter of the action")]
-    UnknownPlaceholder { action: String, placeholder: String },
+    UnknownPlaceholder {
+        /// The schema's lowercased name.
+        action: String,
+        /// The placeholder's name, lowercased, without braces.
+        placeholder: String,
+    },
+    /// The grammar or a template cannot be read.
     #[error("the ALFWorld grammar is malformed near byte {offset}: {message}")]
-    MalformedGrammar { offset: usize, message: String },
+    MalformedGrammar {
+        /// A byte offset: into the grammar for a malformed `action` block, into the template
+        /// text for an unclosed `{` in a template.
+        offset: usize,
+        /// What is wrong there.
+        message: String,
+    },
 }
 
 /// The spelling table of one task in one surface language.
@@ -100,6 +120,7 @@ impl Spelling {
         Spelling::from_fn(task, SurfaceLanguage::Pddl, |a| Some(task.action_name(a)))
     }
 
+    /// The surface language the texts are written in.
     pub fn language(&self) -> SurfaceLanguage {
         self.language
     }
