@@ -187,8 +187,14 @@ impl RelaxedTask {
                 if add.is_empty() {
                     continue;
                 }
+                // A condition fact the precondition already has is one precondition, not two (h_add
+                // would count it twice): sorted and deduplicated, as Fast Downward's relaxation
+                // does with each unary operator's preconditions (and as `condition_facts` gives
+                // an action's own).
                 let mut pre = pre.clone();
                 pre.extend(builder.condition_facts(&effect.condition));
+                pre.sort_unstable();
+                pre.dedup();
                 builder.push(pre, add, action.cost, index as u32);
             }
         }
