@@ -100,14 +100,6 @@ pub enum DataError {
         /// What the field should have been, e.g. `a list of strings`.
         expected: &'static str,
     },
-    /// A gold plan whose problem file is missing. No loader in this crate returns it at present.
-    #[error("{path}: no problem file for gold plan `{id}`")]
-    MissingProblem {
-        /// The gold-plan file.
-        path: PathBuf,
-        /// The task id of the plan.
-        id: String,
-    },
     /// A subset file lists a task id the benchmark does not have.
     #[error("{path}:{line}: no task `{id}` in {benchmark}")]
     UnknownSubsetTask {

@@ -65,18 +65,27 @@ pub enum EnvError {
         /// The grounder's rendered error.
         message: String,
     },
-    /// The TextWorld grammar does not parse, names a symbol it does not define, or has no
-    /// `action` block for one of the domain's actions.
+    /// The TextWorld grammar does not parse, or a part of it does not read: a template, a
+    /// production, a symbol named but not defined. At the place in the grammar text: the error
+    /// itself, or for a part, its `action` block or the key of its symbol.
     #[error("{path}: the `grammar` field, line {line}, column {column}: {message}")]
     Grammar {
         /// The game's name in errors.
         path: String,
-        /// 1-based line in the grammar text; 1 for errors found after parsing (unknown symbols,
-        /// missing action blocks), which carry no position.
+        /// 1-based line in the grammar text.
         line: usize,
-        /// 1-based column, in characters; 1 for errors found after parsing.
+        /// 1-based column, in characters.
         column: usize,
         /// What is wrong.
+        message: String,
+    },
+    /// The TextWorld grammar lacks what has no place in it: an `action` block for one of the
+    /// domain's actions, or a symbol the game's intro (`#intro#`) needs.
+    #[error("{path}: the `grammar` field: {message}")]
+    GrammarIncomplete {
+        /// The game's name in errors.
+        path: String,
+        /// What is missing.
         message: String,
     },
 }

@@ -40,7 +40,8 @@ pub use error::EnvError;
 pub use python_random::PythonRandom;
 pub use virtualhome::pddl as vh_pddl;
 pub use virtualhome::{
-    Action as VhAction, NodeIx as VhNodeIx, NodeState as VhNodeState, Property as VhProperty, Relation as VhRelation, SceneGraph,
-    SceneNode, ScriptLine, VhGoal, VirtualhomeEnv, VirtualhomeError, VirtualhomeTask, World as VhWorld, bind as vh_bind,
-    class_level_goal as vh_class_level_goal, visible_nodes as vh_visible_nodes,
+    Action as VhAction, NodeIx as VhNodeIx, NodeState as VhNodeState, Property as VhProperty, PropertySet as VhPropertySet,
+    Relation as VhRelation, RelationSet as VhRelationSet, SceneGraph, SceneNode, ScriptLine, StateSet as VhStateSet, VhGoal,
+    VirtualhomeEnv, VirtualhomeError, VirtualhomeTask, World as VhWorld, bind as vh_bind, class_level_goal as vh_class_level_goal,
+    visible_nodes as vh_visible_nodes,
 };

@@ -40,9 +40,15 @@ fn malformed_json_names_line_and_column() {
 fn a_grammar_naming_an_unknown_symbol_is_an_error_with_its_position() {
     let mut game = game_json();
     let grammar = game["grammar"].as_str().expect("grammar").replace("#examineReceptacle.feedback#", "#no.such.symbol#");
+    // Found first in an action's feedback: the error is at that action's block.
+    let used = grammar.find("feedback :: \"#no.such.symbol#\"").expect("an action's feedback names it");
+    let block = grammar[..used].rfind("action ").expect("its block");
+    let line = grammar[..block].matches('\n').count() + 1;
+    let column = block - grammar[..block].rfind('\n').map_or(0, |n| n + 1) + 1;
     game["grammar"] = serde_json::Value::String(grammar);
     let error = load(&game).expect_err("unknown symbol");
     let text = error.to_string();
+    assert!(text.contains(&format!("the `grammar` field, line {line}, column {column}: ")), "{text}");
     assert!(text.contains("`#no.such.symbol#`") && text.contains("which it does not define"), "{text}");
 
     let mut game = game_json();
@@ -51,6 +57,26 @@ fn a_grammar_naming_an_unknown_symbol_is_an_error_with_its_position() {
     game["grammar"] = serde_json::Value::String(grammar);
     let text = load(&game).expect_err("unknown part").to_string();
     assert!(text.contains("the `grammar` field, line") && text.contains("unknown part `bogus`"), "{text}");
+}
+
+/// A production that does not read is placed at its symbol's key in the grammar block, not at
+/// the grammar's first line.
+#[test]
+fn a_production_that_does_not_read_is_placed_at_its_symbol() {
+    let mut game = game_json();
+    let grammar = game["grammar"].as_str().expect("grammar").to_string();
+    let key = grammar.find("\"examineReceptacle.feedback\"").expect("the symbol's key");
+    let after = key + grammar[key..].find("\"rhs\": \"").expect("a production") + "\"rhs\": \"".len();
+    let mut broken = grammar.clone();
+    broken.insert_str(after, "{r.na-me} ");
+    let line = grammar[..key].matches('\n').count() + 1;
+    game["grammar"] = serde_json::Value::String(broken);
+    let text = match load(&game) {
+        Ok(_) => panic!("a production with an unsupported expression loaded"),
+        Err(error) => error.to_string(),
+    };
+    assert!(text.contains(&format!("the `grammar` field, line {line}, column ")), "{text}");
+    assert!(text.contains("a `examineReceptacle.feedback` production"), "{text}");
 }
 
 #[test]

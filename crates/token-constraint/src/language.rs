@@ -23,7 +23,7 @@ pub struct LanguageConfig {
     /// Bytes written after every action (default `\n`).
     pub separator: Vec<u8>,
     /// Text that ends the plan at an action boundary, besides the end-of-sequence token
-    /// (default `DONE`, as the paper's prompts say); `None` for EOS only.
+    /// (default `DONE`, as the paper's prompts say); `None`, or an empty marker, for EOS only.
     pub end_marker: Option<Vec<u8>>,
 }
 
@@ -109,7 +109,7 @@ impl LanguageBuilder {
         if text.windows(sep.len()).any(|w| w == sep.as_slice()) {
             return Err(LanguageError::ContainsSeparator { text: lossy(), separator: String::from_utf8_lossy(sep).into_owned() });
         }
-        if let Some(marker) = &self.config.end_marker
+        if let Some(marker) = self.config.end_marker.as_ref().filter(|m| !m.is_empty())
             && text.starts_with(marker)
         {
             return Err(LanguageError::StartsWithEndMarker { text: lossy(), marker: String::from_utf8_lossy(marker).into_owned() });

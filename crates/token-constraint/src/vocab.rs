@@ -21,7 +21,7 @@ pub enum VocabularyError {
     },
     /// More tokens than `u32` ids can number, or more than `u32::MAX` bytes of token text in
     /// all.
-    #[error("the vocabulary has {len} tokens, more than token ids can number")]
+    #[error("the vocabulary of {len} tokens is too large: more tokens than u32 ids can number, or more than u32::MAX bytes of token text")]
     TooLarge {
         /// The number of tokens.
         len: usize,

@@ -148,3 +148,17 @@ fn bad_action_texts_are_refused_with_the_text() {
     assert_eq!(builder.push(b"x", true), Ok(0), "a repeated text keeps its id");
     assert!(builder.build().end_after(0), "and gains end_after");
 }
+
+/// An empty end marker is no end marker, for the builder's checks as for the masks: texts are
+/// accepted (every text starts with the empty string), and at the boundary only the actions and
+/// EOS are allowed, as with `None`.
+#[test]
+fn an_empty_end_marker_is_no_end_marker() {
+    let v = vocab();
+    for end_marker in [None, Some(Vec::new())] {
+        let mut builder = LanguageBuilder::new(LanguageConfig { separator: b"\n".to_vec(), end_marker: end_marker.clone() });
+        assert_eq!(builder.push(b"go cab 1", true), Ok(0), "{end_marker:?}");
+        let m = Matcher::new(Arc::new(builder.build()));
+        assert_eq!(mask(&m, &v), vec![0, 10, EOS], "{end_marker:?}");
+    }
+}

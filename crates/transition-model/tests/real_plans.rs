@@ -195,3 +195,26 @@ fn spellings_round_trip_and_gold_plans_validate_in_virtualhome_verbs() {
     assert_eq!(rewritten, 296);
     println!("{spelled} spelled actions parse back; {rewritten} gold plans validate in VirtualHome verbs");
 }
+
+/// A broken grammar is named where it breaks: an `action` block without `{` at its byte in the
+/// grammar, a template's unclosed placeholder by its action and its byte in the template.
+#[test]
+fn a_broken_alfworld_grammar_says_where() {
+    use transition_model::SpellingError;
+    let files = load(Benchmark::AlfworldSeen).expect("fixtures load").into_iter().next().expect("a task");
+    let Extra::Alfworld(game) = &files.extra else { panic!("an ALFWorld game") };
+    let model = model(&files);
+    let unclosed = game.grammar.replacen("template :: \"open {r}\"", "template :: \"open {r\"", 1);
+    assert_ne!(unclosed, game.grammar, "the fixture's grammar has the open template");
+    match Spelling::alfworld(model.task(), &unclosed) {
+        Err(SpellingError::UnclosedPlaceholder { action, offset }) => assert_eq!((action.as_str(), offset), ("openobject", 5)),
+        other => panic!("{:?}", other.map(|_| ())),
+    }
+    // Cut just before an action block's `{`: that block is the one without a brace.
+    let at = game.grammar.rfind("action ").expect("an action block");
+    let cut = &game.grammar[..at + game.grammar[at..].find('{').expect("its brace")];
+    match transition_model::alfworld::templates(cut) {
+        Err(SpellingError::MalformedGrammar { offset, .. }) => assert_eq!(offset, at, "{}", &cut[offset..]),
+        other => panic!("{:?}", other.map(|_| ())),
+    }
+}

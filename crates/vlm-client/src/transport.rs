@@ -116,7 +116,7 @@ fn send(agent: &ureq::Agent, url: &str, body: Option<&[u8]>, bearer: Option<&str
 
 /// How long to wait before attempt `attempts + 1`, or `None` when the server's `Retry-After`
 /// asks for longer than the policy allows.
-pub fn retry_wait(kind: &ChatErrorKind, attempts: u32, policy: &RetryPolicy) -> Option<Duration> {
+pub(crate) fn retry_wait(kind: &ChatErrorKind, attempts: u32, policy: &RetryPolicy) -> Option<Duration> {
     if let ChatErrorKind::Status { status: 429 | 503, retry_after: Some(asked), .. } = kind {
         return (*asked <= policy.max_wait).then_some(*asked);
     }
@@ -164,7 +164,7 @@ fn attempt(agent: &ureq::Agent, url: &str, body: Option<&[u8]>, bearer: Option<&
 }
 
 /// A `ureq` error as a [`ChatErrorKind`].
-pub fn classify(error: ureq::Error, timeout: Duration) -> ChatErrorKind {
+pub(crate) fn classify(error: ureq::Error, timeout: Duration) -> ChatErrorKind {
     use std::io::ErrorKind;
     match error {
         ureq::Error::Timeout(_) => ChatErrorKind::Timeout(timeout),
@@ -187,7 +187,7 @@ pub fn classify(error: ureq::Error, timeout: Duration) -> ChatErrorKind {
 }
 
 /// `Retry-After` as delta-seconds or an HTTP date (IMF-fixdate), as a wait from now.
-pub fn parse_retry_after(value: &str) -> Option<Duration> {
+pub(crate) fn parse_retry_after(value: &str) -> Option<Duration> {
     let value = value.trim();
     if let Ok(seconds) = value.parse::<u64>() {
         return Some(Duration::from_secs(seconds));

@@ -55,6 +55,8 @@ struct SchemaText {
     /// Whether the template reads only facts no action changes, so one spelling per action
     /// holds for the whole episode.
     template_is_static: bool,
+    /// Byte offset of the schema's `action` block in the grammar, for errors.
+    offset: usize,
 }
 
 /// An effect atom of a Fast Downward operator, as TextWorld applies it: `set` is added to
@@ -307,8 +309,11 @@ impl AlfworldEnv {
         }
 
         // The grammar, checked for unknown symbols now rather than mid-episode.
-        let parse =
-            |text: &str, what: &str| textgen::parse_symbols(text, &predicates).map_err(|e| grammar_error(0, format!("{what}: {e}")));
+        // Errors found from here on are placed where the grammar writes what they are about: an
+        // action's block, or the key of the symbol whose production it is.
+        let parse = |text: &str, what: &str, offset: usize| {
+            textgen::parse_symbols(text, &predicates).map_err(|e| grammar_error(offset, format!("{what}: {e}")))
+        };
         let mut grammar = Grammar::default();
         for (name, rules) in &document.rules {
             let mut productions = Vec::with_capacity(rules.len());
@@ -318,19 +323,19 @@ impl AlfworldEnv {
                 } else {
                     Some(
                         facts::Query::parse(&rule.condition, &predicates)
-                            .map_err(|e| grammar_error(0, format!("the condition of a `{name}` production: {e}")))?,
+                            .map_err(|e| grammar_error(rule.offset, format!("the condition of a `{name}` production: {e}")))?,
                     )
                 };
-                productions.push(Production { condition, rhs: parse(&rule.rhs, &format!("a `{name}` production"))? });
+                productions.push(Production { condition, rhs: parse(&rule.rhs, &format!("a `{name}` production"), rule.offset)? });
             }
             grammar.rules.push((name.clone(), productions));
         }
         let mut schemas = Vec::with_capacity(task.schemas.len());
         for schema in &task.schemas {
-            let text =
-                document.actions.iter().find(|a| a.name == schema.name).ok_or_else(|| {
-                    grammar_error(0, format!("no `action {}` block for the domain's action `{}`", schema.name, schema.name))
-                })?;
+            let text = document.actions.iter().find(|a| a.name == schema.name).ok_or_else(|| EnvError::GrammarIncomplete {
+                path: source.into(),
+                message: format!("no `action {}` block for the domain's action `{}`", schema.name, schema.name),
+            })?;
             let declared = domain.actions.iter().find(|a| a.name.as_str().eq_ignore_ascii_case(&schema.name));
             let params = schema
                 .params
@@ -349,30 +354,43 @@ impl AlfworldEnv {
                     Placeholder { name: name.clone(), ty }
                 })
                 .collect();
-            let template = parse(&text.template, &format!("the template of `{}`", text.name))?;
-            let feedback = parse(&text.feedback, &format!("the feedback of `{}`", text.name))?;
+            let template = parse(&text.template, &format!("the template of `{}`", text.name), text.offset)?;
+            let feedback = parse(&text.feedback, &format!("the feedback of `{}`", text.name), text.offset)?;
             let template_is_static = reads_only_static(&template, &changing);
-            schemas.push(SchemaText { template, feedback, params, template_is_static });
+            schemas.push(SchemaText { template, feedback, params, template_is_static, offset: text.offset });
         }
-        let intro = parse("#intro#", "the intro")?;
-        let mut named_symbols = Vec::new();
-        for symbols in schemas.iter().flat_map(|s| [&s.template, &s.feedback]).chain([&intro]) {
-            textgen::nonterminals(symbols, &mut named_symbols);
+        let intro = parse("#intro#", "the intro", 0)?;
+        // Each symbol named, with where it is named: an action's block, a production's symbol
+        // key, or nowhere in the grammar (the intro that every game starts from).
+        let mut named_symbols: Vec<(String, Option<usize>)> = Vec::new();
+        let mut name_all = |symbols: &[Symbol], offset: Option<usize>| {
+            let mut names = Vec::new();
+            textgen::nonterminals(symbols, &mut names);
+            named_symbols.extend(names.into_iter().map(|name| (name.to_string(), offset)));
+        };
+        for schema in &schemas {
+            name_all(&schema.template, Some(schema.offset));
+            name_all(&schema.feedback, Some(schema.offset));
         }
-        for (_, productions) in &grammar.rules {
-            for production in productions {
-                textgen::nonterminals(&production.rhs, &mut named_symbols);
+        name_all(&intro, None);
+        for ((_, productions), (_, texts)) in grammar.rules.iter().zip(&document.rules) {
+            for (production, text) in productions.iter().zip(texts) {
+                name_all(&production.rhs, Some(text.offset));
             }
         }
-        for name in named_symbols {
-            if !grammar.rules.iter().any(|(n, p)| n == name && !p.is_empty()) {
-                return Err(grammar_error(0, format!("the grammar names the symbol `#{name}#`, which it does not define")));
+        for (name, offset) in named_symbols {
+            if !grammar.rules.iter().any(|(n, p)| *n == name && !p.is_empty()) {
+                let message = format!("the grammar names the symbol `#{name}#`, which it does not define");
+                return Err(match offset {
+                    Some(offset) => grammar_error(offset, message),
+                    None => EnvError::GrammarIncomplete { path: source.into(), message },
+                });
             }
         }
 
         let task_sentence = {
             let world = World { grammar: &grammar, facts: &initial_facts, entities: &entities };
-            let task_symbol = parse("#task#", "the task sentence")?;
+            let task_symbol = parse("#task#", "the task sentence", 0)?;
             let text = world.derive(&task_symbol, &Context::default()).unwrap_or_default();
             text.strip_prefix("Your task is to: ").unwrap_or(&text).to_string()
         };

@@ -16,6 +16,8 @@ use serde_json::Value;
 pub(crate) struct ActionText {
     /// Lowercased, as TextWorld keys actions.
     pub name: String,
+    /// Byte offset of the block's `action` keyword in the document.
+    pub offset: usize,
     pub template: String,
     pub feedback: String,
 }
@@ -25,6 +27,9 @@ pub(crate) struct ActionText {
 pub(crate) struct RuleText {
     pub condition: String,
     pub rhs: String,
+    /// Byte offset in the document of the symbol's key (`"name"`) in the grammar block that gave
+    /// this production, or of the block where the key is not written plainly.
+    pub offset: usize,
 }
 
 #[derive(Debug, Clone, Default)]
@@ -134,7 +139,9 @@ fn dedent(text: &str) -> String {
         .join("\n")
 }
 
-fn merge_json(rules: &mut Vec<(String, Vec<RuleText>)>, json: &str, at: usize) -> Result<(), DocError> {
+/// Merges one grammar block: `json` is its text as parsed, `raw` its text as written, starting
+/// at byte `start` of the document (`at` is the block's opening `"""`, for errors).
+fn merge_json(rules: &mut Vec<(String, Vec<RuleText>)>, json: &str, raw: &str, start: usize, at: usize) -> Result<(), DocError> {
     let value: Value = serde_json::from_str(json).map_err(|e| DocError {
         offset: at,
         message: format!("grammar block is not valid JSON (its line {}, column {}): {e}", e.line(), e.column()),
@@ -146,6 +153,7 @@ fn merge_json(rules: &mut Vec<(String, Vec<RuleText>)>, json: &str, at: usize) -
         let Value::Array(list) = productions else {
             return Err(DocError { offset: at, message: format!("grammar symbol `{name}` is not a list of productions") });
         };
+        let key_at = raw.find(&format!("\"{name}\"")).map_or(at, |i| start + i);
         let mut parsed = Vec::with_capacity(list.len());
         for production in list {
             let rhs = production
@@ -159,7 +167,7 @@ fn merge_json(rules: &mut Vec<(String, Vec<RuleText>)>, json: &str, at: usize) -
                     return Err(DocError { offset: at, message: format!("a production of `{name}` has a non-string `condition`") });
                 }
             };
-            parsed.push(RuleText { condition, rhs: rhs.to_string() });
+            parsed.push(RuleText { condition, rhs: rhs.to_string(), offset: key_at });
         }
         match rules.iter_mut().find(|(n, _)| *n == name) {
             Some(slot) => slot.1 = parsed,
@@ -179,11 +187,13 @@ pub(crate) fn parse(text: &str) -> Result<Document, DocError> {
         }
         if cursor.eat("grammar") {
             cursor.expect("::", "after `grammar`")?;
+            cursor.skip();
             let at = cursor.pos;
             let code = cursor.string(true)?;
             cursor.expect(";", "after the grammar block")?;
-            merge_json(&mut doc.rules, &dedent(code), at)?;
+            merge_json(&mut doc.rules, &dedent(code), code, at + 3, at)?;
         } else if cursor.eat("action") {
+            let offset = cursor.pos - "action".len();
             let name = cursor.name()?.to_lowercase();
             cursor.expect("{", "after the action's name")?;
             let (mut template, mut feedback) = (None, None);
@@ -200,10 +210,11 @@ pub(crate) fn parse(text: &str) -> Result<Document, DocError> {
                         cursor.string(true)?;
                     }
                     "grammar" => {
+                        cursor.skip();
                         let at = cursor.pos;
                         let code = cursor.string(true)?;
                         let kept: Vec<&str> = code.split('\n').filter(|l| !l.trim_start().starts_with('#')).collect();
-                        merge_json(&mut doc.rules, &dedent(&kept.join("\n")), at)?;
+                        merge_json(&mut doc.rules, &dedent(&kept.join("\n")), code, at + 3, at)?;
                     }
                     other => return Err(cursor.error(format!("unknown part `{other}` in action `{name}`"))),
                 }
@@ -212,7 +223,7 @@ pub(crate) fn parse(text: &str) -> Result<Document, DocError> {
             let missing = |what: &str| DocError { offset: cursor.pos, message: format!("action `{name}` has no {what}") };
             let template = template.ok_or_else(|| missing("template"))?;
             let feedback = feedback.ok_or_else(|| missing("feedback"))?;
-            doc.actions.push(ActionText { name, template, feedback });
+            doc.actions.push(ActionText { name, offset, template, feedback });
         } else {
             return Err(cursor.error("expected `grammar ::` or `action`"));
         }

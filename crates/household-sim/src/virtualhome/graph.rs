@@ -268,7 +268,8 @@ impl SceneGraph {
         &self.nodes[ix as usize]
     }
 
-    /// The node at `ix`, mutable; panics when `ix` is not below [`SceneGraph::len`].
+    /// The node at `ix`, mutable; panics when `ix` is not below [`SceneGraph::len`]. Its `id`
+    /// must stay as it is: [`SceneGraph::index_of`] keeps the id each index was loaded with.
     pub fn node_mut(&mut self, ix: NodeIx) -> &mut SceneNode {
         &mut self.nodes[ix as usize]
     }
@@ -298,9 +299,15 @@ impl SceneGraph {
         self.edges.edge_weight(from, to).is_some_and(|set| set.contains(relation))
     }
 
-    /// Adds the edge `from` -`relation`-> `to`; adding one already there changes nothing. The
-    /// indices are not checked against [`SceneGraph::len`].
+    /// Adds the edge `from` -`relation`-> `to`; adding one already there changes nothing. Panics
+    /// when an index is not below [`SceneGraph::len`], as [`SceneGraph::node`] does (the edge
+    /// map would otherwise hold a node with no [`SceneNode`]).
     pub fn add_edge(&mut self, from: NodeIx, relation: Relation, to: NodeIx) {
+        assert!(
+            (from as usize) < self.nodes.len() && (to as usize) < self.nodes.len(),
+            "edge {from} -> {to} names a node index past the graph's {}",
+            self.nodes.len()
+        );
         match self.edges.edge_weight_mut(from, to) {
             Some(set) => set.insert(relation),
             None => {

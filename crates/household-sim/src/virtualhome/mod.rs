@@ -19,7 +19,7 @@ use serde::Deserialize;
 use crate::env::{EngineLine, Environment, Event, GoalAnnotation, Judge, JudgeAtom, Observation, StepResult};
 
 pub use exec::{Action, ScriptLine, World};
-pub use graph::{NodeIx, NodeState, Property, Relation, SceneGraph, SceneNode};
+pub use graph::{NodeIx, NodeState, Property, PropertySet, Relation, RelationSet, SceneGraph, SceneNode, StateSet};
 
 /// What can go wrong loading a VirtualHome task.
 #[derive(Debug, thiserror::Error)]

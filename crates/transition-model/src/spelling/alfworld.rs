@@ -79,10 +79,10 @@ fn compile(action: &str, template: &str, params: &[String]) -> Result<Vec<Piece>
         match c {
             '[' | ']' => {}
             '{' => {
-                let end = template[i..].find('}').map(|e| i + e).ok_or(SpellingError::MalformedGrammar {
-                    offset: i,
-                    message: format!("unclosed `{{` in the template of `{action}`"),
-                })?;
+                let end = template[i..]
+                    .find('}')
+                    .map(|e| i + e)
+                    .ok_or_else(|| SpellingError::UnclosedPlaceholder { action: action.to_string(), offset: i })?;
                 let inner = &template[i + 1..end];
                 let placeholder: String =
                     inner.trim().chars().take_while(|c| c.is_alphanumeric() || *c == '_').collect::<String>().to_lowercase();

@@ -60,11 +60,18 @@ pub enum SpellingError {
         /// The placeholder's name, lowercased, without braces.
         placeholder: String,
     },
-    /// The grammar or a template cannot be read.
+    /// A template opens a placeholder `{` that it never closes.
+    #[error("the ALFWorld template for `{action}` opens a placeholder at byte {offset} of its text and never closes it")]
+    UnclosedPlaceholder {
+        /// The schema's lowercased name.
+        action: String,
+        /// The byte offset of the `{` in the template's text.
+        offset: usize,
+    },
+    /// The grammar's `action` blocks cannot be read.
     #[error("the ALFWorld grammar is malformed near byte {offset}: {message}")]
     MalformedGrammar {
-        /// A byte offset: into the grammar for a malformed `action` block, into the template
-        /// text for an unclosed `{` in a template.
+        /// A byte offset into the grammar.
         offset: usize,
         /// What is wrong there.
         message: String,
