@@ -10,6 +10,11 @@ lengths (every byte of the first and last 64, and 64 between), and asks both: Pi
 --image` (exit 2: the image is refused; exit 3 with "cannot connect": it was accepted and the
 request went to a closed port).
 
+It also asks both about PNG headers that claim a size one pixel row past Pillow's
+decompression-bomb limit (2 * Image.MAX_IMAGE_PIXELS, refused by `Image.open`) and one row
+under it (opened, then cut short): both must refuse the first at its header, and ours must say
+so by its size.
+
 Usage: python3 tools/image_cut_check.py [--xtask PATH]   (needs Pillow; `pip install pillow`)
 Prints one line per picture with every disagreement, then a JSON summary. Exit 0 when the only
 disagreements are PNG cuts inside the last 20 bytes (the IDAT chunk's CRC and zlib checksum
@@ -25,6 +30,8 @@ import random
 import subprocess
 import sys
 import tempfile
+import warnings
+import zlib
 
 try:
     from PIL import Image
@@ -56,6 +63,38 @@ def exif_bytes():
     exif = Image.Exif()
     exif[0x010F] = "camera"
     return exif.tobytes()
+
+
+def png_claiming(width, height):
+    """A 3x2 PNG whose IHDR claims width x height (with its CRC mended)."""
+    buffer = io.BytesIO()
+    Image.new("RGB", (3, 2)).save(buffer, "PNG")
+    png = bytearray(buffer.getvalue())
+    png[16:24] = width.to_bytes(4, "big") + height.to_bytes(4, "big")
+    png[29:33] = zlib.crc32(bytes(png[12:29])).to_bytes(4, "big")
+    return bytes(png)
+
+
+def pillow_refuses_size(data):
+    """Whether Pillow's Image.open refuses the picture for its size alone."""
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", Image.DecompressionBombWarning)
+            with Image.open(io.BytesIO(data)):
+                return False
+    except Image.DecompressionBombError:
+        return True
+
+
+def ours_refusal(xtask, data, path):
+    """Our `chat --image` message for a refused picture (None when accepted)."""
+    with open(path, "wb") as f:
+        f.write(data)
+    r = subprocess.run(
+        [xtask, "chat", "--model", "openai:http://127.0.0.1:9/v1", "--prompt", "x", "--image", path,
+         "--retries", "0", "--timeout", "1"],
+        capture_output=True, text=True)
+    return r.stderr if r.returncode == 2 else None
 
 
 def pillow_reads(data):
@@ -106,6 +145,19 @@ def main():
                 summary["tolerated" if tolerated else "other"] += 1
             print(f"{name}: {n} bytes, {len(cuts)} cuts, whole file read by both: "
                   f"{pillow_reads(data) and ours_reads(args.xtask, data, path)}; disagreements: {disagreements}")
+        # The size limit, from both sides of Pillow's: 13377 x 13378 is past it, 13377 x 13377 not.
+        limit = 2 * Image.MAX_IMAGE_PIXELS
+        for width, height in [(13377, 13378), (13377, 13377)]:
+            data = png_claiming(width, height)
+            over = width * height > limit
+            refusal = ours_refusal(args.xtask, data, path)
+            by_size = refusal is not None and "pixels, more than" in refusal
+            agree = pillow_refuses_size(data) == over and by_size == over and refusal is not None
+            summary["sizes"] = summary.get("sizes", 0) + 1
+            summary["agree" if agree else "other"] += 1
+            print(f"png claiming {width}x{height} ({width * height} pixels, Pillow's limit {limit}): "
+                  f"Pillow refuses it by size: {pillow_refuses_size(data)}; ours refuses it: {refusal is not None}, "
+                  f"by size: {by_size}")
     print(json.dumps(summary))
     sys.exit(1 if summary["other"] else 0)
 

@@ -72,10 +72,15 @@ impl std::fmt::Debug for Image {
 }
 
 impl Image {
+    /// The most pixels a picture may have: Pillow's `2 * Image.MAX_IMAGE_PIXELS` (Pillow 13),
+    /// past which `Image.open` raises `DecompressionBombError`.
+    pub const MAX_PIXELS: u64 = 2 * 89_478_485;
+
     /// The image in `bytes`: PNG or JPEG by its signature, then decoded whole (the pixels are
     /// dropped; the bytes are what is sent), a JPEG to its end-of-image marker. Anything else,
-    /// or a file that does not decode (truncated, corrupt), is [`ChatErrorKind::BadInput`]
-    /// naming the decoder's complaint.
+    /// a file that does not decode (truncated, corrupt), or one of more than [`Image::MAX_PIXELS`]
+    /// pixels (checked from the header, before decoding), is [`ChatErrorKind::BadInput`]
+    /// naming the decoder's complaint or the size.
     pub fn from_bytes(bytes: Vec<u8>) -> Result<Image, ChatErrorKind> {
         let format = if bytes.starts_with(b"\x89PNG\r\n\x1a\n") {
             ImageFormat::Png
@@ -91,7 +96,19 @@ impl Image {
         };
         let refuse =
             |why: String| ChatErrorKind::BadInput(format!("a {} image that does not decode ({} bytes): {why}", format.name(), bytes.len()));
-        let decoded = image::load_from_memory_with_format(&bytes, format.codec()).map_err(|e| refuse(e.to_string()))?;
+        // The size first, from the header: a picture of more pixels than Pillow opens (the
+        // servers' reader: `DecompressionBombError`) is refused before anything is decoded.
+        let reader = || image::ImageReader::with_format(Cursor::new(&bytes), format.codec());
+        let (width, height) = reader().into_dimensions().map_err(|e| refuse(e.to_string()))?;
+        let pixels = u64::from(width.max(1)) * u64::from(height.max(1));
+        if pixels > Image::MAX_PIXELS {
+            return Err(ChatErrorKind::BadInput(format!(
+                "a {width}x{height} {} image: {pixels} pixels, more than the {} that Pillow (which servers read pictures with) opens",
+                format.name(),
+                Image::MAX_PIXELS
+            )));
+        }
+        let decoded = reader().decode().map_err(|e| refuse(e.to_string()))?;
         if format == ImageFormat::Jpeg && !jpeg_reaches_eoi(&bytes) {
             return Err(refuse("it is cut short: no end-of-image marker after its last scan".to_string()));
         }
@@ -296,6 +313,41 @@ mod tests {
     /// A 3x2 picture with every pixel different.
     fn pixels() -> Vec<u8> {
         (0u8..18).map(|i| i.wrapping_mul(37)).collect()
+    }
+
+    /// A PNG whose header claims `width` x `height` (its IHDR rewritten, with a correct CRC; the
+    /// pixel data stays that of a 3x2 picture).
+    fn png_claiming(width: u32, height: u32) -> Vec<u8> {
+        // CRC-32 (ISO-HDLC), bit by bit: a test needs a dozen bytes of it.
+        fn crc32(bytes: &[u8]) -> u32 {
+            let mut crc = !0u32;
+            for &b in bytes {
+                crc ^= u32::from(b);
+                for _ in 0..8 {
+                    crc = if crc & 1 != 0 { (crc >> 1) ^ 0xEDB8_8320 } else { crc >> 1 };
+                }
+            }
+            !crc
+        }
+        let mut png = Image::encode_rgb8(ImageFormat::Png, 3, 2, &pixels()).unwrap().bytes().to_vec();
+        // Signature (8), IHDR length (4), "IHDR" (4), width (4), height (4), 5 more, CRC (4).
+        png[16..20].copy_from_slice(&width.to_be_bytes());
+        png[20..24].copy_from_slice(&height.to_be_bytes());
+        let crc = crc32(&png[12..29]);
+        png[29..33].copy_from_slice(&crc.to_be_bytes());
+        png
+    }
+
+    /// Past Pillow's limit (178,956,970 pixels) a picture is refused from its header, saying its
+    /// size; at the limit it is decoded (and this one fails there: its data is 3x2).
+    #[test]
+    fn a_picture_of_more_pixels_than_pillow_opens_is_refused_by_its_size() {
+        assert_eq!(Image::MAX_PIXELS, 178_956_970);
+        let over = Image::from_bytes(png_claiming(13_377, 13_378)).unwrap_err();
+        assert!(matches!(&over, ChatErrorKind::BadInput(m) if m.contains("13377x13378") && m.contains("178957506 pixels")), "{over}");
+        let at = Image::from_bytes(png_claiming(13_377, 13_377)).unwrap_err();
+        assert!(matches!(&at, ChatErrorKind::BadInput(m) if m.contains("does not decode")), "{at}");
+        assert!(Image::from_bytes(png_claiming(3, 2)).is_ok(), "the rewritten header itself is sound");
     }
 
     #[test]
