@@ -177,8 +177,9 @@ pub struct Episode {
     /// The perceived instances hand-overs set aside (`reexplore`), in order.
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub set_aside: Vec<String>,
-    /// What went wrong first (`step 3 not executed: ...`, `no plan: ...`, `goal not reached`);
-    /// `None` on success.
+    /// What went wrong (`step 3 not executed: ...`, `no plan: ...`, `goal not reached`): the first
+    /// failure of an open-loop run, the last pass's of a closed-loop one (each replanning pass
+    /// replaces it); `None` on success.
     pub failure: Option<String>,
     /// Phase II's planner returned no plan (it ended without one, or could not run); not set
     /// when the hand-over itself failed.

@@ -42,7 +42,8 @@ pub struct Symbol {
 /// One literal of the goal's conjunction, over symbols.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct ClassLiteral {
-    /// ALFWorld: the PDDL predicate as the goal writes it (`inReceptacle`), or `distinct`;
+    /// ALFWorld: the PDDL predicate, lowercased as the PDDL parser stores names (`inreceptacle`),
+    /// or `distinct`;
     /// VirtualHome: the state or relation in lower case (`closed`, `inside`).
     pub predicate: String,
     /// The arguments, each a [`Symbol::name`].

@@ -310,7 +310,8 @@ impl Policy for Systematic {
 /// R_t: what Phase I did so far.
 #[derive(Debug, Clone, Default)]
 pub struct Record {
-    /// Every decision, in order, refused and unreadable ones included.
+    /// Every decision, in order, refused and unreadable ones included; a `Done` that ends the
+    /// exploration is not recorded here.
     pub decisions: Vec<Decision>,
     /// Every environment step, in order.
     pub steps: Vec<StepRecord>,

@@ -95,8 +95,8 @@ impl<'a> Metadata<'a> {
         if self.get(key).is_some() { self.dimension(key) } else { Ok(default) }
     }
 
-    /// A finite number, stored as a float or an integer of any width; NaN and infinities are
-    /// [`LmError::BadMetadata`].
+    /// A finite number, stored as a float or a non-negative integer of any width; NaN, infinities
+    /// and negative integers are [`LmError::BadMetadata`].
     pub fn float(&self, key: &str) -> Result<f64, LmError> {
         let value = self.required(key)?;
         let x = match value {

@@ -14,8 +14,8 @@ use tokenizers::{DecoderWrapper, Tokenizer};
 use crate::TokenId;
 use crate::vocab::{Token, Vocabulary, VocabularyError};
 
-/// Names of end-of-sequence tokens in common chat models, those of them a tokenizer has being
-/// its end of sequence in [`vocabulary_from_file`]: Qwen/SmolLM2 (`<|im_end|>`, `<|endoftext|>`), Llama 2 (`</s>`),
+/// Names of end-of-sequence tokens in common chat models; in [`vocabulary_from_file`], those the
+/// tokenizer has as added special tokens are its end of sequence: Qwen/SmolLM2 (`<|im_end|>`, `<|endoftext|>`), Llama 2 (`</s>`),
 /// Llama 3 (`<|eot_id|>`, `<|end_of_text|>`).
 pub const COMMON_EOS: &[&str] = &["<|im_end|>", "<|endoftext|>", "</s>", "<|eot_id|>", "<|end_of_text|>"];
 

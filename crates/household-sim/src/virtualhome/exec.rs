@@ -19,12 +19,13 @@ pub enum Action {
     Close,
     /// `[DRINK] <obj>`: changes nothing; the character must hold the node, which must be drinkable or a recipient.
     Drink,
-    /// `[FIND] <obj>`: as `WALK`, except that a node already close (or a body part, or ON the character) is only
-    /// made close, the character's FACING edges dropped.
+    /// `[FIND] <obj>`: as `WALK`, except for a node already close, a body part, or a node ON the character: then
+    /// the character must be close to it (or it fails), and its FACING edges are dropped.
     Find,
     /// `[WALK] <obj>`: the character moves into the node's room and, unless the node is that room, close to the node
     /// and its non-room containers; also close to what the node rests ON and, if it can be opened, what is inside it.
-    /// What the character holds comes along. Fails while sitting or lying.
+    /// What the character holds stays close to it, with an INSIDE edge to the room the character walked from (as
+    /// the evolving graph leaves it). Fails while sitting or lying.
     Walk,
     /// `[GRAB] <obj>`: a close, grabbable node not inside a closed one goes into a free hand (right first); what it
     /// rested on is remembered for `PUTOBJBACK`.
@@ -251,8 +252,9 @@ pub struct World {
     pub graph: SceneGraph,
     /// The acting character's node.
     pub character: NodeIx,
-    /// Per node grabbed and not yet put down: the node it rested on when grabbed and the relation (ON,
-    /// INSIDE or CLOSE), which `PUTOBJBACK` restores; a node in here cannot be grabbed again.
+    /// Per node grabbed from a node other than a room: the node it rested on and the relation (ON,
+    /// INSIDE or CLOSE), which `PUTOBJBACK` restores. A node in here cannot be grabbed again; `PUTON`
+    /// and pouring water take a node out of the hand without removing its entry.
     pub grabbed_from: FxHashMap<NodeIx, (NodeIx, Relation)>,
 }
 

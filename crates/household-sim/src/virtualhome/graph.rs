@@ -116,9 +116,9 @@ flag_enum!(
      Surfaces = "SURFACES",
      /// `GRAB` accepts it (and `water` and `child` without it).
      Grabbable = "GRABBABLE",
-     /// `SIT` accepts it, up to a per-class number of sitters.
+     /// `SIT` accepts it while fewer nodes (sitters and objects) are ON it than a per-class number.
      Sittable = "SITTABLE",
-     /// `LIE` accepts it, up to a per-class number.
+     /// `LIE` accepts it while fewer nodes are ON it than a per-class number.
      Lieable = "LIEABLE",
      /// No action here reads it.
      Hangable = "HANGABLE",

@@ -88,8 +88,8 @@ pub enum VhGoal {
 /// One EAI VirtualHome task: its initial scene graph and its goal.
 #[derive(Debug, Clone)]
 pub struct VirtualhomeTask {
-    /// EAI's task id; [`VirtualhomeTask::load`] requires the file to be named for it
-    /// (`<task_id>.json.gz` or `<task_id>.json`).
+    /// EAI's task id; [`VirtualhomeTask::load`] requires a file named `*.json.gz` or `*.json`
+    /// to be named for it (`<task_id>.json.gz`, `<task_id>.json`).
     pub task_id: String,
     /// EAI's task category ("Wash dishes with dishwasher").
     pub task_name: String,
