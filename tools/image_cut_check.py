@@ -86,14 +86,19 @@ def pillow_refuses_size(data):
         return True
 
 
-def ours_refusal(xtask, data, path):
-    """Our `chat --image` message for a refused picture (None when accepted)."""
+def ask_ours(xtask, data, path):
+    """`xtask chat --image` on the picture, against a closed port: the finished process."""
     with open(path, "wb") as f:
         f.write(data)
-    r = subprocess.run(
+    return subprocess.run(
         [xtask, "chat", "--model", "openai:http://127.0.0.1:9/v1", "--prompt", "x", "--image", path,
          "--retries", "0", "--timeout", "1"],
         capture_output=True, text=True)
+
+
+def ours_refusal(xtask, data, path):
+    """Our message for a refused picture (exit 2); None when accepted."""
+    r = ask_ours(xtask, data, path)
     return r.stderr if r.returncode == 2 else None
 
 
@@ -107,12 +112,7 @@ def pillow_reads(data):
 
 
 def ours_reads(xtask, data, path):
-    with open(path, "wb") as f:
-        f.write(data)
-    r = subprocess.run(
-        [xtask, "chat", "--model", "openai:http://127.0.0.1:9/v1", "--prompt", "x", "--image", path,
-         "--retries", "0", "--timeout", "1"],
-        capture_output=True, text=True)
+    r = ask_ours(xtask, data, path)
     if r.returncode == 2:
         return False
     if r.returncode == 3 and "cannot connect" in r.stderr:
