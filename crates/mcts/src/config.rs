@@ -244,9 +244,12 @@ pub struct Stats {
     pub forced_tokens: u64,
     /// The model's work (forward calls, positions prefilled / reused, distributions returned).
     pub usage: Usage,
-    /// Heuristic evaluations run, and states looked up (including cache hits).
+    /// Heuristic evaluations run while decoding (cache misses). The final plan's
+    /// [`Outcome::value`](crate::Outcome::value) is computed after these counts are taken and is
+    /// not among them, so a greedy decode may show 0 beside a value.
     pub heuristic_evaluations: u64,
-    /// States whose heuristic was asked for (cache hits and goal states included).
+    /// States whose heuristic was asked for while decoding (cache hits and goal states
+    /// included; the final value's lookup not counted, as above).
     pub heuristic_lookups: u64,
     /// Real time the run took (whatever clock its limit was read on).
     pub millis: f64,
@@ -285,7 +288,9 @@ pub struct Outcome {
 /// The top of an MCTS tree, for a report: the first actions the search tried, and the actions
 /// it tried after the most visited of them. A tree node is a token; a row here is the node
 /// where an action's line completes (the tokens between are one row), so a row is an action
-/// with the statistics of the node that completes it. Only visited branches are listed, at
+/// with the statistics of the node that completes it. Under [`Tokenization::Any`] one action
+/// can be written by several token sequences, each its own branch, so the same line may stand
+/// in several rows (three `DONE` rows from three splits of it). Only visited branches are listed, at
 /// most [`TreeSummary::LISTED`] per level, most visited first (ties: the node made first), so
 /// the summary is small and deterministic.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]

@@ -12,7 +12,9 @@
 //! let spelling = transition_model::Spelling::pddl(model.task());
 //! let vocab = Arc::new(mcts::constraint_vocabulary(lm.vocabulary())?);
 //! let mut decoder = Decoder::new(model, &spelling, vocab, ValueConfig::default());
-//! let prompt = lm.encode("Plan:\n")?;
+//! // A prompt's tokens as the model reads a prompt: BOS in front where it wants one. (The
+//! // paper's Phase II prompt is `prompt::PlanningPrompt`, rendered by the model's template.)
+//! let prompt = lm.tokenizer().encode_prompt("Plan:\n")?;
 //! let config = DecodeConfig::new(Mode::from_name("constrained-mcts").unwrap());
 //! let outcome = decoder.decode(lm, &prompt, &model.initial_state(), &config)?;
 //! assert!(outcome.valid);

@@ -141,7 +141,9 @@ pub struct PlanningPrompt {
 
 impl PlanningPrompt {
     /// The prompt text by the model's chat template, the assistant's turn opened: the plan's
-    /// first token comes right after it.
+    /// first token comes right after it. Give [`Decoder::decode`](crate::Decoder::decode) its
+    /// tokens by `model.tokenizer().encode_prompt(..)`, which puts BOS in front where the model
+    /// wants one (`encode` does not).
     pub fn render(&self, model: &dyn lm::LanguageModel) -> Result<String, lm::LmError> {
         model.chat_prompt(&self.system, &self.user)
     }

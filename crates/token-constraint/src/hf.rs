@@ -9,7 +9,10 @@
 
 use std::path::Path;
 
-use tokenizers::{DecoderWrapper, Tokenizer};
+use tokenizers::DecoderWrapper;
+/// The `tokenizers` crate's tokenizer, which [`load_tokenizer`] and [`vocabulary_from_file`]
+/// return: re-exported so that a user can name it without depending on `tokenizers` itself.
+pub use tokenizers::Tokenizer;
 
 use crate::TokenId;
 use crate::vocab::{Token, Vocabulary, VocabularyError};

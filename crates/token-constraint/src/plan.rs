@@ -37,7 +37,8 @@ pub struct StateLanguage {
 
 impl StateLanguage {
     /// The applicable actions spelled as `choice`, in increasing id order; the first is the
-    /// one a plan executes (as [`TransitionModel::validate_text`] does).
+    /// one a plan executes (as [`TransitionModel::validate_text`] does). Panics if `choice` is
+    /// not a choice of this state's language (not below its [`Language::choices`]).
     pub fn actions(&self, choice: ChoiceId) -> &[ActionId] {
         &self.actions[choice as usize]
     }
