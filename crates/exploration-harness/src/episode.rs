@@ -584,7 +584,8 @@ pub fn score(adapter: &dyn Handing, goal: &ClassGoal, exploration: &Exploration,
 
 /// ŝ0's text as a transition model of `domain`.
 pub fn ground(domain: &pddl_syntax::Domain, problem: &str) -> Result<TransitionModel, String> {
-    let parsed = pddl_syntax::parse_problem(problem).map_err(|e| format!("the grounded problem does not parse: {e:?}"))?;
+    let parsed =
+        pddl_syntax::parse_problem(problem).map_err(|e| format!("the grounded problem does not parse: {}", e.render("ŝ0", problem)))?;
     let task = grounding::ground(domain, &parsed).map_err(|e| format!("the grounded problem does not ground: {e}"))?;
     Ok(TransitionModel::new(task))
 }

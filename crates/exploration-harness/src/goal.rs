@@ -125,7 +125,7 @@ fn parse_alfworld(annotation: &GoalAnnotation, goal: &mut ClassGoal) -> Result<(
     let benchmark = annotation.benchmark.clone();
     let text = format!("(define (problem goal) (:domain alfred) (:goal {}))", annotation.formula);
     let problem =
-        pddl_syntax::parse_problem(&text).map_err(|e| GoalError::Unreadable { benchmark: benchmark.clone(), message: format!("{e:?}") })?;
+        pddl_syntax::parse_problem(&text).map_err(|e| GoalError::Unreadable { benchmark: benchmark.clone(), message: e.to_string() })?;
     let condition = problem.goal.ok_or_else(|| GoalError::Unreadable { benchmark: benchmark.clone(), message: "no goal".into() })?;
     let mut scope: Vec<(String, String)> = Vec::new();
     walk(&condition, goal, &mut scope, &benchmark)?;

@@ -165,7 +165,7 @@ pub fn alfworld_from_problems<'a>(problems: impl IntoIterator<Item = (&'a str, &
     let mut can_contain = BTreeSet::new();
     for (origin, text) in problems {
         let problem =
-            pddl_syntax::parse_problem(text).map_err(|e| OntologyError { origin: origin.to_string(), message: format!("{e:?}") })?;
+            pddl_syntax::parse_problem(text).map_err(|e| OntologyError { origin: origin.to_string(), message: e.render(origin, text) })?;
         let mut class_of: BTreeMap<String, String> = BTreeMap::new();
         let mut unary: Vec<(String, String)> = Vec::new();
         for element in &problem.init {

@@ -188,13 +188,15 @@ impl RelaxedTask {
                     continue;
                 }
                 // A condition fact the precondition already has is one precondition, not two (h_add
-                // would count it twice): sorted and deduplicated, as Fast Downward's relaxation
-                // does with each unary operator's preconditions (and as `condition_facts` gives
-                // an action's own).
+                // would count it twice; Fast Downward deduplicates each unary operator's
+                // preconditions). The order stays the precondition's, then the condition's: LM-cut
+                // breaks ties by it, and an operator without a repeated fact is as before.
                 let mut pre = pre.clone();
-                pre.extend(builder.condition_facts(&effect.condition));
-                pre.sort_unstable();
-                pre.dedup();
+                for fact in builder.condition_facts(&effect.condition) {
+                    if !pre.contains(&fact) {
+                        pre.push(fact);
+                    }
+                }
                 builder.push(pre, add, action.cost, index as u32);
             }
         }

@@ -80,7 +80,7 @@ pub enum EnvError {
         message: String,
     },
     /// The TextWorld grammar lacks what has no place in it: an `action` block for one of the
-    /// domain's actions, or a symbol the game's intro (`#intro#`) needs.
+    /// domain's actions, or the `intro` symbol every game starts from.
     #[error("{path}: the `grammar` field: {message}")]
     GrammarIncomplete {
         /// The game's name in errors.

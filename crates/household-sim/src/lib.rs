@@ -2,9 +2,21 @@
 //! engines do.
 //!
 //! An agent sees an [`Environment`]: it resets, sends command text, reads
-//! [`Observation`]s and [`Event`]s, and may ask whether the goal holds. The hidden state is
-//! reachable only through the [`Judge`] trait, which evaluation uses after an episode (failure
-//! attribution, precision and recall of beliefs) and which no agent is handed.
+//! [`Observation`]s and [`Event`]s, and may ask whether the goal holds (the engine's own
+//! check, which ends an episode as the benchmark ends it). The hidden state is for the
+//! [`Judge`] trait, which evaluation uses after an episode (failure attribution, precision and
+//! recall of beliefs) and which no agent is handed.
+//!
+//! The types keep an agent apart by what it is handed, not by what they can do: the concrete
+//! environments also serve tools, tests and judges, and offer what those need:
+//! - [`AlfworldEnv::task`] and [`AlfworldEnv::walkthrough`]: the grounded task and the
+//!   expert's plan;
+//! - the public fields of [`VirtualhomeTask`]: the scene graph and the goal's node ids;
+//! - [`VirtualhomeEnv`]'s instance-level script lines (`[WALK] <fridge> (289)`), executed for
+//!   any node id, seen or not, for replays and parity with EAI's executor.
+//!
+//! `exploration-harness` hands its agents the trait alone, and its direct policy refuses an
+//! instance-level line before it reaches the environment.
 //!
 //! An ALFWorld game from `fixtures/`, played with its expert's walkthrough:
 //!

@@ -70,12 +70,13 @@ fn a_production_that_does_not_read_is_placed_at_its_symbol() {
     let mut broken = grammar.clone();
     broken.insert_str(after, "{r.na-me} ");
     let line = grammar[..key].matches('\n').count() + 1;
+    let column = grammar[..key].chars().rev().take_while(|&c| c != '\n').count() + 1;
     game["grammar"] = serde_json::Value::String(broken);
     let text = match load(&game) {
         Ok(_) => panic!("a production with an unsupported expression loaded"),
         Err(error) => error.to_string(),
     };
-    assert!(text.contains(&format!("the `grammar` field, line {line}, column ")), "{text}");
+    assert!(text.contains(&format!("the `grammar` field, line {line}, column {column}: ")), "{text}");
     assert!(text.contains("a `examineReceptacle.feedback` production"), "{text}");
 }
 

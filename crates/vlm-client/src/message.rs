@@ -316,8 +316,9 @@ mod tests {
     }
 
     /// A PNG whose header claims `width` x `height` (its IHDR rewritten, with a correct CRC; the
-    /// pixel data stays that of a 3x2 picture).
-    fn png_claiming(width: u32, height: u32) -> Vec<u8> {
+    /// pixel data stays that of a 3x2 RGB picture), in grayscale when `gray` (a decoder then
+    /// reserves one byte a pixel, not three: 179 MB, not 537, for the largest size let through).
+    fn png_claiming(width: u32, height: u32, gray: bool) -> Vec<u8> {
         // CRC-32 (ISO-HDLC), bit by bit: a test needs a dozen bytes of it.
         fn crc32(bytes: &[u8]) -> u32 {
             let mut crc = !0u32;
@@ -333,6 +334,9 @@ mod tests {
         // Signature (8), IHDR length (4), "IHDR" (4), width (4), height (4), 5 more, CRC (4).
         png[16..20].copy_from_slice(&width.to_be_bytes());
         png[20..24].copy_from_slice(&height.to_be_bytes());
+        if gray {
+            png[25] = 0;
+        }
         let crc = crc32(&png[12..29]);
         png[29..33].copy_from_slice(&crc.to_be_bytes());
         png
@@ -343,11 +347,11 @@ mod tests {
     #[test]
     fn a_picture_of_more_pixels_than_pillow_opens_is_refused_by_its_size() {
         assert_eq!(Image::MAX_PIXELS, 178_956_970);
-        let over = Image::from_bytes(png_claiming(13_377, 13_378)).unwrap_err();
+        let over = Image::from_bytes(png_claiming(13_377, 13_378, true)).unwrap_err();
         assert!(matches!(&over, ChatErrorKind::BadInput(m) if m.contains("13377x13378") && m.contains("178957506 pixels")), "{over}");
-        let at = Image::from_bytes(png_claiming(13_377, 13_377)).unwrap_err();
+        let at = Image::from_bytes(png_claiming(13_377, 13_377, true)).unwrap_err();
         assert!(matches!(&at, ChatErrorKind::BadInput(m) if m.contains("does not decode")), "{at}");
-        assert!(Image::from_bytes(png_claiming(3, 2)).is_ok(), "the rewritten header itself is sound");
+        assert!(Image::from_bytes(png_claiming(3, 2, false)).is_ok(), "the rewritten header itself is sound");
     }
 
     #[test]

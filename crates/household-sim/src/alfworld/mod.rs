@@ -428,7 +428,8 @@ impl AlfworldEnv {
         Ok(env)
     }
 
-    /// The game's expert walkthrough (TextWorld commands), empty when it has none.
+    /// The game's expert walkthrough (TextWorld commands), empty when it has none: the expert
+    /// baseline's plan, for tools and tests; agents get [`Environment`].
     pub fn walkthrough(&self) -> &[String] {
         &self.walkthrough
     }

@@ -153,7 +153,7 @@ fn merge_json(rules: &mut Vec<(String, Vec<RuleText>)>, json: &str, raw: &str, s
         let Value::Array(list) = productions else {
             return Err(DocError { offset: at, message: format!("grammar symbol `{name}` is not a list of productions") });
         };
-        let key_at = raw.find(&format!("\"{name}\"")).map_or(at, |i| start + i);
+        let key_at = key_offset(raw, &name).map_or(at, |i| start + i);
         let mut parsed = Vec::with_capacity(list.len());
         for production in list {
             let rhs = production
@@ -175,6 +175,15 @@ fn merge_json(rules: &mut Vec<(String, Vec<RuleText>)>, json: &str, raw: &str, s
         }
     }
     Ok(())
+}
+
+/// Where `raw` writes `"name"` as a key (a `:` follows) on a line that is not a `#` comment.
+fn key_offset(raw: &str, name: &str) -> Option<usize> {
+    let quoted = format!("\"{name}\"");
+    raw.match_indices(&quoted).map(|(i, _)| i).find(|&i| {
+        let line_start = raw[..i].rfind('\n').map_or(0, |n| n + 1);
+        raw[i + quoted.len()..].trim_start().starts_with(':') && !raw[line_start..i].trim_start().starts_with('#')
+    })
 }
 
 pub(crate) fn parse(text: &str) -> Result<Document, DocError> {
