@@ -98,8 +98,9 @@ pub trait Environment {
     fn goal_reached(&self) -> bool;
     /// Whether the engine has ended the episode, as it tells its agents: TextWorld ends an
     /// ALFWorld game once it is won (its `done`); EAI's VirtualHome executor runs every line
-    /// of a script and ends none (it judges the final state). An agent's loop stops here; a
-    /// command sent after it is not the benchmark's.
+    /// of a script and ends none (it judges the final state). An agent's loop stops here. A
+    /// command sent after it is not the benchmark's: an ended ALFWorld game answers it, as
+    /// TextWorld does, with its last observation, and counts no step.
     fn done(&self) -> bool;
     /// Steps sent since the last reset.
     fn steps_taken(&self) -> usize;

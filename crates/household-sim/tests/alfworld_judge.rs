@@ -51,3 +51,27 @@ fn the_engine_script_holds_every_command_as_sent_with_its_outcome() {
     env.reset();
     assert_eq!(env.engine_script(), vec![]);
 }
+
+/// Once the game is won, the engine takes no command, as TextWorld 1.7.0 does (checked on
+/// `look_at_obj_in_light-AlarmClock-None-DeskLamp-323`: after the winning `take`, `look`, `go to
+/// desk 1` and `take the moon` each got the winning step's observation, and the move count stayed
+/// 3): the last observation again, no step counted, no line in the engine script, no change.
+#[test]
+fn after_the_win_the_engine_takes_no_command() {
+    let mut env = mug_game();
+    env.reset();
+    let mut last = String::new();
+    for command in env.walkthrough().to_vec() {
+        last = env.step(&command).observation.text;
+    }
+    assert!(env.done());
+    let (steps, script, atoms) = (env.steps_taken(), env.engine_script().len(), env.hidden_atoms());
+    for command in ["look", "go to countertop 1", "take the moon"] {
+        let after = env.step(command);
+        assert_eq!(after.observation.text, last, "{command}");
+        assert!(!after.event.executed(), "{command}");
+    }
+    assert_eq!((env.steps_taken(), env.engine_script().len()), (steps, script));
+    assert_eq!(env.hidden_atoms(), atoms);
+    assert!(env.goal_reached());
+}

@@ -95,6 +95,8 @@ pub struct AlfworldEnv {
     steps: usize,
     /// Every command since the reset with whether it executed ([`Judge::engine_script`]).
     script: Vec<EngineLine>,
+    /// The last observation's text: TextWorld's answer to every command once the game is won.
+    last: String,
     scratch: Vec<ActionId>,
 }
 
@@ -422,6 +424,7 @@ impl AlfworldEnv {
             admissible: Vec::new(),
             steps: 0,
             script: Vec::new(),
+            last: String::new(),
             scratch: Vec::new(),
         };
         env.gather();
@@ -588,10 +591,21 @@ impl Environment for AlfworldEnv {
         self.script.clear();
         self.gather();
         let text = self.world().derive(&self.intro, &Context::default()).unwrap_or_else(|e| format!("[grammar error: {e}]"));
+        self.last.clone_from(&text);
         Observation::text(text)
     }
 
+    /// Once the game is won, TextWorld takes no command: it answers each with its last
+    /// observation, counts no move and changes nothing (checked with TextWorld 1.7.0 on
+    /// `look_at_obj_in_light-AlarmClock-None-DeskLamp-323`); so does this engine, and such a
+    /// command is neither a step nor a line of the engine script.
     fn step(&mut self, command: &str) -> StepResult {
+        if self.done() {
+            return StepResult {
+                observation: Observation::text(self.last.clone()),
+                event: Event::NotExecuted { reason: "the game is won and over: the engine takes no command".into() },
+            };
+        }
         self.steps += 1;
         let sent = command;
         let command = python_strip(command);
@@ -600,6 +614,7 @@ impl Environment for AlfworldEnv {
         self.script.push(EngineLine { line: sent.to_string(), executed: found.is_some() });
         let Some(id) = found else {
             self.gather();
+            NOTHING_HAPPENS.clone_into(&mut self.last);
             return StepResult {
                 observation: Observation::text(NOTHING_HAPPENS),
                 event: Event::NotExecuted { reason: NOTHING_HAPPENS.into() },
@@ -607,6 +622,7 @@ impl Environment for AlfworldEnv {
         };
         let text = self.execute(id);
         self.gather();
+        self.last.clone_from(&text);
         StepResult { observation: Observation::text(text), event: Event::Executed }
     }
 
