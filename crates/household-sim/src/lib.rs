@@ -13,9 +13,11 @@
 //!   expert's plan;
 //! - the public fields of [`VirtualhomeTask`]: the scene graph and the goal's node ids;
 //! - [`VirtualhomeEnv`]'s instance-level script lines (`[WALK] <fridge> (289)`), executed for
-//!   any node id, seen or not, for replays and parity with EAI's executor.
+//!   any node id, seen or not, for replays and parity with EAI's executor. They go through
+//!   [`Environment::step`], so a caller of the trait can probe node ids with them.
 //!
-//! `exploration-harness` hands its agents the trait alone, and its direct policy refuses an
+//! The agent-side rule is therefore kept by the caller: `exploration-harness`'s Phase I
+//! policies choose among the skills the controller offers, and its direct policy refuses an
 //! instance-level line before it reaches the environment.
 //!
 //! An ALFWorld game from `fixtures/`, played with its expert's walkthrough:
