@@ -293,7 +293,7 @@ pub fn bench(subset: &str, limit: usize, runs: usize, no_reference: bool, json: 
 /// building its planner from the dataset's graph, and executing each line), in one run.
 fn bench_virtualhome(runs: usize, no_reference: bool) -> anyhow::Result<serde_json::Value> {
     use anyhow::Context;
-    use household_sim::{Environment, ScriptLine, VirtualhomeEnv, VirtualhomeTask};
+    use household_sim::{Environment, IdScope, ScriptLine, VirtualhomeEnv, VirtualhomeTask};
     let root = benchmark_data::fixtures_dir().join("virtualhome-eai");
     let mut text = String::new();
     std::io::Read::read_to_string(
@@ -317,7 +317,7 @@ fn bench_virtualhome(runs: usize, no_reference: bool) -> anyhow::Result<serde_js
             let start = std::time::Instant::now();
             let task = VirtualhomeTask::load(&path).map_err(|e| InputError(e.to_string()))?;
             let init = task.init.clone();
-            let mut env = VirtualhomeEnv::new(task, "virtualhome-eai");
+            let mut env = VirtualhomeEnv::new(task, "virtualhome-eai").with_id_scope(IdScope::Any);
             env.reset();
             load.push(start.elapsed().as_secs_f64());
             let start = std::time::Instant::now();

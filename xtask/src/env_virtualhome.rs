@@ -6,7 +6,7 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 
 use anyhow::bail;
-use household_sim::{Environment, Judge, PythonRandom, VirtualhomeEnv, VirtualhomeTask};
+use household_sim::{Environment, IdScope, Judge, PythonRandom, VirtualhomeEnv, VirtualhomeTask};
 use serde_json::json;
 
 /// Arguments of the VirtualHome part of `cargo xtask env` (parsed there).
@@ -84,7 +84,7 @@ pub fn load_task(benchmark: &str, task: &str, task_dir: Option<&std::path::Path>
 pub fn run(args: &VirtualhomeEnvArgs) -> anyhow::Result<ExitCode> {
     let task = load_task(&args.benchmark, &args.task, args.task_dir.as_deref())?;
     let reference = task.reference_program.clone();
-    let mut env = VirtualhomeEnv::new(task, &args.benchmark);
+    let mut env = VirtualhomeEnv::new(task, &args.benchmark).with_id_scope(IdScope::Any);
     let commands: Option<Vec<String>> = match &args.commands {
         Some(file) => {
             let text = crate::input::read_text(file)?;

@@ -39,7 +39,7 @@ use std::time::Duration;
 
 use anyhow::Context;
 use household_sim::vh_pddl::{self, SOUND_DOMAIN};
-use household_sim::{Environment, Event, Judge, PythonRandom, VirtualhomeEnv, VirtualhomeTask};
+use household_sim::{Environment, Event, IdScope, Judge, PythonRandom, VirtualhomeEnv, VirtualhomeTask};
 use serde_json::{Value, json};
 use transition_model::TransitionModel;
 
@@ -313,7 +313,7 @@ fn reference(domain: &pddl_syntax::Domain, task: &VirtualhomeTask, limit: Durati
         .map(|&a| problem.script_line(&task.init, &model.task().action_name(a)))
         .collect::<Result<_, _>>()
         .map_err(|e| anyhow::anyhow!(e))?;
-    let mut env = VirtualhomeEnv::new(task.clone(), "virtualhome-rearrange");
+    let mut env = VirtualhomeEnv::new(task.clone(), "virtualhome-rearrange").with_id_scope(IdScope::Any);
     env.reset();
     let executed = script.iter().all(|line| !matches!(env.step(line).event, Event::NotExecuted { .. }));
     Ok((executed && env.unmet_goals().is_empty()).then_some(script))

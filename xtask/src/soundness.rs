@@ -15,7 +15,7 @@ use anyhow::Context;
 use eval_harness::records::{RecordFile, config_hash};
 use heuristics::search::SearchStatus;
 use household_sim::vh_pddl::{self, SOUND_DOMAIN, VhProblem};
-use household_sim::{Environment, Event, Judge, VhGoal, VirtualhomeEnv, VirtualhomeTask};
+use household_sim::{Environment, Event, IdScope, Judge, VhGoal, VirtualhomeEnv, VirtualhomeTask};
 use serde_json::json;
 use transition_model::{Spelling, TransitionModel};
 
@@ -235,7 +235,7 @@ fn spell(problem: &VhProblem, task: &VirtualhomeTask, plan: &[String]) -> anyhow
 
 /// Runs script lines in our executor: (every line executed, every goal holds at the end).
 fn run_in_env(task: &VirtualhomeTask, script: &[String]) -> (bool, bool) {
-    let mut env = VirtualhomeEnv::new(task.clone(), "virtualhome-eai");
+    let mut env = VirtualhomeEnv::new(task.clone(), "virtualhome-eai").with_id_scope(IdScope::Any);
     env.reset();
     let executed = script.iter().all(|line| !matches!(env.step(line).event, Event::NotExecuted { .. }));
     (executed, executed && env.unmet_goals().is_empty())

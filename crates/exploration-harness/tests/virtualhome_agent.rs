@@ -11,7 +11,7 @@ mod common;
 
 use common::{Restless, assert_ends_where_the_engine_does, assert_no_target_repeats};
 use exploration_harness::{Attribution, Episode, EpisodeConfig, Grounded, Ontology, PhaseTwo, Systematic, parse_goal, run_episode};
-use household_sim::{Environment, VirtualhomeEnv, VirtualhomeTask};
+use household_sim::{Environment, IdScope, VirtualhomeEnv, VirtualhomeTask};
 
 /// A* expansions per plan: a bound that holds on any machine under any load (not a time limit).
 const EXPANSIONS: u64 = 300_000;
@@ -516,7 +516,7 @@ fn every_virtualhome_percept_holds_in_the_hidden_state() {
     for path in tasks(&fixtures().join("virtualhome-rearrange")) {
         let task = VirtualhomeTask::load(&path).unwrap();
         let program = task.reference_program.clone();
-        let mut env = VirtualhomeEnv::new(task, "virtualhome-rearrange");
+        let mut env = VirtualhomeEnv::new(task, "virtualhome-rearrange").with_id_scope(IdScope::Any);
         let mut belief = Belief::default();
         let mut text = env.reset().text;
         for step in 0..=program.len() {

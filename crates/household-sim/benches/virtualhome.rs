@@ -9,7 +9,7 @@ use std::io::Read as _;
 use std::path::Path;
 
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
-use household_sim::{Environment, ScriptLine, VirtualhomeEnv, VirtualhomeTask};
+use household_sim::{Environment, IdScope, ScriptLine, VirtualhomeEnv, VirtualhomeTask};
 
 fn programs() -> Vec<(VirtualhomeTask, Vec<String>)> {
     let fixtures = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../fixtures/virtualhome-eai");
@@ -39,8 +39,10 @@ fn bench(c: &mut Criterion) {
         .iter()
         .map(|(task, lines)| (task.clone(), lines.iter().map(|l| ScriptLine::parse(l).expect("recorded line parses")).collect()))
         .collect();
-    let mut envs: Vec<(VirtualhomeEnv, Vec<String>)> =
-        programs.into_iter().map(|(task, lines)| (VirtualhomeEnv::new(task, "virtualhome-eai"), lines)).collect();
+    let mut envs: Vec<(VirtualhomeEnv, Vec<String>)> = programs
+        .into_iter()
+        .map(|(task, lines)| (VirtualhomeEnv::new(task, "virtualhome-eai").with_id_scope(IdScope::Any), lines))
+        .collect();
     let mut group = c.benchmark_group("virtualhome");
     group.throughput(Throughput::Elements(steps as u64));
     group.sample_size(10);

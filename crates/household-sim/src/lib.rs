@@ -12,13 +12,15 @@
 //! - [`AlfworldEnv::task`] and [`AlfworldEnv::walkthrough`]: the grounded task and the
 //!   expert's plan;
 //! - the public fields of [`VirtualhomeTask`]: the scene graph and the goal's node ids;
-//! - [`VirtualhomeEnv`]'s instance-level script lines (`[WALK] <fridge> (289)`), executed for
-//!   any node id, seen or not, for replays and parity with EAI's executor. They go through
-//!   [`Environment::step`], so a caller of the trait can probe node ids with them.
+//! - [`VirtualhomeEnv::with_id_scope`]`(`[`IdScope::Any`]`)`: instance-level script lines
+//!   (`[WALK] <fridge> (289)`) executed for any node id, seen or not, for replays and parity
+//!   with EAI's executor. By default ([`IdScope::Perceived`]) a line may name only a node an
+//!   observation has shown since the reset, so an agent cannot probe ids through
+//!   [`Environment::step`].
 //!
-//! The agent-side rule is therefore kept by the caller: `exploration-harness`'s Phase I
-//! policies choose among the skills the controller offers, and its direct policy refuses an
-//! instance-level line before it reaches the environment.
+//! `exploration-harness` keeps the rule on its side too: its Phase I policies choose among the
+//! skills the controller offers, and its direct policy refuses an instance-level line before it
+//! reaches the environment.
 //!
 //! An ALFWorld game from `fixtures/`, played with its expert's walkthrough:
 //!
@@ -54,7 +56,7 @@ pub use error::EnvError;
 pub use python_random::PythonRandom;
 pub use virtualhome::pddl as vh_pddl;
 pub use virtualhome::{
-    Action as VhAction, NodeIx as VhNodeIx, NodeState as VhNodeState, Property as VhProperty, PropertySet as VhPropertySet,
+    Action as VhAction, IdScope, NodeIx as VhNodeIx, NodeState as VhNodeState, Property as VhProperty, PropertySet as VhPropertySet,
     Relation as VhRelation, RelationSet as VhRelationSet, SceneGraph, SceneNode, ScriptLine, StateSet as VhStateSet, VhGoal,
     VirtualhomeEnv, VirtualhomeError, VirtualhomeTask, World as VhWorld, bind as vh_bind, class_level_goal as vh_class_level_goal,
     visible_nodes as vh_visible_nodes,

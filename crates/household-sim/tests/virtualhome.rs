@@ -8,7 +8,7 @@
 //!     └─ dishwasher (30) [CLOSED, OFF]
 //! ```
 
-use household_sim::{EngineLine, Environment, Event, Judge, VirtualhomeEnv, VirtualhomeError, VirtualhomeTask};
+use household_sim::{EngineLine, Environment, Event, IdScope, Judge, VirtualhomeEnv, VirtualhomeError, VirtualhomeTask};
 
 fn scene(goal: &str) -> String {
     let node = |id: u32, class: &str, category: &str, props: &str, states: &str| {
@@ -52,7 +52,7 @@ const PLATE_IN_DISHWASHER: &str =
 
 fn env(goal: &str) -> VirtualhomeEnv {
     let task = VirtualhomeTask::from_json(&scene(goal), "tiny.json").expect("tiny scene parses");
-    let mut env = VirtualhomeEnv::new(task, "virtualhome-eai");
+    let mut env = VirtualhomeEnv::new(task, "virtualhome-eai").with_id_scope(IdScope::Any);
     env.reset();
     env
 }
@@ -71,6 +71,43 @@ fn grabbing_needs_closeness_and_walking_makes_the_target_and_its_surface_close()
     check(&mut e, &[("[GRAB] <plate> (21)", false), ("[WALK] <plate> (21)", true), ("[GRAB] <plate> (21)", true)]);
     // Walking to the plate made the table close; the other plate is on it, so close too (the loose rule).
     check(&mut e, &[("[GRAB] <plate> (22)", true), ("[GRAB] <apple> (11)", false)]);
+}
+
+/// By default an instance-level line may name only a node an observation has shown since the
+/// reset, with the class it was shown with: the tv in the other room and the apple in the
+/// closed fridge are refused (nothing changes, nothing reaches the engine script) until they
+/// are seen; once seen they stay nameable. `IdScope::Any` takes every node, as EAI's executor.
+#[test]
+fn instance_level_lines_name_only_what_has_been_seen() {
+    let task = VirtualhomeTask::from_json(&scene(PLATE_IN_DISHWASHER), "tiny.json").unwrap();
+    let mut e = VirtualhomeEnv::new(task.clone(), "virtualhome-eai");
+    assert_eq!(e.id_scope(), IdScope::Perceived);
+    let start = e.reset().text;
+    let refused = e.step("[WALK] <tv> (51)");
+    assert_eq!(refused.event, Event::NotExecuted { reason: "no tv (51) has been seen".to_string() });
+    assert!(refused.observation.text.ends_with(&start), "nothing changed:\n{}", refused.observation.text);
+    // A seen id under another class, an id the scene lacks, and the character are refused too.
+    for (line, reason) in [
+        ("[WALK] <tv> (10)", "no tv (10) has been seen"),
+        ("[WALK] <tv> (99)", "no tv (99) has been seen"),
+        ("[WALK] <character> (2)", "no character (2) has been seen"),
+    ] {
+        assert_eq!(e.step(line).event, Event::NotExecuted { reason: reason.to_string() }, "{line}");
+    }
+    check(&mut e, &[("[WALK] <fridge> (10)", true), ("[GRAB] <apple> (11)", false), ("[OPEN] <fridge> (10)", true)]);
+    let grab = e.step("[GRAB] <apple> (11)");
+    assert_eq!(grab.event, Event::Executed, "the open fridge showed the apple");
+    // Walking to the livingroom (every room is listed) shows the tv; back in the kitchen it stays
+    // nameable, and a reset forgets it.
+    check(&mut e, &[("[WALK] <livingroom> (50)", true), ("[WALK] <kitchen> (1)", true), ("[WALK] <tv> (51)", true)]);
+    let lines: Vec<String> = e.engine_script().into_iter().map(|l| l.line).collect();
+    assert!(!lines.iter().any(|l| l.contains("(99)") || l.contains("<character>")), "refused lines never reach the engine: {lines:?}");
+    assert_eq!(lines.first().map(String::as_str), Some("[WALK] <fridge> (10)"));
+    e.reset();
+    assert!(!e.step("[WALK] <tv> (51)").event.executed());
+    let mut any = VirtualhomeEnv::new(task, "virtualhome-eai").with_id_scope(IdScope::Any);
+    any.reset();
+    check(&mut any, &[("[WALK] <tv> (51)", true)]);
 }
 
 #[test]

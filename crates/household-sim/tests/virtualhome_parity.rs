@@ -7,7 +7,7 @@
 use std::io::Read as _;
 use std::path::{Path, PathBuf};
 
-use household_sim::{Environment, Judge, VirtualhomeEnv, VirtualhomeTask};
+use household_sim::{Environment, IdScope, Judge, VirtualhomeEnv, VirtualhomeTask};
 use serde::Deserialize;
 
 fn fixtures() -> PathBuf {
@@ -52,7 +52,7 @@ fn compare(records: &[Recorded], task_dir: &Path) -> (usize, Vec<String>) {
                 task
             }
         };
-        let mut env = VirtualhomeEnv::new(task, "virtualhome-eai");
+        let mut env = VirtualhomeEnv::new(task, "virtualhome-eai").with_id_scope(IdScope::Any);
         env.reset();
         let mut mismatch = None;
         for (i, line) in record.lines.iter().enumerate() {

@@ -8,7 +8,7 @@ use std::collections::BTreeMap;
 use std::io::Read as _;
 use std::path::{Path, PathBuf};
 
-use household_sim::{Environment, Event, Judge, VhGoal, VirtualhomeEnv, VirtualhomeTask};
+use household_sim::{Environment, Event, IdScope, Judge, VhGoal, VirtualhomeEnv, VirtualhomeTask};
 
 fn dir() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../../fixtures/virtualhome-rearrange")
@@ -30,7 +30,7 @@ fn every_task_has_a_reference_program_that_reaches_every_goal() {
         assert!(task.goals.iter().any(|g| matches!(g, VhGoal::Edge { .. })), "{}: no edge goal", task.task_id);
         let id = task.task_id.clone();
         let program = task.reference_program.clone();
-        let mut env = VirtualhomeEnv::new(task, "virtualhome-rearrange");
+        let mut env = VirtualhomeEnv::new(task, "virtualhome-rearrange").with_id_scope(IdScope::Any);
         env.reset();
         assert!(!env.goal_reached(), "{id}: the goal holds before any step");
         for line in &program {

@@ -6,7 +6,7 @@
 use std::path::{Path, PathBuf};
 
 use household_sim::vh_pddl::{self as pddl, SOUND_DOMAIN};
-use household_sim::{Environment, Event, Judge, VirtualhomeEnv, VirtualhomeTask};
+use household_sim::{Environment, Event, IdScope, Judge, VirtualhomeEnv, VirtualhomeTask};
 use transition_model::TransitionModel;
 
 /// A* expansions per plan: a bound that holds on any machine under any load (not a time limit).
@@ -61,7 +61,7 @@ fn every_fixture_task_has_a_plan_that_executes_and_reaches_its_goal() {
                 continue;
             }
         };
-        let mut env = VirtualhomeEnv::new(task, "virtualhome-eai");
+        let mut env = VirtualhomeEnv::new(task, "virtualhome-eai").with_id_scope(IdScope::Any);
         env.reset();
         for (i, line) in script.iter().enumerate() {
             if let Event::NotExecuted { reason } = env.step(line).event {

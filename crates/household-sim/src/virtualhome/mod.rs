@@ -2,9 +2,10 @@
 //! as the evolving graph executes script lines, seen as VirtualHome's `get_visible_nodes`
 //! shows it, and judged on every node, edge and action goal.
 //!
-//! Commands are either instance-level script lines (`[WALK] <plate> (1001)`, for replay and
-//! parity) or class-level verbs (`grab plate`, `putin plate dishwasher`) that the adapter
-//! binds to instances by [`bind`]'s rule.
+//! Commands are either instance-level script lines (`[WALK] <plate> (1001)`: by default only
+//! for nodes an observation has shown, every node for replay and parity, see [`IdScope`]) or
+//! class-level verbs (`grab plate`, `putin plate dishwasher`) that the adapter binds to
+//! instances by [`bind`]'s rule.
 
 mod exec;
 mod graph;
@@ -335,6 +336,22 @@ pub fn bind(world: &World, action: Action, position: usize, class_name: &str) ->
     all.first().copied()
 }
 
+/// Which node ids an instance-level script line (`[WALK] <fridge> (289)`) sent to
+/// [`VirtualhomeEnv`] may name.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum IdScope {
+    /// Only ids the environment has shown since the reset, each with the class it was shown
+    /// with (an observation lists `fridge (289)`): what an agent may name. Any other line is
+    /// refused, as not executed, before it is grounded, so it changes nothing and is not in
+    /// [`Judge::engine_script`]. Class-level commands (`walk fridge`) bind to visible
+    /// instances either way. The default.
+    #[default]
+    Perceived,
+    /// Every node id of the scene, as EAI's executor takes them: for replays of recorded or
+    /// gold programs and parity with the executor, never for an agent.
+    Any,
+}
+
 /// A VirtualHome task as an [`Environment`] (and a [`Judge`]).
 #[derive(Debug, Clone)]
 pub struct VirtualhomeEnv {
@@ -345,13 +362,17 @@ pub struct VirtualhomeEnv {
     script: Vec<EngineLine>,
     steps: usize,
     annotation: GoalAnnotation,
+    scope: IdScope,
+    /// By node index: shown in an observation since the reset (the character never is).
+    perceived: Vec<bool>,
 }
 
 impl VirtualhomeEnv {
     /// The environment of `task`, announced as `benchmark`'s ([`GoalAnnotation::benchmark`]):
     /// `virtualhome-eai` or `virtualhome-rearrange`, the names the agent's goal parser and the
     /// direct policy's action list read (`exploration_harness::parse_goal` refuses a name
-    /// that does not start with `virtualhome`).
+    /// that does not start with `virtualhome`). Instance-level lines may name only what it
+    /// has shown ([`IdScope::Perceived`]); replays widen that with [`Self::with_id_scope`].
     pub fn new(task: VirtualhomeTask, benchmark: &str) -> VirtualhomeEnv {
         let annotation = GoalAnnotation {
             benchmark: benchmark.to_string(),
@@ -360,7 +381,35 @@ impl VirtualhomeEnv {
             family: task.task_name.clone(),
         };
         let world = task.init.clone();
-        VirtualhomeEnv { task, world, script: Vec::new(), steps: 0, annotation }
+        let mut env =
+            VirtualhomeEnv { task, world, script: Vec::new(), steps: 0, annotation, scope: IdScope::default(), perceived: Vec::new() };
+        env.mark(&visible_nodes(&env.world));
+        env
+    }
+
+    /// This environment with `scope` for the ids of instance-level lines: [`IdScope::Any`]
+    /// to replay a program that names nodes the environment has not shown (EAI's gold
+    /// programs walk to objects in other rooms by id).
+    #[must_use]
+    pub fn with_id_scope(mut self, scope: IdScope) -> VirtualhomeEnv {
+        self.scope = scope;
+        self
+    }
+
+    /// Which ids instance-level lines may name.
+    pub fn id_scope(&self) -> IdScope {
+        self.scope
+    }
+
+    /// Marks `visible` (what an observation shows) as perceived, the character left out (see
+    /// [`IdScope::Perceived`]).
+    fn mark(&mut self, visible: &[NodeIx]) {
+        self.perceived.resize(self.world.graph.len(), false);
+        for &ix in visible {
+            if ix != self.world.character {
+                self.perceived[ix as usize] = true;
+            }
+        }
     }
 
     /// What the agent sees now as `(id, class_name)`, by id (the nodes the observation
@@ -395,6 +444,11 @@ impl VirtualhomeEnv {
     /// - plate (1001): on kitchencounter (123); close to you
     /// ```
     pub fn observe(&self) -> String {
+        self.render().0
+    }
+
+    /// [`Self::observe`]'s text and the nodes it shows.
+    fn render(&self) -> (String, Vec<NodeIx>) {
         let w = &self.world;
         let g = &w.graph;
         let name = |ix: NodeIx| format!("{} ({})", g.node(ix).class_name, g.node(ix).id);
@@ -444,7 +498,14 @@ impl VirtualhomeEnv {
                 let _ = writeln!(out, "- {}: {}", name(ix), parts.join("; "));
             }
         }
-        out
+        (out, visible)
+    }
+
+    /// The observation text, after marking what it shows as perceived.
+    fn observe_and_perceive(&mut self) -> String {
+        let (text, visible) = self.render();
+        self.mark(&visible);
+        text
     }
 
     /// Turns a command into a script line: instance-level lines as they are; class-level
@@ -453,6 +514,15 @@ impl VirtualhomeEnv {
         let command = command.trim();
         if command.starts_with('[') {
             let line = ScriptLine::parse(command)?;
+            if self.scope == IdScope::Perceived {
+                let g = &self.world.graph;
+                for (class_name, id) in &line.objects {
+                    let shown = g.index_of(*id).is_some_and(|ix| self.perceived[ix as usize] && g.node(ix).class_name == *class_name);
+                    if !shown {
+                        return Err(format!("no {class_name} ({id}) has been seen"));
+                    }
+                }
+            }
             return Ok((line, command.to_string()));
         }
         let mut words = command.split_whitespace();
@@ -518,7 +588,8 @@ impl Environment for VirtualhomeEnv {
         self.world = self.task.init.clone();
         self.script.clear();
         self.steps = 0;
-        Observation::text(self.observe())
+        self.perceived.clear();
+        Observation::text(self.observe_and_perceive())
     }
 
     fn step(&mut self, command: &str) -> StepResult {
@@ -528,13 +599,14 @@ impl Environment for VirtualhomeEnv {
             self.script.push(EngineLine { line: text.clone(), executed: executed.is_ok() });
             executed.map(|()| text)
         });
+        let now = self.observe_and_perceive();
         match outcome {
             Ok(text) => {
-                let observation = Observation::text(format!("Executed {text}.\n{}", self.observe()));
+                let observation = Observation::text(format!("Executed {text}.\n{now}"));
                 StepResult { observation, event: Event::Executed }
             }
             Err(reason) => {
-                let observation = Observation::text(format!("Not executed: {reason}.\n{}", self.observe()));
+                let observation = Observation::text(format!("Not executed: {reason}.\n{now}"));
                 StepResult { observation, event: Event::NotExecuted { reason } }
             }
         }
