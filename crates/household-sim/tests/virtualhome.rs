@@ -82,6 +82,7 @@ fn instance_level_lines_name_only_what_has_been_seen() {
     let task = VirtualhomeTask::from_json(&scene(PLATE_IN_DISHWASHER), "tiny.json").unwrap();
     let mut e = VirtualhomeEnv::new(task.clone(), "virtualhome-eai");
     assert_eq!(e.id_scope(), IdScope::Perceived);
+    assert!(!e.step("[WALK] <fridge> (10)").event.executed(), "before the reset nothing has been shown");
     let start = e.reset().text;
     let refused = e.step("[WALK] <tv> (51)");
     assert_eq!(refused.event, Event::NotExecuted { reason: "no tv (51) has been seen".to_string() });
@@ -90,7 +91,7 @@ fn instance_level_lines_name_only_what_has_been_seen() {
     for (line, reason) in [
         ("[WALK] <tv> (10)", "no tv (10) has been seen"),
         ("[WALK] <tv> (99)", "no tv (99) has been seen"),
-        ("[WALK] <character> (2)", "no character (2) has been seen"),
+        ("[WALK] <character> (2)", "the character (2) is not an object to name"),
     ] {
         assert_eq!(e.step(line).event, Event::NotExecuted { reason: reason.to_string() }, "{line}");
     }

@@ -341,7 +341,8 @@ pub fn bind(world: &World, action: Action, position: usize, class_name: &str) ->
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum IdScope {
     /// Only ids the environment has shown since the reset, each with the class it was shown
-    /// with (an observation lists `fridge (289)`): what an agent may name. Any other line is
+    /// with (an observation lists `fridge (289)`), never the character: what an agent may
+    /// name. Before the first reset nothing has been shown. Any other line is
     /// refused, as not executed, before it is grounded, so it changes nothing and is not in
     /// [`Judge::engine_script`]. Class-level commands (`walk fridge`) bind to visible
     /// instances either way. The default.
@@ -363,7 +364,8 @@ pub struct VirtualhomeEnv {
     steps: usize,
     annotation: GoalAnnotation,
     scope: IdScope,
-    /// By node index: shown in an observation since the reset (the character never is).
+    /// By node index: shown in an observation since the reset. Nothing before the first
+    /// reset; the character is never nameable, though an observation can mention it.
     perceived: Vec<bool>,
 }
 
@@ -381,10 +383,8 @@ impl VirtualhomeEnv {
             family: task.task_name.clone(),
         };
         let world = task.init.clone();
-        let mut env =
-            VirtualhomeEnv { task, world, script: Vec::new(), steps: 0, annotation, scope: IdScope::default(), perceived: Vec::new() };
-        env.mark(&visible_nodes(&env.world));
-        env
+        let perceived = vec![false; world.graph.len()];
+        VirtualhomeEnv { task, world, script: Vec::new(), steps: 0, annotation, scope: IdScope::default(), perceived }
     }
 
     /// This environment with `scope` for the ids of instance-level lines: [`IdScope::Any`]
@@ -517,7 +517,14 @@ impl VirtualhomeEnv {
             if self.scope == IdScope::Perceived {
                 let g = &self.world.graph;
                 for (class_name, id) in &line.objects {
-                    let shown = g.index_of(*id).is_some_and(|ix| self.perceived[ix as usize] && g.node(ix).class_name == *class_name);
+                    let ix = g.index_of(*id);
+                    if ix == Some(self.world.character) {
+                        return Err(format!("the character ({id}) is not an object to name"));
+                    }
+                    // Compared as the line's names are read (lower case, spaces as `_`).
+                    let shown = ix.is_some_and(|ix| {
+                        self.perceived[ix as usize] && g.node(ix).class_name.to_lowercase().replace(' ', "_") == *class_name
+                    });
                     if !shown {
                         return Err(format!("no {class_name} ({id}) has been seen"));
                     }
