@@ -31,6 +31,12 @@ pub struct EnvArgs {
     /// alfworld_trace.py prints them; without it, readable text.
     #[arg(long)]
     json: bool,
+    /// VirtualHome: take an instance-level line (`[WALK] <plate> (1001)`) only for a node an
+    /// observation has shown since the reset, as the environment an agent is handed does;
+    /// without it any node of the scene, as EAI's executor takes them (gold programs walk to
+    /// objects in other rooms by id).
+    #[arg(long, conflicts_with = "game")]
+    as_agent: bool,
 }
 
 /// A string as Python's `json.dumps` writes it (`ensure_ascii`: every non-ASCII character
@@ -108,6 +114,7 @@ pub fn run(args: EnvArgs) -> anyhow::Result<ExitCode> {
             random: args.random,
             seed: args.seed,
             json: args.json,
+            as_agent: args.as_agent,
         });
     };
     let mut env = AlfworldEnv::from_game_file(game).map_err(|e| InputError(e.to_string()))?;

@@ -27,6 +27,9 @@ pub struct VirtualhomeEnvArgs {
     pub seed: u64,
     /// JSON lines (step, command, executed, message, observation; the last line the verdict).
     pub json: bool,
+    /// Instance-level lines only for nodes shown since the reset ([`IdScope::Perceived`]);
+    /// else for any node ([`IdScope::Any`]).
+    pub as_agent: bool,
 }
 
 /// Actions the random program draws from (uniformly), with their number of objects.
@@ -84,7 +87,7 @@ pub fn load_task(benchmark: &str, task: &str, task_dir: Option<&std::path::Path>
 pub fn run(args: &VirtualhomeEnvArgs) -> anyhow::Result<ExitCode> {
     let task = load_task(&args.benchmark, &args.task, args.task_dir.as_deref())?;
     let reference = task.reference_program.clone();
-    let mut env = VirtualhomeEnv::new(task, &args.benchmark).with_id_scope(IdScope::Any);
+    let mut env = VirtualhomeEnv::new(task, &args.benchmark).with_id_scope(if args.as_agent { IdScope::Perceived } else { IdScope::Any });
     let commands: Option<Vec<String>> = match &args.commands {
         Some(file) => {
             let text = crate::input::read_text(file)?;

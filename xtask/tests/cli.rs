@@ -516,6 +516,35 @@ fn env_virtualhome_prints_json_lines_and_the_verdict() {
     assert_eq!(output.status.code(), Some(1));
     let last: serde_json::Value = serde_json::from_str(stdout(&output).lines().last().expect("verdict")).expect("JSON");
     assert_eq!(last["unmet"], serde_json::json!(["dishwasher (1000) is ON"]));
+    // As an agent's environment takes lines: the gold program walks into the dining room before
+    // it names what is there, so it runs the same; a line naming the dishwasher from the home
+    // office, where the character starts, is refused until the dishwasher has been seen.
+    let output = xtask(&[
+        "env",
+        "--benchmark",
+        "virtualhome-eai",
+        "--task",
+        "201_1",
+        "--commands",
+        &plan.display().to_string(),
+        "--json",
+        "--as-agent",
+    ]);
+    assert_eq!(output.status.code(), Some(0), "{}", String::from_utf8_lossy(&output.stderr));
+    let early = scratch(&tmp, "vh-201_1-early.txt", &format!("[WALK] <dishwasher> (1000)\n{program}"));
+    for (flag, executed) in [(None, true), (Some("--as-agent"), false)] {
+        let mut args = vec!["env", "--benchmark", "virtualhome-eai", "--task", "201_1", "--json"];
+        let early_path = early.display().to_string();
+        args.extend(["--commands", early_path.as_str()]);
+        args.extend(flag);
+        let first: serde_json::Value = serde_json::from_str(stdout(&xtask(&args)).lines().nth(1).expect("step 1")).expect("JSON");
+        assert_eq!(first["executed"], executed, "{flag:?}: {first}");
+        if !executed {
+            assert_eq!(first["message"], "no dishwasher (1000) has been seen");
+        }
+    }
+    let output = xtask(&["env", "--game", "any", "--as-agent"]);
+    assert_eq!(output.status.code(), Some(2), "--as-agent is VirtualHome's");
     let output = xtask(&["env", "--benchmark", "virtualhome-eai", "--task", "201_1", "--random", "15", "--seed", "3", "--json"]);
     assert_eq!(stdout(&output).lines().count(), 17);
     let output = xtask(&["env", "--benchmark", "virtualhome-eai", "--task", "no_such_task", "--random", "3"]);
