@@ -338,6 +338,22 @@ pub fn bind(world: &World, action: Action, position: usize, class_name: &str) ->
 
 /// Which node ids an instance-level script line (`[WALK] <fridge> (289)`) sent to
 /// [`VirtualhomeEnv`] may name.
+///
+/// ```
+/// use household_sim::{Environment, IdScope, VirtualhomeEnv, VirtualhomeTask};
+/// let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../fixtures/virtualhome-eai/graphs/201_1.json.gz");
+/// // As an agent's environment: the character starts in the home office.
+/// let mut env = VirtualhomeEnv::new(VirtualhomeTask::load(&path)?, "virtualhome-eai");
+/// env.reset();
+/// assert!(!env.step("[WALK] <dishwasher> (1000)").event.executed(), "not seen yet");
+/// assert!(env.step("[WALK] <dining_room> (201)").event.executed(), "every room is listed");
+/// assert!(env.step("[WALK] <dishwasher> (1000)").event.executed(), "in view now");
+/// // As EAI's executor, for a replay of the gold program.
+/// let mut replay = VirtualhomeEnv::new(VirtualhomeTask::load(&path)?, "virtualhome-eai").with_id_scope(IdScope::Any);
+/// replay.reset();
+/// assert!(replay.step("[WALK] <dishwasher> (1000)").event.executed());
+/// # Ok::<(), household_sim::VirtualhomeError>(())
+/// ```
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum IdScope {
     /// Only ids the environment has shown since the reset, each with the class it was shown
