@@ -23,15 +23,16 @@ fn named(text: &str, into: &mut BTreeSet<(String, u32)>) {
         Some((first, rest)) if first.starts_with("Executed ") || first.starts_with("Not executed: ") => rest,
         _ => text,
     };
-    let bytes = text.as_bytes();
     let mut at = 0;
     while let Some(found) = text[at..].find(" (") {
         let open = at + found;
         at = open + 2;
         let Some(close) = text[at..].find(')') else { break };
         let Ok(id) = text[at..at + close].parse::<u32>() else { continue };
-        let start = text[..open].rfind(|c: char| !(c.is_ascii_alphanumeric() || c == '_')).map_or(0, |i| i + 1);
-        if start < open && bytes[start.saturating_sub(1)] != b'<' {
+        // Class names hold letters, digits, `_` and `-` (`shoe-shine_kit`); the echo's `<c> (id)`
+        // ends in `>` and is read as no name.
+        let start = text[..open].rfind(|c: char| !(c.is_ascii_alphanumeric() || c == '_' || c == '-')).map_or(0, |i| i + 1);
+        if start < open {
             into.insert((text[start..open].to_string(), id));
         }
     }
@@ -66,7 +67,8 @@ proptest! {
             let pick = |n: u16| -> (String, u32) {
                 match how {
                     0..=5 if !visible.is_empty() => { let (id, class) = &visible[n as usize % visible.len()]; (class.clone(), *id) }
-                    6 => (nodes[n as usize % nodes.len()].0.clone(), nodes[a as usize % nodes.len()].1),
+                    // A node in view named under another node's class (often another class).
+                    6 => (nodes[(n as usize + 1 + b as usize) % nodes.len()].0.clone(), visible[a as usize % visible.len()].0),
                     7 => (graph.node(character).class_name.clone(), graph.node(character).id),
                     _ => nodes[n as usize % nodes.len()].clone(),
                 }
@@ -75,6 +77,7 @@ proptest! {
             let objects = if verb == "PUTBACK" { vec![pick(a), pick(b)] } else { vec![pick(a)] };
             let line = std::iter::once(format!("[{verb}]")).chain(objects.iter().map(|(c, id)| format!("<{c}> ({id})"))).collect::<Vec<_>>().join(" ");
             let script_before = env.engine_script().len();
+            let state_before = env.hidden_atoms();
             let result = env.step(&line);
             let unseen = objects.iter().find(|o| o.1 == graph.node(character).id || !shown.contains(*o));
             match (&result.event, unseen) {
@@ -86,6 +89,7 @@ proptest! {
                     };
                     prop_assert_eq!(reason, &expected, "{}", line);
                     prop_assert_eq!(env.engine_script().len(), script_before, "a refused id never reaches the engine: {}", line);
+                    prop_assert!(env.hidden_atoms() == state_before, "a refused id changes nothing: {}", line);
                 }
                 (Event::Executed, Some(object)) => prop_assert!(false, "{line} executed, but {object:?} was never shown"),
                 (Event::NotExecuted { reason }, None) => {

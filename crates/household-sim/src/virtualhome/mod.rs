@@ -358,7 +358,8 @@ pub fn bind(world: &World, action: Action, position: usize, class_name: &str) ->
 pub enum IdScope {
     /// Only ids the environment has shown since the reset, each with the class it was shown
     /// with (an observation lists `fridge (289)`), never the character: what an agent may
-    /// name. Before the first reset nothing has been shown. Any other line is
+    /// name. Until an observation (a reset's or a step's) has shown a node, it is not
+    /// nameable. Any other line is
     /// refused, as not executed, before it is grounded, so it changes nothing and is not in
     /// [`Judge::engine_script`]. Class-level commands (`walk fridge`) bind to visible
     /// instances either way. The default.
@@ -380,8 +381,8 @@ pub struct VirtualhomeEnv {
     steps: usize,
     annotation: GoalAnnotation,
     scope: IdScope,
-    /// By node index: shown in an observation since the reset. Nothing before the first
-    /// reset; the character is never nameable, though an observation can mention it.
+    /// By node index: shown in an observation since the reset (none when made, before any
+    /// observation); the character is never nameable, though an observation can mention it.
     perceived: Vec<bool>,
 }
 
