@@ -111,6 +111,18 @@ fn instance_level_lines_name_only_what_has_been_seen() {
     check(&mut any, &[("[WALK] <tv> (51)", true)]);
 }
 
+/// A class is compared as script lines read names (lower case, spaces as `_`, as EAI's parser):
+/// a table shown as `Kitchen Table (20)` is named `<Kitchen Table> (20)` or `<kitchen_table> (20)`,
+/// not `<table> (20)`.
+#[test]
+fn a_shown_class_is_compared_as_lines_read_it() {
+    let text = scene(PLATE_IN_DISHWASHER).replace(r#""class_name":"table""#, r#""class_name":"Kitchen Table""#);
+    let mut e = VirtualhomeEnv::new(VirtualhomeTask::from_json(&text, "tiny.json").unwrap(), "virtualhome-eai");
+    assert!(e.reset().text.contains("- Kitchen Table (20)"));
+    check(&mut e, &[("[WALK] <Kitchen Table> (20)", true), ("[WALK] <kitchen_table> (20)", true)]);
+    assert_eq!(e.step("[WALK] <table> (20)").event, Event::NotExecuted { reason: "no table (20) has been seen".to_string() });
+}
+
 #[test]
 fn a_closed_container_hides_and_blocks_its_contents() {
     let mut e = env(PLATE_IN_DISHWASHER);
