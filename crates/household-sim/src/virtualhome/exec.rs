@@ -201,6 +201,11 @@ pub struct ScriptLine {
 }
 
 impl ScriptLine {
+    /// An object's name as a script line reads it: lower-cased, spaces as `_` (as the executor).
+    pub(crate) fn object_name(name: &str) -> String {
+        name.to_lowercase().replace(' ', "_")
+    }
+
     /// Parses a script line as `scripts.parse_script_line` does: `[ACTION]` then
     /// `<name> (id)` pairs; the number of pairs must be the action's arity.
     pub fn parse(line: &str) -> Result<ScriptLine, String> {
@@ -226,7 +231,7 @@ impl ScriptLine {
             let Some(end_paren) = paren.find(')') else { break };
             let id_text = paren[..end_paren].trim();
             let id: u32 = id_text.parse().map_err(|_| format!("invalid object id {id_text:?} for <{object}>"))?;
-            objects.push((object.to_lowercase().replace(' ', "_"), id));
+            objects.push((ScriptLine::object_name(object), id));
             rest = &paren[end_paren + 1..];
         }
         let line = ScriptLine { action, objects };

@@ -359,10 +359,9 @@ pub enum IdScope {
     /// Only ids the environment has shown since the reset, each with the class it was shown
     /// with (an observation lists `fridge (289)`), never the character: what an agent may
     /// name. Until an observation (a reset's or a step's) has shown a node, it is not
-    /// nameable. Any other line is
-    /// refused, as not executed, before it is grounded, so it changes nothing and is not in
-    /// [`Judge::engine_script`]. Class-level commands (`walk fridge`) bind to visible
-    /// instances either way. The default.
+    /// nameable. Any other line is refused, as not executed, before it is grounded, so it
+    /// changes nothing and is not in [`Judge::engine_script`]. Class-level commands (`walk
+    /// fridge`) bind to visible instances either way. The default.
     #[default]
     Perceived,
     /// Every node id of the scene, as EAI's executor takes them: for replays of recorded or
@@ -381,8 +380,9 @@ pub struct VirtualhomeEnv {
     steps: usize,
     annotation: GoalAnnotation,
     scope: IdScope,
-    /// By node index: shown in an observation since the reset (none when made, before any
-    /// observation); the character is never nameable, though an observation can mention it.
+    /// By node index (the graph's nodes are fixed at load): shown in an observation since the
+    /// reset (none when made, before any observation); the character is never nameable, though
+    /// an observation can mention it.
     perceived: Vec<bool>,
 }
 
@@ -421,7 +421,6 @@ impl VirtualhomeEnv {
     /// Marks `visible` (what an observation shows) as perceived, the character left out (see
     /// [`IdScope::Perceived`]).
     fn mark(&mut self, visible: &[NodeIx]) {
-        self.perceived.resize(self.world.graph.len(), false);
         for &ix in visible {
             if ix != self.world.character {
                 self.perceived[ix as usize] = true;
@@ -538,10 +537,9 @@ impl VirtualhomeEnv {
                     if ix == Some(self.world.character) {
                         return Err(format!("the character ({id}) is not an object to name"));
                     }
-                    // Compared as the line's names are read (lower case, spaces as `_`).
-                    let shown = ix.is_some_and(|ix| {
-                        self.perceived[ix as usize] && g.node(ix).class_name.to_lowercase().replace(' ', "_") == *class_name
-                    });
+                    // The class as the line's names are read.
+                    let shown =
+                        ix.is_some_and(|ix| self.perceived[ix as usize] && ScriptLine::object_name(&g.node(ix).class_name) == *class_name);
                     if !shown {
                         return Err(format!("no {class_name} ({id}) has been seen"));
                     }
@@ -612,7 +610,7 @@ impl Environment for VirtualhomeEnv {
         self.world = self.task.init.clone();
         self.script.clear();
         self.steps = 0;
-        self.perceived.clear();
+        self.perceived.fill(false);
         Observation::text(self.observe_and_perceive())
     }
 
