@@ -706,8 +706,10 @@ fn run_once(args: &EvalArgs, planned: &[Planned]) -> anyhow::Result<(serde_json:
         let mut records = RecordFile::open(&args.out, &stem, &config(args, suite, tasks)?, args.shard, args.fresh)
             .map_err(|e| InputError(e.to_string()))?;
         records.check_tasks(&tasks.iter().map(EvalTask::id).collect()).map_err(|e| InputError(e.to_string()))?;
-        records.settle()?;
         let total = one.total(args.limit);
+        let left = (0..total).filter(|&i| args.shard.is_none_or(|s| s.selects(i)) && !records.done().contains(tasks[i].id())).count();
+        records.check_unmerged(left).map_err(|e| InputError(e.to_string()))?;
+        records.settle()?;
         let selected = (0..total).filter(|&i| args.shard.is_none_or(|s| s.selects(i))).count();
         let bar = crate::input::progress_bar(format!("{} {agent_name}", suite.name()), selected);
         let mut ids = Vec::new();

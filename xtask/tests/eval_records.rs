@@ -207,4 +207,16 @@ fn shards_report_apart_and_merge_to_the_records_of_one_run() {
     let (_tmp_whole, whole) = run_dir("whole");
     assert!(eval(&whole).args(["--limit", "5"]).status().expect("runs").success());
     assert_eq!(records_of(Path::new(path)), records(&whole), "the merged shards are the unsharded run's records");
+
+    // A merged run's shard resumed with tasks left would leave the merged file stale: refused,
+    // the shard left as it was; with nothing left to run it only reports again.
+    let first = shards.iter().find(|p| p.to_string_lossy().ends_with(".shard-1-of-2.jsonl")).expect("shard 1");
+    let before = std::fs::read(first).expect("the shard");
+    let resumed = eval(&dir).args(["--limit", "7", "--shard", "1/2"]).stderr(Stdio::piped()).output().expect("runs");
+    let stderr = String::from_utf8_lossy(&resumed.stderr);
+    assert_eq!(resumed.status.code(), Some(2), "{stderr}");
+    assert!(stderr.contains("were merged into it") && stderr.contains("1 task(s) left"), "{stderr}");
+    assert_eq!(std::fs::read(first).expect("the shard"), before, "a refused resume writes nothing");
+    let again = eval(&dir).args(["--limit", "5", "--shard", "1/2"]).stderr(Stdio::piped()).output().expect("runs");
+    assert!(again.status.success(), "{}", String::from_utf8_lossy(&again.stderr));
 }

@@ -83,6 +83,22 @@ pub enum RecordError {
     /// a string `task`; the message says what it lacks.
     #[error("a record must be a JSON object with a string `task`: {0}")]
     NotARecord(String),
+    /// A shard with tasks left to run, beside the merged file of its run ([`merge`]'s output):
+    /// resuming it would leave the merged file short of the tasks it adds, and the merged file
+    /// is what reports, replays and CI read in place of the shards.
+    #[error(
+        "{merged}: the shards of this run were merged into it, and {path} has {left} task(s) left to run: \
+         resuming the shard would leave the merged file short of them; move the merged file away, \
+         resume the shards, then merge them again"
+    )]
+    Merged {
+        /// The shard file.
+        path: PathBuf,
+        /// The merged file beside it (`<stem>-<hash>.jsonl`).
+        merged: PathBuf,
+        /// How many of the shard's tasks are not recorded yet.
+        left: usize,
+    },
     /// [`RecordFile::append`] was given a task the file records already; nothing was written.
     #[error("{path}: task {task} is recorded already (a file holding a task twice cannot be resumed or reported)")]
     Duplicate {
@@ -184,6 +200,8 @@ impl std::str::FromStr for Shard {
 #[derive(Debug)]
 pub struct RecordFile {
     path: PathBuf,
+    /// For a shard file, the file its run's shards merge into (`<stem>-<hash>.jsonl`).
+    merged: Option<PathBuf>,
     hash: String,
     records: Vec<Map<String, Value>>,
     /// The line of each record, 1-based, and the lines of the file.
@@ -254,7 +272,8 @@ impl RecordFile {
         let torn_tail = (torn > 0).then_some((text.len() as u64, (text.len() + torn) as u64));
         let done = records.iter().filter_map(|r| r.get("task").and_then(Value::as_str).map(str::to_string)).collect();
         let line_count = text.lines().count();
-        Ok(RecordFile { path, hash, records, lines, line_count, done, file, torn_tail })
+        let merged = shard.map(|_| dir.join(format!("{name}.jsonl")));
+        Ok(RecordFile { path, merged, hash, records, lines, line_count, done, file, torn_tail })
     }
 
     /// Cuts off a last record cut short by a crash, saying so: for the caller to call once it
@@ -284,6 +303,19 @@ impl RecordFile {
             }
         }
         Ok(())
+    }
+
+    /// Refuses to resume a shard file whose run was merged already ([`RecordError::Merged`]),
+    /// where `left` of its tasks are still to run: the merged file beside it would then miss
+    /// what the shard adds, while reports and replays read the shard through it. A shard with
+    /// nothing left to run, or an unsharded file, passes.
+    pub fn check_unmerged(&self, left: usize) -> Result<(), RecordError> {
+        match &self.merged {
+            Some(merged) if left > 0 && merged.exists() => {
+                Err(RecordError::Merged { path: self.path.clone(), merged: merged.clone(), left })
+            }
+            _ => Ok(()),
+        }
     }
 
     /// The record file (`<dir>/<stem>-<hash>[.shard-i-of-n].jsonl`).

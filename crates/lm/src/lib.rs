@@ -80,7 +80,7 @@ pub use llama::{Architecture, KvCache, LlamaModel, ModelConfig, RopeConfig};
 pub use local::{DEFAULT_BRANCH_STORE_BYTES, LocalModel};
 pub use model::{LanguageModel, Logprobs, Prior, Usage, generate_greedy};
 #[cfg(feature = "openai")]
-pub use openai::{OpenAiConfig, OpenAiModel, ServerDialect};
+pub use openai::{OpenAiConfig, OpenAiModel, ServerDialect, UnknownDialect};
 pub use tokenizer::{BpeParts, COMMON_BOS_TOKENS, COMMON_STOP_TOKENS, PreTokenizer, Tokenizer};
 pub use uniform::UniformModel;
 pub use vocabulary::{TokenId, TokenKind, Vocabulary, byte_level_decode, byte_level_encode, char_to_byte_map};

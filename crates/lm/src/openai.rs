@@ -38,13 +38,25 @@ use crate::vocabulary::TokenId;
 /// Which extensions of the completions API the server has (command-line names `vllm`,
 /// `generic`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, strum::EnumString, strum::IntoStaticStr, strum::VariantNames)]
-#[strum(serialize_all = "lowercase")]
+#[strum(serialize_all = "lowercase", parse_err_ty = UnknownDialect, parse_err_fn = UnknownDialect::new)]
 pub enum ServerDialect {
     /// vLLM: `allowed_token_ids` and `return_tokens_as_token_ids` are sent.
     Vllm,
     /// Plain OpenAI completions (llama.cpp server, Ollama): tokens come back as text and are
     /// mapped to ids through the tokenizer; allowed sets are applied on this side.
     Generic,
+}
+
+/// A name that is not a [`ServerDialect`]'s (the error of its
+/// [`FromStr`](std::str::FromStr)): names what was given and lists the dialects.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error("`{0}` is not a server dialect: the dialects are {dialects}", dialects = <ServerDialect as strum::VariantNames>::VARIANTS.join(", "))]
+pub struct UnknownDialect(pub String);
+
+impl UnknownDialect {
+    fn new(given: &str) -> UnknownDialect {
+        UnknownDialect(given.to_string())
+    }
 }
 
 /// Where the server is and how to talk to it.

@@ -420,3 +420,13 @@ fn a_429_is_retried() {
     assert_eq!(remote.usage().forward_calls, 2);
     server.join().expect("server");
 }
+
+/// The dialects by name, and a name that is none of them refused with the list.
+#[test]
+fn server_dialects_parse_by_name_and_refuse_others_with_the_list() {
+    assert_eq!("vllm".parse::<ServerDialect>(), Ok(ServerDialect::Vllm));
+    assert_eq!("generic".parse::<ServerDialect>(), Ok(ServerDialect::Generic));
+    let error = "llama.cpp".parse::<ServerDialect>().expect_err("not a dialect");
+    assert_eq!(error, lm::UnknownDialect("llama.cpp".into()));
+    assert_eq!(error.to_string(), "`llama.cpp` is not a server dialect: the dialects are vllm, generic");
+}

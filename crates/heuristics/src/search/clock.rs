@@ -33,7 +33,7 @@ const CPU_READ_INTERVAL: Duration = Duration::from_millis(1);
     strum::VariantNames,
 )]
 #[serde(rename_all = "kebab-case")]
-#[strum(serialize_all = "kebab-case")]
+#[strum(serialize_all = "kebab-case", parse_err_ty = crate::UnknownName, parse_err_fn = Clock::unknown)]
 pub enum Clock {
     /// Elapsed real time, what a user waits (the paper's).
     #[default]
@@ -45,6 +45,10 @@ pub enum Clock {
 }
 
 impl Clock {
+    fn unknown(given: &str) -> crate::UnknownName {
+        crate::UnknownName::of::<Clock>("clock", given)
+    }
+
     /// Whether this is the wall clock (for `serde(skip_serializing_if)`: configurations
     /// written before the clock was a setting name the wall clock by leaving it out).
     pub fn is_wall(&self) -> bool {

@@ -29,7 +29,7 @@ pub use symmetry::ObjectSymmetries;
 
 /// Which search (command-line names `astar`, `gbfs`, `lazy-gbfs`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, strum::EnumString, strum::IntoStaticStr, strum::VariantNames, strum::VariantArray)]
-#[strum(serialize_all = "kebab-case")]
+#[strum(serialize_all = "kebab-case", parse_err_ty = crate::UnknownName, parse_err_fn = Algorithm::unknown)]
 pub enum Algorithm {
     /// A* on f = g + h: with an admissible heuristic such as [`crate::LmCut`] its plans are
     /// optimal; a cheaper path reopens a closed state.
@@ -40,6 +40,12 @@ pub enum Algorithm {
     /// Lazy greedy best-first search: successors inherit their parent's value and are
     /// evaluated when expanded.
     LazyGbfs,
+}
+
+impl Algorithm {
+    fn unknown(given: &str) -> crate::UnknownName {
+        crate::UnknownName::of::<Algorithm>("search algorithm", given)
+    }
 }
 
 /// Limits and options of one search.
