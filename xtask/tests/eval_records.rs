@@ -119,27 +119,30 @@ fn killed_runs_resume_to_exactly_the_records_of_an_uninterrupted_run() {
 #[test]
 fn seeds_make_one_run_each() {
     let (_tmp_dir, dir) = run_dir("seeds");
-    let output = Command::new(env!("CARGO_BIN_EXE_xtask"))
-        .args([
-            "eval",
-            "--explorer",
-            "systematic",
-            "--lm",
-            "uniform",
-            "--mode",
-            "sample",
-            "--seeds",
-            "0,42",
-            "--benchmark",
-            "alfworld-seen",
-            "--time-limit",
-            "5",
-        ])
-        .args(["--limit", "1", "--json", "--out"])
-        .arg(&dir)
-        .current_dir(Path::new(env!("CARGO_MANIFEST_DIR")).join(".."))
-        .output()
-        .expect("runs");
+    let run = |limit: &str| {
+        Command::new(env!("CARGO_BIN_EXE_xtask"))
+            .args([
+                "eval",
+                "--explorer",
+                "systematic",
+                "--lm",
+                "uniform",
+                "--mode",
+                "sample",
+                "--seeds",
+                "0,42",
+                "--benchmark",
+                "alfworld-seen",
+                "--time-limit",
+                "5",
+            ])
+            .args(["--limit", limit, "--json", "--out"])
+            .arg(&dir)
+            .current_dir(Path::new(env!("CARGO_MANIFEST_DIR")).join(".."))
+            .output()
+            .expect("runs")
+    };
+    let output = run("1");
     let stdout = String::from_utf8_lossy(&output.stdout);
     assert!(output.status.success(), "{}", String::from_utf8_lossy(&output.stderr));
     let summary: serde_json::Value = serde_json::from_str(&stdout).expect("one JSON object");
@@ -162,6 +165,25 @@ fn seeds_make_one_run_each() {
     }
     let report = std::fs::read_to_string(dir.join("report/report.md")).expect("the report");
     assert!(report.contains("alfworld-seen"), "{report}");
+
+    // Every seed's file is checked before any task runs: with seed 42's damaged, a longer run
+    // is refused at once, and seed 0's file gets no record first.
+    let seed_of = |file: &PathBuf| {
+        let config: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(file.with_extension("config.json")).expect("config")).expect("JSON");
+        config["decode"]["seed"].as_u64()
+    };
+    let zero = files.iter().find(|f| seed_of(f) == Some(0)).expect("seed 0's records");
+    let forty_two = files.iter().find(|f| seed_of(f) == Some(42)).expect("seed 42's records");
+    let mut damaged = std::fs::read_to_string(forty_two).expect("reads");
+    damaged.push_str("not a record\n");
+    std::fs::write(forty_two, damaged).expect("writes");
+    let before = std::fs::read(zero).expect("reads");
+    let output = run("2");
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert_eq!(output.status.code(), Some(2), "{stderr}");
+    assert!(stderr.contains(&format!("{}:2", forty_two.display())), "{stderr}");
+    assert!(std::fs::read(zero).expect("reads") == before, "refused before seed 0 ran a task");
 
     let refused = Command::new(env!("CARGO_BIN_EXE_xtask"))
         .args(["eval", "--agent", "planner", "--explorer", "systematic", "--seeds", "0,42", "--out"])
@@ -199,7 +221,9 @@ fn shards_report_apart_and_merge_to_the_records_of_one_run() {
     assert_eq!(short.status.code(), Some(2), "{stderr}");
     assert!(stderr.contains("5 of the run's 140 tasks recorded"), "{stderr}");
     let merged = Command::new(env!("CARGO_BIN_EXE_xtask")).args(["merge", "--partial"]).args(&shards).output().expect("runs");
-    assert!(merged.status.success(), "{}", String::from_utf8_lossy(&merged.stderr));
+    let stderr = String::from_utf8_lossy(&merged.stderr);
+    assert!(merged.status.success(), "{stderr}");
+    assert!(stderr.contains("135 of the run's tasks are not recorded: `eval` runs them without --shard"), "{stderr}");
     // "N records of configuration C -> PATH"
     let stdout = String::from_utf8_lossy(&merged.stdout);
     let path = stdout.trim().rsplit(" -> ").next().expect("the merged file");
@@ -215,8 +239,14 @@ fn shards_report_apart_and_merge_to_the_records_of_one_run() {
     let resumed = eval(&dir).args(["--limit", "7", "--shard", "1/2"]).stderr(Stdio::piped()).output().expect("runs");
     let stderr = String::from_utf8_lossy(&resumed.stderr);
     assert_eq!(resumed.status.code(), Some(2), "{stderr}");
-    assert!(stderr.contains("were merged into it") && stderr.contains("1 task(s) left"), "{stderr}");
-    assert_eq!(std::fs::read(first).expect("the shard"), before, "a refused resume writes nothing");
+    assert!(stderr.contains("1 task(s) of this shard are left to run") && stderr.contains(path), "{stderr}");
+    assert!(std::fs::read(first).expect("the shard") == before, "a refused resume writes nothing");
+    // Started over (--fresh), every task of the shard is left: refused too, its records kept.
+    let fresh = eval(&dir).args(["--limit", "5", "--shard", "1/2", "--fresh"]).stderr(Stdio::piped()).output().expect("runs");
+    let stderr = String::from_utf8_lossy(&fresh.stderr);
+    assert_eq!(fresh.status.code(), Some(2), "{stderr}");
+    assert!(stderr.contains("3 task(s) of this shard are left to run"), "{stderr}");
+    assert!(std::fs::read(first).expect("the shard") == before, "a refused fresh start deletes nothing");
     let again = eval(&dir).args(["--limit", "5", "--shard", "1/2"]).stderr(Stdio::piped()).output().expect("runs");
     assert!(again.status.success(), "{}", String::from_utf8_lossy(&again.stderr));
 }

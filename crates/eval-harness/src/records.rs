@@ -21,7 +21,9 @@
 //! - **Shards.** `--shard i/n` ([`Shard`]) runs the tasks whose index is `i-1` modulo `n`, into
 //!   `<stem>-<hash>.shard-i-of-n.jsonl` (the configuration, and so the hash, is the same for
 //!   every shard). [`merge`] joins shard files of one configuration into the file an unsharded
-//!   run writes, in index order, and refuses mixed configurations and repeated tasks.
+//!   run writes, in index order, and refuses mixed configurations, repeated tasks and a shard a
+//!   run is still writing; [`RecordFile::check_unmerged`] refuses to resume a shard with tasks
+//!   left once that file holds records, which would leave it short of them.
 
 use std::collections::{BTreeMap, BTreeSet};
 use std::fs::{File, OpenOptions};
@@ -83,13 +85,15 @@ pub enum RecordError {
     /// a string `task`; the message says what it lacks.
     #[error("a record must be a JSON object with a string `task`: {0}")]
     NotARecord(String),
-    /// A shard with tasks left to run, beside the merged file of its run ([`merge`]'s output):
-    /// resuming it would leave the merged file short of the tasks it adds, and the merged file
-    /// is what reports, replays and CI read in place of the shards.
+    /// A shard with tasks left to run, beside the unsharded file of its run holding records
+    /// ([`merge`]'s output, or a run without shards): resuming it would leave that file short
+    /// of the tasks it adds, and that file is what reports, replays and CI read in place of
+    /// the shards.
     #[error(
-        "{merged}: the shards of this run were merged into it, and {path} has {left} task(s) left to run: \
-         resuming the shard would leave the merged file short of them; move the merged file away, \
-         resume the shards, then merge them again"
+        "{path}: {left} task(s) of this shard are left to run, and {merged} beside it holds this run's records \
+         (merged from its shards, or written by a run without --shard), which reports and replays read in place of the \
+         shards: resuming the shard would leave that file short of them; resume without --shard (which appends the \
+         missing tasks to that file), or move that file out of the folder, resume the shards and merge them again"
     )]
     Merged {
         /// The shard file.
@@ -209,17 +213,29 @@ pub struct RecordFile {
     line_count: usize,
     done: BTreeSet<String>,
     file: File,
-    /// When a record cut short follows the whole lines: where they end, and the file's length
-    /// as read (cut off by [`RecordFile::settle`]).
-    torn_tail: Option<(u64, u64)>,
+    /// What [`RecordFile::settle`] cuts off: a record cut short after the whole lines, or, with
+    /// `fresh`, every earlier record.
+    cut: Option<Cut>,
+}
+
+/// The end of a record file that [`RecordFile::settle`] cuts off.
+#[derive(Debug, Clone, Copy)]
+struct Cut {
+    /// Where the kept bytes end.
+    keep: u64,
+    /// The file's length as read: the cut is made only while it still has this length.
+    length: u64,
+    /// Every earlier record (`fresh`), not a last one cut short.
+    fresh: bool,
 }
 
 impl RecordFile {
     /// Opens (creating) `<dir>/<stem>-<hash>[.shard-i-of-n].jsonl` for `config`: checks or
     /// writes the configuration file beside it and reads the records already there, passing
     /// over a last record cut short (cut off by [`RecordFile::settle`], once the caller has no
-    /// more reason to refuse the file). `fresh` deletes earlier records of this configuration
-    /// first.
+    /// more reason to refuse the file). `fresh` starts the configuration over: the earlier
+    /// records are not read, and [`RecordFile::settle`] deletes them (so a run refused before
+    /// it settles leaves them as they were).
     pub fn open(dir: &Path, stem: &str, config: &impl Serialize, shard: Option<Shard>, fresh: bool) -> Result<RecordFile, RecordError> {
         std::fs::create_dir_all(dir).map_err(io(dir))?;
         let hash = config_hash(config);
@@ -259,36 +275,44 @@ impl RecordFile {
             Err(std::fs::TryLockError::Error(e)) if e.kind() == std::io::ErrorKind::Unsupported => {}
             Err(std::fs::TryLockError::Error(e)) => return Err(io(&path)(e)),
         }
-        if fresh {
-            file.set_len(0).map_err(io(&path))?;
-        }
+        // With `fresh`, the earlier records are neither read nor (until `settle`) deleted.
         let mut bytes = Vec::new();
-        file.read_to_end(&mut bytes).map_err(io(&path))?;
+        let fresh_cut = if fresh {
+            let length = file.metadata().map_err(io(&path))?.len();
+            (length > 0).then_some(Cut { keep: 0, length, fresh: true })
+        } else {
+            file.read_to_end(&mut bytes).map_err(io(&path))?;
+            None
+        };
         // A last line without its newline is a record cut short by a crash: its task runs
         // again, and the line is cut off by `settle` (not here: a file the run then refuses,
         // here or in `check_tasks`, is left as it was).
         let (text, torn) = whole_lines(&path, bytes)?;
         let (lines, records): (Vec<usize>, Vec<Map<String, Value>>) = parse_records(&path, &text, Some(&hash))?.into_iter().unzip();
-        let torn_tail = (torn > 0).then_some((text.len() as u64, (text.len() + torn) as u64));
+        let cut =
+            fresh_cut.or_else(|| (torn > 0).then_some(Cut { keep: text.len() as u64, length: (text.len() + torn) as u64, fresh: false }));
         let done = records.iter().filter_map(|r| r.get("task").and_then(Value::as_str).map(str::to_string)).collect();
         let line_count = text.lines().count();
         let merged = shard.map(|_| dir.join(format!("{name}.jsonl")));
-        Ok(RecordFile { path, merged, hash, records, lines, line_count, done, file, torn_tail })
+        Ok(RecordFile { path, merged, hash, records, lines, line_count, done, file, cut })
     }
 
-    /// Cuts off a last record cut short by a crash, saying so: for the caller to call once it
-    /// has checked the file (`check_tasks`, its own reading of the records), so that a file it
-    /// refuses is left as it was; [`RecordFile::append`] settles first too. Where the file
-    /// changed since it was read (another writer, on a file system without locks), nothing is
-    /// cut: the line is then no longer the last, and every later open names it.
+    /// Cuts off a last record cut short by a crash, saying so, or, opened `fresh`, deletes the
+    /// earlier records: for the caller to call once it has checked the file (`check_tasks`,
+    /// `check_unmerged`, its own reading of the records), so that a file it refuses is left as
+    /// it was; [`RecordFile::append`] settles first too. Where the file changed since it was
+    /// read (another writer, on a file system without locks), nothing is cut: the line is then
+    /// no longer the last, and every later open names it.
     pub fn settle(&mut self) -> Result<(), RecordError> {
-        let Some((whole, length)) = self.torn_tail.take() else { return Ok(()) };
-        if self.file.metadata().map_err(io(&self.path))?.len() != length {
+        let Some(cut) = self.cut.take() else { return Ok(()) };
+        if self.file.metadata().map_err(io(&self.path))?.len() != cut.length {
             return Ok(());
         }
-        self.file.set_len(whole).map_err(io(&self.path))?;
+        self.file.set_len(cut.keep).map_err(io(&self.path))?;
         self.file.seek(SeekFrom::End(0)).map_err(io(&self.path))?;
-        eprintln!("{}: cut off a record cut short (a killed run); its task runs again", self.path.display());
+        if !cut.fresh {
+            eprintln!("{}: cut off a record cut short (a killed run); its task runs again", self.path.display());
+        }
         Ok(())
     }
 
@@ -311,7 +335,7 @@ impl RecordFile {
     /// nothing left to run, or an unsharded file, passes.
     pub fn check_unmerged(&self, left: usize) -> Result<(), RecordError> {
         match &self.merged {
-            Some(merged) if left > 0 && merged.exists() => {
+            Some(merged) if left > 0 && std::fs::metadata(merged).is_ok_and(|m| m.len() > 0) => {
                 Err(RecordError::Merged { path: self.path.clone(), merged: merged.clone(), left })
             }
             _ => Ok(()),
@@ -469,6 +493,9 @@ pub fn merge(shards: &[PathBuf], partial: bool) -> Result<Merged, RecordError> {
     let base = named[0].0.as_str();
     let mut all: Vec<(PathBuf, Map<String, Value>)> = Vec::new();
     let mut config: Option<String> = None;
+    // Each shard's file, locked (shared) until the merged file is written: a shard a run is
+    // still writing would go on past the merge, and no run starts one while it is merged.
+    let mut locked = Vec::with_capacity(shards.len());
     // Every file is a shard of one run: the name's `<stem>-<hash>` is the first's.
     for (path, (file_base, shard)) in shards.iter().zip(&named) {
         if file_base.as_str() != base {
@@ -477,6 +504,16 @@ pub fn merge(shards: &[PathBuf], partial: bool) -> Result<Merged, RecordError> {
                 path.display()
             )));
         }
+        let file = File::open(path).map_err(io(path))?;
+        match file.try_lock_shared() {
+            Ok(()) => {}
+            Err(std::fs::TryLockError::WouldBlock) => {
+                return Err(RecordError::Merge(format!("{}: a run is still writing this shard; merge once it has ended", path.display())));
+            }
+            Err(std::fs::TryLockError::Error(e)) if e.kind() == std::io::ErrorKind::Unsupported => {}
+            Err(std::fs::TryLockError::Error(e)) => return Err(io(path)(e)),
+        }
+        locked.push(file);
         let (text, torn) = whole_lines(path, std::fs::read(path).map_err(io(path))?)?;
         if torn > 0 {
             return Err(RecordError::Merge(format!("{}: its last record is cut short; resume that shard first", path.display())));
@@ -595,5 +632,6 @@ pub fn merge(shards: &[PathBuf], partial: bool) -> Result<Merged, RecordError> {
     }
     let text: String = all.iter().map(|r| Value::Object(r.clone()).to_string() + "\n").collect();
     write_whole(&target, text.as_bytes())?;
+    drop(locked);
     Ok(Merged { path: target, records: all.len(), config, expected })
 }

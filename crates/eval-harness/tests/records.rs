@@ -353,3 +353,69 @@ fn canonical_json_sorts_keys_at_every_level() {
     let sorted: Value = serde_json::from_str(&text).expect("json");
     assert_eq!(config_hash(&config), config_hash(&sorted));
 }
+
+/// Shards and their merged file stay one run: a shard a run is still writing is not merged, and
+/// once the merged file holds records a shard with tasks left is not resumed beside it (it would
+/// leave that file short of them), `fresh` included, whose refusal then deletes nothing; a
+/// shard with nothing left, or an unsharded file, passes.
+#[test]
+fn a_merged_run_is_not_resumed_by_its_shards_nor_a_written_shard_merged() {
+    let (_tmp_dir, dir) = scratch("merged");
+    let config = json!({"agent": "expert", "benchmark": "ipc", "tasks": {"count": 4}});
+    let (one, two) = (Shard { index: 1, count: 2 }, Shard { index: 2, count: 2 });
+    let mut first = RecordFile::open(&dir, "run", &config, Some(one), false).expect("opens");
+    first.append(0, &json!({"task": "t0", "success": true})).expect("appends");
+    let mut second = RecordFile::open(&dir, "run", &config, Some(two), false).expect("opens");
+    second.append(1, &json!({"task": "t1", "success": true})).expect("appends");
+    let paths = [first.path().to_path_buf(), second.path().to_path_buf()];
+    // The first shard's run still holds its file.
+    let error = merge(&paths, true).expect_err("a shard being written");
+    assert_eq!(error.to_string(), format!("{}: a run is still writing this shard; merge once it has ended", paths[0].display()));
+    drop((first, second));
+    let merged = merge(&paths, true).expect("a partial merge");
+    assert_eq!(merged.records, 2);
+
+    let before = std::fs::read(&paths[0]).expect("reads");
+    for fresh in [false, true] {
+        let file = RecordFile::open(&dir, "run", &config, Some(one), fresh).expect("opens");
+        // t2 is the shard's one task left (t0 is recorded; with `fresh` neither is).
+        let left = if fresh { 2 } else { 1 };
+        let error = file.check_unmerged(left).expect_err("resumed past its merge");
+        assert!(
+            matches!(&error, RecordError::Merged { path, merged: m, left: l } if *path == paths[0] && *m == merged.path && *l == left),
+            "{error}"
+        );
+        assert!(error.to_string().contains("resume without --shard"), "{error}");
+        file.check_unmerged(0).expect("nothing left to run");
+        drop(file);
+        assert!(std::fs::read(&paths[0]).expect("reads") == before, "a refused shard is left as it was (fresh: {fresh})");
+    }
+    // The unsharded file itself resumes (it is the merged file), and a merged file with no
+    // records (as a run without shards leaves before its first) stands for nothing.
+    RecordFile::open(&dir, "run", &config, None, false).expect("opens").check_unmerged(2).expect("not a shard");
+    std::fs::write(&merged.path, "").expect("empties");
+    RecordFile::open(&dir, "run", &config, Some(one), false).expect("opens").check_unmerged(1).expect("no records beside it");
+}
+
+/// `fresh` deletes the earlier records when the run settles the file (or appends), not when it
+/// opens it: a run refused in between leaves them as they were.
+#[test]
+fn a_fresh_start_deletes_the_earlier_records_once_settled() {
+    let (_tmp_dir, dir) = scratch("fresh");
+    let config = json!({"agent": "expert", "benchmark": "ipc"});
+    let mut file = RecordFile::open(&dir, "run", &config, None, false).expect("opens");
+    file.append(0, &json!({"task": "a", "success": true})).expect("appends");
+    let path = file.path().to_path_buf();
+    drop(file);
+    let before = std::fs::read(&path).expect("reads");
+    let file = RecordFile::open(&dir, "run", &config, None, true).expect("opens");
+    assert!(file.records().is_empty() && file.done().is_empty());
+    drop(file);
+    assert!(std::fs::read(&path).expect("reads") == before, "opened fresh, not settled: kept");
+    let mut file = RecordFile::open(&dir, "run", &config, None, true).expect("opens");
+    file.settle().expect("settles");
+    assert!(std::fs::read(&path).expect("reads").is_empty(), "settled fresh: deleted");
+    file.append(0, &json!({"task": "b", "success": false})).expect("appends");
+    drop(file);
+    assert_eq!(tasks(&RecordFile::open(&dir, "run", &config, None, false).expect("reopens")), ["b"]);
+}

@@ -81,7 +81,7 @@ impl<H: Heuristic + ?Sized> Heuristic for Box<H> {
 /// The heuristics by command-line name (`blind`, `goalcount`, `hmax`, `hadd`, `ff`,
 /// `lmcut`): the names are the variants' (`FromStr`, `Into<&str>`, [`strum::VariantNames`]).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, strum::EnumString, strum::IntoStaticStr, strum::VariantNames, strum::VariantArray)]
-#[strum(serialize_all = "lowercase", parse_err_ty = UnknownName, parse_err_fn = UnknownName::heuristic)]
+#[strum(serialize_all = "lowercase", parse_err_ty = UnknownName, parse_err_fn = HeuristicName::unknown)]
 pub enum HeuristicName {
     /// [`Blind`], `blind`.
     Blind,
@@ -117,37 +117,15 @@ impl HeuristicName {
     }
 }
 
-/// A name that is none of an enum's command-line names: the error of [`HeuristicName`]'s,
-/// [`search::Algorithm`]'s and [`search::Clock`]'s [`FromStr`](std::str::FromStr), which names
-/// what was given and lists the names there are (`` `lm-cut` is not a heuristic: the heuristics
-/// are blind, goalcount, hmax, hadd, ff, lmcut ``).
-#[derive(Debug, Clone, PartialEq, Eq)]
-pub struct UnknownName {
-    /// What was named (`heuristic`, `search algorithm`, `clock`).
-    pub what: &'static str,
-    /// The name given.
-    pub given: String,
-    /// The names there are, in the enum's order.
-    pub valid: &'static [&'static str],
-}
+/// The error of [`HeuristicName`]'s, [`search::Algorithm`]'s and [`search::Clock`]'s
+/// [`FromStr`](std::str::FromStr): the name given and the names there are.
+pub use transition_model::UnknownName;
 
-impl UnknownName {
-    fn heuristic(given: &str) -> UnknownName {
-        UnknownName { what: "heuristic", given: given.to_string(), valid: NAMES }
-    }
-
-    pub(crate) fn of<T: strum::VariantNames>(what: &'static str, given: &str) -> UnknownName {
-        UnknownName { what, given: given.to_string(), valid: T::VARIANTS }
+impl HeuristicName {
+    fn unknown(given: &str) -> UnknownName {
+        UnknownName::of::<HeuristicName>("heuristic", given)
     }
 }
-
-impl std::fmt::Display for UnknownName {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        write!(f, "`{}` is not a {}: the {}s are {}", self.given, self.what, self.what, self.valid.join(", "))
-    }
-}
-
-impl std::error::Error for UnknownName {}
 
 /// The heuristics' command-line names, in [`HeuristicName`]'s order.
 pub const NAMES: &[&str] = <HeuristicName as strum::VariantNames>::VARIANTS;

@@ -23,6 +23,7 @@ fn every_name_parses_back_to_itself() {
     round_trips::<Clock>();
     assert_eq!(HeuristicName::VARIANTS, ["blind", "goalcount", "hmax", "hadd", "ff", "lmcut"]);
     assert_eq!(Algorithm::VARIANTS, ["astar", "gbfs", "lazy-gbfs"]);
+    assert_eq!(Clock::VARIANTS, ["wall", "cpu"]);
 }
 
 #[test]

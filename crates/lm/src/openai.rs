@@ -50,7 +50,10 @@ pub enum ServerDialect {
 /// A name that is not a [`ServerDialect`]'s (the error of its
 /// [`FromStr`](std::str::FromStr)): names what was given and lists the dialects.
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
-#[error("`{0}` is not a server dialect: the dialects are {dialects}", dialects = <ServerDialect as strum::VariantNames>::VARIANTS.join(", "))]
+#[error(
+    "`{0}` is not a server dialect: the dialects are {dialects}",
+    dialects = <ServerDialect as strum::VariantNames>::VARIANTS.join(", ")
+)]
 pub struct UnknownDialect(pub String);
 
 impl UnknownDialect {

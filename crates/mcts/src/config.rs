@@ -51,7 +51,7 @@ pub struct Mode {
     strum::VariantArray,
 )]
 #[serde(rename_all = "kebab-case")]
-#[strum(serialize_all = "kebab-case")]
+#[strum(serialize_all = "kebab-case", parse_err_ty = heuristics::UnknownName, parse_err_fn = ModeName::unknown)]
 pub enum ModeName {
     /// Masked tokens, chosen by MCTS (the paper's method).
     ConstrainedMcts,
@@ -65,6 +65,12 @@ pub enum ModeName {
     Sample,
     /// Masked tokens, sampled.
     ConstrainedSample,
+}
+
+impl ModeName {
+    fn unknown(given: &str) -> heuristics::UnknownName {
+        heuristics::UnknownName::of::<ModeName>("mode", given)
+    }
 }
 
 impl ModeName {
@@ -144,7 +150,7 @@ impl Default for Budget {
 /// Which token sequences spell an action under the constraint.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, strum::EnumString, strum::IntoStaticStr, strum::VariantNames)]
 #[serde(rename_all = "kebab-case")]
-#[strum(serialize_all = "kebab-case")]
+#[strum(serialize_all = "kebab-case", parse_err_ty = heuristics::UnknownName, parse_err_fn = Tokenization::unknown)]
 pub enum Tokenization {
     /// The tokenizer's own encoding of each action's line (paper Eq. 7): one token path per
     /// action. See [`crate::canonical`].
@@ -152,6 +158,12 @@ pub enum Tokenization {
     Canonical,
     /// Any token sequence whose bytes spell the line ([`token_constraint`]'s byte-level masks).
     Any,
+}
+
+impl Tokenization {
+    fn unknown(given: &str) -> heuristics::UnknownName {
+        heuristics::UnknownName::of::<Tokenization>("tokenization", given)
+    }
 }
 
 /// Everything one decoding run needs besides the task and the model.
@@ -442,7 +454,7 @@ pub struct MctsConfig {
 /// The range `Q` is min-max normalised over, so that it and the prior term are on one scale.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, strum::EnumString, strum::IntoStaticStr, strum::VariantNames)]
 #[serde(rename_all = "kebab-case")]
-#[strum(serialize_all = "kebab-case")]
+#[strum(serialize_all = "kebab-case", parse_err_ty = heuristics::UnknownName, parse_err_fn = Normalization::unknown)]
 pub enum Normalization {
     /// Every value the tree has backed up (MuZero).
     Tree,
@@ -451,16 +463,28 @@ pub enum Normalization {
     Siblings,
 }
 
+impl Normalization {
+    fn unknown(given: &str) -> heuristics::UnknownName {
+        heuristics::UnknownName::of::<Normalization>("normalization", given)
+    }
+}
+
 /// The statistic a node keeps of the values backed up through it.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, strum::EnumString, strum::IntoStaticStr, strum::VariantNames)]
 #[serde(rename_all = "kebab-case")]
-#[strum(serialize_all = "kebab-case")]
+#[strum(serialize_all = "kebab-case", parse_err_ty = heuristics::UnknownName, parse_err_fn = Backup::unknown)]
 pub enum Backup {
     /// The mean (Monte-Carlo backup, as AlphaZero).
     Mean,
     /// The best value seen below the node (a Bellman backup for a deterministic model: the
     /// value of a prefix is the value of its best continuation found so far).
     Max,
+}
+
+impl Backup {
+    fn unknown(given: &str) -> heuristics::UnknownName {
+        heuristics::UnknownName::of::<Backup>("backup", given)
+    }
 }
 
 impl MctsConfig {

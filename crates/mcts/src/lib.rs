@@ -37,6 +37,9 @@ pub use config::{
     StopReason, Strategy, Tokenization, TreeLevel, TreeRow, TreeSummary,
 };
 pub use decode::Decoder;
+/// The error of the option enums' `FromStr` ([`ModeName`], [`Tokenization`], [`Normalization`],
+/// [`Backup`], [`Clock`]): the name given and the names there are.
+pub use heuristics::UnknownName;
 pub use sampling::{Sampler, SamplingConfig};
 pub use value::{Evaluator, ValueConfig};
 pub use vocab::constraint_vocabulary;

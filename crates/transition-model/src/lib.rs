@@ -22,11 +22,13 @@
 //! assert_eq!(error.describe(model.task()), "invalid: step 1: `(go b c)` is not applicable: unmet (at b)");
 //! ```
 
+mod names;
 mod spelling;
 mod state;
 mod successor;
 mod validate;
 
+pub use names::UnknownName;
 pub use spelling::{ObjectNames, Spelling, SpellingError, SurfaceLanguage, alfworld, natural_order, normalize, virtualhome};
 pub use state::State;
 pub use successor::SuccessorGenerator;

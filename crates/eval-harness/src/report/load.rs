@@ -91,7 +91,7 @@ pub fn record_paths(arguments: &[PathBuf]) -> Result<Vec<PathBuf>, ReportError> 
 /// `sets` without the shard files whose merged file (`cargo xtask merge`) is among them, and a
 /// note for each one left out: a folder holds both after a merge, and the merged file holds
 /// the shards' records (the same `<stem>-<hash>`, so the same configuration). A shard record
-/// that the merged file lacks, or holds otherwise (a shard resumed after the merge), is an
+/// that the merged file lacks, or holds otherwise (a shard written after the merge), is an
 /// error that asks for the merge again.
 pub fn without_merged_shards(sets: &[RecordSet]) -> Result<(Vec<RecordSet>, Vec<String>), ReportError> {
     let mut kept = Vec::with_capacity(sets.len());
@@ -106,7 +106,7 @@ pub fn without_merged_shards(sets: &[RecordSet]) -> Result<(Vec<RecordSet>, Vec<
         for record in &set.records {
             if held.get(&task(record)).is_none_or(|m| m.fields != record.fields) {
                 let message = format!(
-                    "task {} is not in the merged file {} as it is here (a shard resumed after the merge?): merge the shards again",
+                    "task {} is not in the merged file {} as it is here (a shard written after the merge): move the merged file away, then merge the shards again",
                     task(record),
                     whole.path.display()
                 );

@@ -24,7 +24,7 @@ use rustc_hash::FxHashMap;
 /// `virtualhome`: the variants', through `FromStr`, `Into<&str>` and
 /// [`strum::VariantNames`]).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, strum::EnumString, strum::IntoStaticStr, strum::VariantNames, strum::VariantArray)]
-#[strum(serialize_all = "lowercase")]
+#[strum(serialize_all = "lowercase", parse_err_ty = crate::UnknownName, parse_err_fn = SurfaceLanguage::unknown)]
 pub enum SurfaceLanguage {
     /// PDDL action names, `(schema arg1 ... argn)`.
     Pddl,
@@ -35,6 +35,10 @@ pub enum SurfaceLanguage {
 }
 
 impl SurfaceLanguage {
+    fn unknown(given: &str) -> crate::UnknownName {
+        crate::UnknownName::of::<SurfaceLanguage>("surface language", given)
+    }
+
     /// The command-line name: `pddl`, `alfworld` or `virtualhome`.
     pub fn name(self) -> &'static str {
         self.into()
