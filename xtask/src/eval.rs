@@ -509,15 +509,14 @@ pub fn run(args: EvalArgs) -> anyhow::Result<ExitCode> {
     // Every check of the input that needs no model comes first: a misspelt benchmark or subset
     // is reported before the model is fetched (or before saying that pip is missing).
     let planned = plan(&args)?;
-    // Every record file of the run is opened and checked before anything runs (and before the
-    // model is fetched): a later benchmark's or seed's file that is refused (another
-    // configuration's, another run's busy with it, a task not the run's, a shard resumed past
-    // its run's merge) is said now, not after hours of the first. Nothing in them is cut or
-    // deleted until the run itself opens them again.
+    // Every record file of the run is checked before anything runs (and before the model is
+    // fetched), creating and changing nothing: a later benchmark's or seed's file that would be
+    // refused (another configuration's, a task not the run's, a shard resumed past its run's
+    // merge, another run writing it now) is said now, not after hours of the first.
     let runs = seeded(&args);
     for one in &runs {
         for suite in &planned {
-            open_records(one, suite)?;
+            open_records(one, suite, true)?;
         }
     }
     if needs_model
@@ -557,15 +556,16 @@ fn seeded(args: &EvalArgs) -> Vec<EvalArgs> {
         .collect()
 }
 
-/// One suite's record file of the run `args`, opened and checked against the run: every
-/// record is of one of its tasks, and a shard with tasks left is not resumed beside its run's
-/// merged file (`RecordFile::check_unmerged`). Nothing is cut or deleted yet (`settle`).
-fn open_records(args: &EvalArgs, one: &Planned) -> anyhow::Result<RecordFile> {
+/// One suite's record file of the run `args`, opened (`check_only`: only to be checked,
+/// creating nothing) and checked against the run: every record is of one of its tasks, and a
+/// shard with tasks left is not resumed beside its run's merged file
+/// (`RecordFile::check_unmerged`). Nothing is cut or deleted yet (`settle`).
+fn open_records(args: &EvalArgs, one: &Planned, check_only: bool) -> anyhow::Result<RecordFile> {
     let (suite, tasks) = (one.suite, &one.tasks);
     let agent_name = serde_json::to_value(args.agent)?.as_str().unwrap_or_default().to_string();
     let stem = format!("{}-{agent_name}", suite.name());
-    let records =
-        RecordFile::open(&args.out, &stem, &config(args, suite, tasks)?, args.shard, args.fresh).map_err(|e| InputError(e.to_string()))?;
+    let open = if check_only { RecordFile::check_only } else { RecordFile::open };
+    let records = open(&args.out, &stem, &config(args, suite, tasks)?, args.shard, args.fresh).map_err(|e| InputError(e.to_string()))?;
     records.check_tasks(&tasks.iter().map(EvalTask::id).collect()).map_err(|e| InputError(e.to_string()))?;
     let total = one.total(args.limit);
     let left = (0..total).filter(|&i| args.shard.is_none_or(|s| s.selects(i)) && !records.done().contains(tasks[i].id())).count();
@@ -743,7 +743,7 @@ fn run_once(args: &EvalArgs, planned: &[Planned]) -> anyhow::Result<(serde_json:
     let mut written = Vec::new();
     for one in planned {
         let (suite, tasks) = (one.suite, &one.tasks);
-        let mut records = open_records(args, one)?;
+        let mut records = open_records(args, one, false)?;
         records.settle()?;
         let total = one.total(args.limit);
         let selected = (0..total).filter(|&i| args.shard.is_none_or(|s| s.selects(i))).count();
@@ -827,7 +827,7 @@ pub fn merge(args: MergeArgs) -> anyhow::Result<ExitCode> {
     }
     if let Some(missing) = merged.expected.and_then(|n| n.checked_sub(merged.records as u64)).filter(|&m| m > 0) {
         eprintln!(
-            "{missing} of the run's tasks are not recorded: `eval` runs them without --shard into {} (a shard is not resumed beside it)",
+            "{missing} of the run's tasks are not recorded: `eval` with the run's options, without --shard and without --limit (or a larger one), runs them into {} (a shard is not resumed beside it)",
             merged.path.display()
         );
     }

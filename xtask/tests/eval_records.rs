@@ -223,7 +223,10 @@ fn shards_report_apart_and_merge_to_the_records_of_one_run() {
     let merged = Command::new(env!("CARGO_BIN_EXE_xtask")).args(["merge", "--partial"]).args(&shards).output().expect("runs");
     let stderr = String::from_utf8_lossy(&merged.stderr);
     assert!(merged.status.success(), "{stderr}");
-    assert!(stderr.contains("135 of the run's tasks are not recorded: `eval` runs them without --shard"), "{stderr}");
+    assert!(
+        stderr.contains("135 of the run's tasks are not recorded: `eval` with the run's options, without --shard and without --limit"),
+        "{stderr}"
+    );
     // "N records of configuration C -> PATH"
     let stdout = String::from_utf8_lossy(&merged.stdout);
     let path = stdout.trim().rsplit(" -> ").next().expect("the merged file");

@@ -70,9 +70,9 @@ pub enum RecordError {
         found: String,
     },
     /// Another process holds the record file's lock: a run of the same configuration is
-    /// writing into the same folder.
+    /// writing into the same folder, or [`merge`] is reading the file.
     #[error(
-        "{path}: another run is writing these records now (one run of a configuration per folder at a time); wait for it, or use another --out folder"
+        "{path}: another run is writing these records now, or a merge is reading them (one run of a configuration per folder at a time); wait for it, or use another --out folder"
     )]
     Busy {
         /// The locked record file.
@@ -102,6 +102,13 @@ pub enum RecordError {
         merged: PathBuf,
         /// How many of the shard's tasks are not recorded yet.
         left: usize,
+    },
+    /// [`RecordFile::settle`] or [`RecordFile::append`] on a file opened by
+    /// [`RecordFile::check_only`]; nothing was written.
+    #[error("{path}: opened to be checked only, not written")]
+    CheckOnly {
+        /// The record file.
+        path: PathBuf,
     },
     /// [`RecordFile::append`] was given a task the file records already; nothing was written.
     #[error("{path}: task {task} is recorded already (a file holding a task twice cannot be resumed or reported)")]
@@ -212,7 +219,10 @@ pub struct RecordFile {
     lines: Vec<usize>,
     line_count: usize,
     done: BTreeSet<String>,
-    file: File,
+    /// `None` for a file opened to check only ([`RecordFile::check_only`]) that is not there.
+    file: Option<File>,
+    /// Opened to check only: nothing is written, settled or appended.
+    check_only: bool,
     /// What [`RecordFile::settle`] cuts off: a record cut short after the whole lines, or, with
     /// `fresh`, every earlier record.
     cut: Option<Cut>,
@@ -237,7 +247,37 @@ impl RecordFile {
     /// records are not read, and [`RecordFile::settle`] deletes them (so a run refused before
     /// it settles leaves them as they were).
     pub fn open(dir: &Path, stem: &str, config: &impl Serialize, shard: Option<Shard>, fresh: bool) -> Result<RecordFile, RecordError> {
-        std::fs::create_dir_all(dir).map_err(io(dir))?;
+        RecordFile::read(dir, stem, config, shard, fresh, false)
+    }
+
+    /// What [`RecordFile::open`] would read and refuse, creating and changing nothing: a
+    /// configuration file of another run is refused, the records are read (none with `fresh`,
+    /// or where the file is not there yet), and a run writing them is [`RecordError::Busy`];
+    /// the lock is released with the value. The value answers [`RecordFile::check_tasks`],
+    /// [`RecordFile::check_unmerged`] and the readers, but settles and appends nothing
+    /// ([`RecordError::CheckOnly`]): for a run to check every file it will write before it
+    /// starts the first, leaving nothing behind if it is refused.
+    pub fn check_only(
+        dir: &Path,
+        stem: &str,
+        config: &impl Serialize,
+        shard: Option<Shard>,
+        fresh: bool,
+    ) -> Result<RecordFile, RecordError> {
+        RecordFile::read(dir, stem, config, shard, fresh, true)
+    }
+
+    fn read(
+        dir: &Path,
+        stem: &str,
+        config: &impl Serialize,
+        shard: Option<Shard>,
+        fresh: bool,
+        check_only: bool,
+    ) -> Result<RecordFile, RecordError> {
+        if !check_only {
+            std::fs::create_dir_all(dir).map_err(io(dir))?;
+        }
         let hash = config_hash(config);
         let name = format!("{stem}-{hash}");
         let config_path = dir.join(format!("{name}.config.json"));
@@ -259,30 +299,48 @@ impl RecordFile {
             }
             // Written whole or not at all (a file cut short by a crash would refuse every
             // later open as a mismatch): a synced temporary file renamed into place.
-            Err(e) if e.kind() == std::io::ErrorKind::NotFound => write_whole(&config_path, config_text.as_bytes())?,
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
+                if !check_only {
+                    write_whole(&config_path, config_text.as_bytes())?;
+                }
+            }
             Err(e) => return Err(io(&config_path)(e)),
         }
         let path = dir.join(format!("{name}{}.jsonl", shard.map(|s| s.suffix()).unwrap_or_default()));
-        let mut file = OpenOptions::new().create(true).read(true).append(true).open(&path).map_err(io(&path))?;
+        let mut file = if check_only {
+            match File::open(&path) {
+                Ok(file) => Some(file),
+                Err(e) if e.kind() == std::io::ErrorKind::NotFound => None,
+                Err(e) => return Err(io(&path)(e)),
+            }
+        } else {
+            Some(OpenOptions::new().create(true).read(true).append(true).open(&path).map_err(io(&path))?)
+        };
         // One writer per record file: two runs of one configuration into one folder would each
         // run the tasks the other has not finished yet and record them twice. The lock is the
         // operating system's advisory file lock (`flock`), held while this value lives and
         // released when the process ends, however it ends, so a killed run leaves none behind.
-        match file.try_lock() {
-            Ok(()) => {}
-            Err(std::fs::TryLockError::WouldBlock) => return Err(RecordError::Busy { path }),
-            // A file system without locks: run unguarded, as before locks were taken.
-            Err(std::fs::TryLockError::Error(e)) if e.kind() == std::io::ErrorKind::Unsupported => {}
-            Err(std::fs::TryLockError::Error(e)) => return Err(io(&path)(e)),
+        if let Some(file) = &file {
+            match file.try_lock() {
+                Ok(()) => {}
+                Err(std::fs::TryLockError::WouldBlock) => return Err(RecordError::Busy { path }),
+                // A file system without locks: run unguarded, as before locks were taken.
+                Err(std::fs::TryLockError::Error(e)) if e.kind() == std::io::ErrorKind::Unsupported => {}
+                Err(std::fs::TryLockError::Error(e)) => return Err(io(&path)(e)),
+            }
         }
         // With `fresh`, the earlier records are neither read nor (until `settle`) deleted.
         let mut bytes = Vec::new();
-        let fresh_cut = if fresh {
-            let length = file.metadata().map_err(io(&path))?.len();
-            (length > 0).then_some(Cut { keep: 0, length, fresh: true })
-        } else {
-            file.read_to_end(&mut bytes).map_err(io(&path))?;
-            None
+        let fresh_cut = match file.as_mut() {
+            Some(file) if fresh => {
+                let length = file.metadata().map_err(io(&path))?.len();
+                (length > 0).then_some(Cut { keep: 0, length, fresh: true })
+            }
+            Some(file) => {
+                file.read_to_end(&mut bytes).map_err(io(&path))?;
+                None
+            }
+            None => None,
         };
         // A last line without its newline is a record cut short by a crash: its task runs
         // again, and the line is cut off by `settle` (not here: a file the run then refuses,
@@ -294,22 +352,26 @@ impl RecordFile {
         let done = records.iter().filter_map(|r| r.get("task").and_then(Value::as_str).map(str::to_string)).collect();
         let line_count = text.lines().count();
         let merged = shard.map(|_| dir.join(format!("{name}.jsonl")));
-        Ok(RecordFile { path, merged, hash, records, lines, line_count, done, file, cut })
+        Ok(RecordFile { path, merged, hash, records, lines, line_count, done, file, check_only, cut })
     }
 
     /// Cuts off a last record cut short by a crash, saying so, or, opened `fresh`, deletes the
     /// earlier records: for the caller to call once it has checked the file (`check_tasks`,
     /// `check_unmerged`, its own reading of the records), so that a file it refuses is left as
-    /// it was; [`RecordFile::append`] settles first too. Where the file changed since it was
-    /// read (another writer, on a file system without locks), nothing is cut: the line is then
-    /// no longer the last, and every later open names it.
+    /// it was; [`RecordFile::append`] settles first too. Where a line cut short is no longer
+    /// the file's last (another writer, on a file system without locks), it is not cut: every
+    /// later open names it. A file opened to check only is [`RecordError::CheckOnly`].
     pub fn settle(&mut self) -> Result<(), RecordError> {
+        if self.check_only {
+            return Err(RecordError::CheckOnly { path: self.path.clone() });
+        }
         let Some(cut) = self.cut.take() else { return Ok(()) };
-        if self.file.metadata().map_err(io(&self.path))?.len() != cut.length {
+        let Some(file) = self.file.as_mut() else { return Ok(()) };
+        if !cut.fresh && file.metadata().map_err(io(&self.path))?.len() != cut.length {
             return Ok(());
         }
-        self.file.set_len(cut.keep).map_err(io(&self.path))?;
-        self.file.seek(SeekFrom::End(0)).map_err(io(&self.path))?;
+        file.set_len(cut.keep).map_err(io(&self.path))?;
+        file.seek(SeekFrom::End(0)).map_err(io(&self.path))?;
         if !cut.fresh {
             eprintln!("{}: cut off a record cut short (a killed run); its task runs again", self.path.display());
         }
@@ -329,10 +391,11 @@ impl RecordFile {
         Ok(())
     }
 
-    /// Refuses to resume a shard file whose run was merged already ([`RecordError::Merged`]),
-    /// where `left` of its tasks are still to run: the merged file beside it would then miss
-    /// what the shard adds, while reports and replays read the shard through it. A shard with
-    /// nothing left to run, or an unsharded file, passes.
+    /// Refuses to resume a shard file, `left` of whose tasks are still to run, once the
+    /// unsharded file of its run beside it holds records ([`RecordError::Merged`]: [`merge`]
+    /// made it, or a run without shards wrote it): that file would then miss what the shard
+    /// adds, while reports and replays read the shard through it. A shard with nothing left
+    /// to run, a shard beside an empty or absent unsharded file, and an unsharded file pass.
     pub fn check_unmerged(&self, left: usize) -> Result<(), RecordError> {
         match &self.merged {
             Some(merged) if left > 0 && std::fs::metadata(merged).is_ok_and(|m| m.len() > 0) => {
@@ -379,8 +442,9 @@ impl RecordFile {
         let mut line = Value::Object(object.clone()).to_string();
         line.push('\n');
         self.settle()?;
-        self.file.write_all(line.as_bytes()).map_err(io(&self.path))?;
-        self.file.sync_data().map_err(io(&self.path))?;
+        let Some(file) = self.file.as_mut() else { return Err(RecordError::CheckOnly { path: self.path.clone() }) };
+        file.write_all(line.as_bytes()).map_err(io(&self.path))?;
+        file.sync_data().map_err(io(&self.path))?;
         self.done.insert(task);
         self.line_count += 1;
         self.lines.push(self.line_count);
@@ -504,7 +568,7 @@ pub fn merge(shards: &[PathBuf], partial: bool) -> Result<Merged, RecordError> {
                 path.display()
             )));
         }
-        let file = File::open(path).map_err(io(path))?;
+        let mut file = File::open(path).map_err(io(path))?;
         match file.try_lock_shared() {
             Ok(()) => {}
             Err(std::fs::TryLockError::WouldBlock) => {
@@ -513,8 +577,12 @@ pub fn merge(shards: &[PathBuf], partial: bool) -> Result<Merged, RecordError> {
             Err(std::fs::TryLockError::Error(e)) if e.kind() == std::io::ErrorKind::Unsupported => {}
             Err(std::fs::TryLockError::Error(e)) => return Err(io(path)(e)),
         }
+        // Read through the locked handle: where locks are the process's (fcntl, as on NFS),
+        // closing another handle to the file would drop this one's.
+        let mut bytes = Vec::new();
+        file.read_to_end(&mut bytes).map_err(io(path))?;
         locked.push(file);
-        let (text, torn) = whole_lines(path, std::fs::read(path).map_err(io(path))?)?;
+        let (text, torn) = whole_lines(path, bytes)?;
         if torn > 0 {
             return Err(RecordError::Merge(format!("{}: its last record is cut short; resume that shard first", path.display())));
         }
@@ -629,6 +697,19 @@ pub fn merge(shards: &[PathBuf], partial: bool) -> Result<Merged, RecordError> {
     let target = first.with_file_name(format!("{base}.jsonl"));
     if std::fs::metadata(&target).is_ok_and(|m| m.len() > 0) {
         return Err(RecordError::Merge(format!("{}: already holds records; move it away to merge into it", target.display())));
+    }
+    // An empty target may be a run without shards that has not recorded its first task yet:
+    // the merged file would be renamed over the file it holds, and its records lost.
+    if let Ok(existing) = File::open(&target) {
+        match existing.try_lock_shared() {
+            Ok(()) => {}
+            Err(std::fs::TryLockError::WouldBlock) => {
+                return Err(RecordError::Merge(format!("{}: a run is writing it; merge once it has ended", target.display())));
+            }
+            Err(std::fs::TryLockError::Error(e)) if e.kind() == std::io::ErrorKind::Unsupported => {}
+            Err(std::fs::TryLockError::Error(e)) => return Err(io(&target)(e)),
+        }
+        locked.push(existing);
     }
     let text: String = all.iter().map(|r| Value::Object(r.clone()).to_string() + "\n").collect();
     write_whole(&target, text.as_bytes())?;

@@ -116,20 +116,21 @@ pub struct Report {
     pub files: usize,
     /// The records in those files.
     pub records: usize,
-    /// Each shard file read through its merged file ([`without_merged_shards`]).
+    /// Each file left out ([`without_merged_shards`]): a shard read through its merged file, a
+    /// file with no record yet.
     pub merged_shards: Vec<String>,
 }
 
 /// The report of `sets` (module documentation).
 pub fn build(sets: &[RecordSet], options: &ReportOptions) -> Result<Report, ReportError> {
-    let (sets, merged) = without_merged_shards(sets)?;
-    let sets = sets.as_slice();
     if sets.iter().all(|s| s.records.is_empty()) {
         return Err(ReportError::NoRecords(format!(
             "the record files hold no records: {}",
             sets.iter().map(|s| s.path.display().to_string()).collect::<Vec<_>>().join(", ")
         )));
     }
+    let (sets, merged) = without_merged_shards(sets)?;
+    let sets = sets.as_slice();
     let mut study = study::study(sets)?;
     study.left_out.splice(0..0, merged.iter().cloned());
     let tables = tables::tables(&study, options)?;

@@ -419,3 +419,41 @@ fn a_fresh_start_deletes_the_earlier_records_once_settled() {
     drop(file);
     assert_eq!(tasks(&RecordFile::open(&dir, "run", &config, None, false).expect("reopens")), ["b"]);
 }
+
+/// `check_only` reads and refuses what `open` would, and creates or changes nothing: no
+/// folder, configuration or record file for a run not started, no record cut or deleted, the
+/// lock tried and given back; it settles and appends nothing.
+#[test]
+fn a_file_opened_to_check_only_is_read_and_refused_as_open_would_and_left_alone() {
+    let (_tmp_dir, dir) = scratch("check-only");
+    let config = json!({"agent": "expert", "benchmark": "ipc"});
+    let mut absent = RecordFile::check_only(&dir, "run", &config, None, false).expect("nothing to refuse");
+    assert!(absent.records().is_empty());
+    assert!(!dir.exists(), "no folder made");
+    assert!(matches!(absent.append(0, &json!({"task": "a", "success": true})), Err(RecordError::CheckOnly { .. })));
+    assert!(!dir.exists(), "nothing written");
+
+    let mut file = RecordFile::open(&dir, "run", &config, None, false).expect("opens");
+    file.append(0, &json!({"task": "a", "success": true})).expect("appends");
+    let path = file.path().to_path_buf();
+    // Held by its run: busy, as to `open`.
+    assert!(matches!(RecordFile::check_only(&dir, "run", &config, None, false), Err(RecordError::Busy { .. })));
+    drop(file);
+    // A record cut short stays, fresh or not, and the lock is given back with the value.
+    let mut text = std::fs::read_to_string(&path).expect("reads");
+    text.push_str("{\"task\": \"b\"");
+    std::fs::write(&path, &text).expect("writes");
+    for fresh in [false, true] {
+        let mut checked = RecordFile::check_only(&dir, "run", &config, None, fresh).expect("checks");
+        assert_eq!(tasks(&checked), if fresh { vec![] } else { vec!["a".to_string()] });
+        assert!(matches!(checked.settle(), Err(RecordError::CheckOnly { .. })));
+        drop(checked);
+        assert_eq!(std::fs::read_to_string(&path).expect("reads"), text, "left alone (fresh: {fresh})");
+    }
+    RecordFile::open(&dir, "run", &config, None, false).expect("not held");
+    // Another configuration's file is refused, as to `open`.
+    let config_path = dir.join(format!("run-{}.config.json", config_hash(&config)));
+    std::fs::write(&config_path, r#"{"agent": "planner", "benchmark": "ipc"}"#).expect("writes");
+    let error = RecordFile::check_only(&dir, "run", &config, None, false).expect_err("another configuration");
+    assert!(matches!(error, RecordError::ConfigMismatch { .. }), "{error}");
+}

@@ -747,3 +747,24 @@ fn shards_beside_their_merged_file_are_read_once() {
     assert!(error.starts_with(&format!("{}:{line}:", shards[1].display())), "{error}");
     assert!(error.contains("merge the shards again"), "{error}");
 }
+
+/// A file with no record yet (a run that has not finished its first task) is left out with a
+/// note, and an empty unsharded file beside the shards is not their merged file: the shards
+/// are read as they are, as `eval` resumes them beside it.
+#[test]
+fn files_without_records_are_left_out_and_stand_for_no_merge() {
+    let (_tmp_dir, dir) = scratch("empty");
+    for entry in std::fs::read_dir(fixtures()).unwrap() {
+        let path = entry.unwrap().path();
+        std::fs::copy(&path, dir.join(path.file_name().unwrap())).expect("copy");
+    }
+    let stem = "virtualhome-rearrange-planner-1a1f05079ed4";
+    let empty = dir.join(format!("{stem}.jsonl"));
+    std::fs::write(&empty, "").unwrap();
+    let sets: Vec<_> = record_paths(std::slice::from_ref(&dir)).unwrap().iter().map(|p| load(p).unwrap()).collect();
+    let report = build(&sets, &ReportOptions::default()).expect("a report");
+    let tables = |markdown: &str| markdown[markdown.find("\n## ").expect("a table")..].to_string();
+    assert_eq!(tables(&report.markdown), tables(&fixture_report().markdown), "the shards' tables");
+    assert!(report.markdown.contains(&format!("- left out: {}: no record yet", empty.display())), "{}", report.markdown);
+    assert!(!report.markdown.contains("its records are those of the merged"), "{}", report.markdown);
+}

@@ -88,16 +88,23 @@ pub fn record_paths(arguments: &[PathBuf]) -> Result<Vec<PathBuf>, ReportError> 
     Ok(paths)
 }
 
-/// `sets` without the shard files whose merged file (`cargo xtask merge`) is among them, and a
-/// note for each one left out: a folder holds both after a merge, and the merged file holds
-/// the shards' records (the same `<stem>-<hash>`, so the same configuration). A shard record
-/// that the merged file lacks, or holds otherwise (a shard written after the merge), is an
-/// error that asks for the merge again.
+/// `sets` without the files that hold no record yet (a run that has not finished its first
+/// task) and without the shard files whose merged file (`cargo xtask merge`) is among them,
+/// with a note for each one left out: a folder holds both after a merge, and the merged file
+/// holds the shards' records (the same `<stem>-<hash>`, so the same configuration). A shard
+/// record that the merged file lacks, or holds otherwise (a shard written after the merge),
+/// is an error that asks for the merge again. An unsharded file counts as the merged file
+/// only when it holds records, as `RecordFile::check_unmerged` counts it.
 pub fn without_merged_shards(sets: &[RecordSet]) -> Result<(Vec<RecordSet>, Vec<String>), ReportError> {
     let mut kept = Vec::with_capacity(sets.len());
     let mut notes = Vec::new();
     for set in sets {
-        let Some(whole) = sets.iter().find(|m| set.is_shard() && !m.is_shard() && m.stem() == set.stem()) else {
+        if set.records.is_empty() {
+            notes.push(format!("{}: no record yet", set.path.display()));
+            continue;
+        }
+        let merged = |m: &&RecordSet| set.is_shard() && !m.is_shard() && m.stem() == set.stem() && !m.records.is_empty();
+        let Some(whole) = sets.iter().find(merged) else {
             kept.push(set.clone());
             continue;
         };
