@@ -105,7 +105,7 @@ fn crates_share_settings_and_respect_their_boundaries() {
                 "pddl-syntax",
                 "household-sim",
                 "vlm-client",
-                "lm",
+                // mcts without its decoder (the prompt, the tree summary): no model, no lm.
                 "mcts",
                 "grounding",
                 "transition-model",
@@ -205,7 +205,18 @@ fn dependencies_are_declared_once_and_crates_build_alone() {
     let workspace = std::fs::read_to_string(root().join("Cargo.toml")).expect("root manifest");
     assert!(workspace.contains("lm = { path = \"crates/lm\", default-features = false }"), "members choose lm's backends");
     let mcts = manifest("mcts");
-    assert!(section(&mcts, "[dependencies]").contains(&"lm.workspace = true"), "mcts depends on lm's interface alone");
+    assert!(
+        section(&mcts, "[dependencies]").contains(&"lm = { workspace = true, optional = true }"),
+        "mcts depends on lm's interface alone"
+    );
+    // mcts's decoder (lm, the masks) is a feature that exploration-harness does not take: Phase
+    // I and the episode build without a model crate in their tree.
+    assert!(section(&mcts, "[features]").contains(&"default = [\"decoder\"]"));
+    assert!(workspace.contains("mcts = { path = \"crates/mcts\", default-features = false }"), "members choose mcts's decoder");
+    assert!(
+        section(&manifest("exploration-harness"), "[dependencies]").contains(&"mcts.workspace = true"),
+        "exploration-harness: mcts without the decoder"
+    );
     // benchmark-data: the compile-time path is one fallback, behind a root callers can pass.
     let data = std::fs::read_to_string(root().join("crates/benchmark-data/src/lib.rs")).expect("lib.rs");
     assert_eq!(data.matches("env!(\"CARGO_MANIFEST_DIR\")").count(), 1, "benchmark-data: only Fixtures::checkout may use the build path");

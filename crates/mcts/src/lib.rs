@@ -6,6 +6,7 @@
 //! distribution request feeds every strategy.
 //!
 //! ```no_run
+//! # #[cfg(feature = "decoder")]
 //! # fn demo(model: &transition_model::TransitionModel, lm: &mut dyn lm::LanguageModel) -> Result<(), Box<dyn std::error::Error>> {
 //! use std::sync::Arc;
 //! use mcts::{DecodeConfig, Decoder, Mode, ValueConfig};
@@ -20,26 +21,49 @@
 //! assert!(outcome.valid);
 //! # Ok(()) }
 //! ```
+//!
+//! The decoder is the default feature `decoder` (the language model, `lm`, and the token
+//! masks). Without it the crate is what an episode's record and a chat planner need of Phase
+//! II, with no model in its dependency tree: the planning prompt ([`prompt`], less
+//! `PlanningPrompt::render`), the summary of a search tree ([`TreeSummary`], [`Backup`]) and
+//! the value of a plan ([`Evaluator`]).
 
+// Without the decoder, the crate documentation's links to it have nothing to point at.
+#![cfg_attr(not(feature = "decoder"), allow(rustdoc::broken_intra_doc_links))]
+
+#[cfg(feature = "decoder")]
 pub mod canonical;
+#[cfg(feature = "decoder")]
 mod config;
+#[cfg(feature = "decoder")]
 pub mod cursor;
+#[cfg(feature = "decoder")]
 mod decode;
 pub mod prompt;
+#[cfg(feature = "decoder")]
 mod sampling;
+#[cfg(feature = "decoder")]
 mod search;
+#[cfg(feature = "decoder")]
 mod step;
+mod summary;
 mod value;
+#[cfg(feature = "decoder")]
 mod vocab;
 
+#[cfg(feature = "decoder")]
 pub use config::{
-    Backup, Budget, Clock, DecodeConfig, DecodeError, InvalidStep, MctsConfig, Mode, ModeName, Normalization, Outcome, RowKind, Stats,
-    StopReason, Strategy, Tokenization, TreeLevel, TreeRow, TreeSummary,
+    Budget, Clock, DecodeConfig, DecodeError, InvalidStep, MctsConfig, Mode, ModeName, Normalization, Outcome, Stats, StopReason, Strategy,
+    Tokenization,
 };
+#[cfg(feature = "decoder")]
 pub use decode::Decoder;
-/// The error of the option enums' `FromStr` ([`ModeName`], [`Tokenization`], [`Normalization`],
-/// [`Backup`], [`Clock`]): the name given and the names there are.
+/// The error of the option enums' `FromStr` ([`Backup`], and with the decoder `ModeName`,
+/// `Tokenization`, `Normalization`, `Clock`): the name given and the names there are.
 pub use heuristics::UnknownName;
+#[cfg(feature = "decoder")]
 pub use sampling::{Sampler, SamplingConfig};
+pub use summary::{Backup, RowKind, TreeLevel, TreeRow, TreeSummary};
 pub use value::{Evaluator, ValueConfig};
+#[cfg(feature = "decoder")]
 pub use vocab::constraint_vocabulary;

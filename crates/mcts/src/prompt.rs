@@ -144,6 +144,7 @@ impl PlanningPrompt {
     /// first token comes right after it. Give [`Decoder::decode`](crate::Decoder::decode) its
     /// tokens by `model.tokenizer().encode_prompt(..)`, which puts BOS in front where the model
     /// wants one (`encode` does not).
+    #[cfg(feature = "decoder")]
     pub fn render(&self, model: &dyn lm::LanguageModel) -> Result<String, lm::LmError> {
         model.chat_prompt(&self.system, &self.user)
     }

@@ -77,11 +77,10 @@ use rustc_hash::FxHashMap;
 use token_constraint::TokenId;
 use transition_model::{State, TransitionModel};
 
-use crate::config::{
-    Backup, DecodeConfig, DecodeError, MctsConfig, Normalization, RowKind, Run, StopReason, TreeLevel, TreeRow, TreeSummary,
-};
+use crate::config::{DecodeConfig, DecodeError, MctsConfig, Normalization, Run, StopReason};
 use crate::cursor::{Cursor, Event};
 use crate::step::{Session, Stepper};
+use crate::summary::{Backup, RowKind, TreeLevel, TreeRow, TreeSummary};
 use crate::value::Evaluator;
 
 const EXPANDED: u8 = 1;
