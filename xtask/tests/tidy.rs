@@ -217,6 +217,18 @@ fn dependencies_are_declared_once_and_crates_build_alone() {
         section(&manifest("exploration-harness"), "[dependencies]").contains(&"mcts.workspace = true"),
         "exploration-harness: mcts without the decoder"
     );
+    // And what cargo resolves for it alone: no model crate in its normal dependency tree.
+    let tree = std::process::Command::new(env!("CARGO"))
+        .args(["tree", "--offline", "--locked", "-e", "normal", "--prefix", "none", "-p", "exploration-harness"])
+        .current_dir(root())
+        .output()
+        .expect("cargo tree runs");
+    assert!(tree.status.success(), "{}", String::from_utf8_lossy(&tree.stderr));
+    let tree = String::from_utf8_lossy(&tree.stdout);
+    for model_crate in ["lm ", "candle-core ", "tokenizers ", "llguidance "] {
+        assert!(!tree.lines().any(|l| l.starts_with(model_crate)), "exploration-harness builds {model_crate}:\n{tree}");
+    }
+    assert!(tree.lines().any(|l| l.starts_with("mcts ")), "{tree}");
     // benchmark-data: the compile-time path is one fallback, behind a root callers can pass.
     let data = std::fs::read_to_string(root().join("crates/benchmark-data/src/lib.rs")).expect("lib.rs");
     assert_eq!(data.matches("env!(\"CARGO_MANIFEST_DIR\")").count(), 1, "benchmark-data: only Fixtures::checkout may use the build path");

@@ -58,8 +58,8 @@ pub use config::{
 };
 #[cfg(feature = "decoder")]
 pub use decode::Decoder;
-/// The error of the option enums' `FromStr` ([`Backup`], and with the decoder `ModeName`,
-/// `Tokenization`, `Normalization`, `Clock`): the name given and the names there are.
+/// The error of the option enums' `FromStr` ([`Backup`], and with the decoder [`ModeName`],
+/// [`Tokenization`], [`Normalization`], [`Clock`]): the name given and the names there are.
 pub use heuristics::UnknownName;
 #[cfg(feature = "decoder")]
 pub use sampling::{Sampler, SamplingConfig};

@@ -7,7 +7,7 @@ use serde::{Deserialize, Serialize};
 /// The top of an MCTS tree, for a report: the first actions the search tried, and the actions
 /// it tried after the most visited of them. A tree node is a token; a row here is the node
 /// where an action's line completes (the tokens between are one row), so a row is an action
-/// with the statistics of the node that completes it. Under `Tokenization::Any` one action
+/// with the statistics of the node that completes it. Under [`Tokenization::Any`](crate::Tokenization::Any) one action
 /// can be written by several token sequences, each its own branch, so the same line may stand
 /// in several rows (three `DONE` rows from three splits of it). Only visited branches are listed, at
 /// most [`TreeSummary::LISTED`] per level, most visited first (ties: the node made first), so

@@ -3,8 +3,6 @@
 //! writes, goal relevance, and the whole prompt of one small task per benchmark as an insta
 //! snapshot (`tests/snapshots/`) so that format changes are deliberate.
 
-use std::sync::Arc;
-
 use benchmark_data::{Benchmark, Extra, TaskFiles};
 use grounding::{FactId, Task};
 use mcts::prompt::{PlanningPrompt, PromptOptions, PromptStyle, Relevance, planning_prompt, relevant_facts};
@@ -395,10 +393,11 @@ fn the_pddl_prompt_of_ipc_blocks_instance_1() {
 /// The assistant's turn opens right after the prompt, thinking off (Qwen3's template writes
 /// the empty think block: the paper's Phase II decodes with thinking off).
 #[test]
+#[cfg(feature = "decoder")]
 fn render_opens_the_assistant_turn_right_after_the_prompt() {
     let path = benchmark_data::fixtures_dir().join("tokenizers/qwen3/tokenizer.json");
     let tokenizer = lm::Tokenizer::from_tokenizer_json(&path).expect("Qwen3 tokenizer loads");
-    let model = lm::UniformModel::new(Arc::new(tokenizer));
+    let model = lm::UniformModel::new(std::sync::Arc::new(tokenizer));
     let task = load_one(Benchmark::VirtualhomeEai, "1004_2");
     let prompt = prompt(&task, Relevance::default());
     let rendered = prompt.render(&model).expect("chat template renders");
