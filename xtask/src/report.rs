@@ -55,8 +55,9 @@ pub fn write_report(records: &[PathBuf], out: &Path, replicates: usize, seed: u6
     }
     let options = ReportOptions { bootstrap: BootstrapConfig { replicates, seed, ..BootstrapConfig::PAPER }, ..ReportOptions::default() };
     let report = build(&sets, &options).map_err(input)?;
-    // Shard files beside their merged file are read once, through it (the report says which).
-    for note in &report.merged_shards {
+    // The files left out (the report says which): shards beside their merged file, read once
+    // through it, and files with no record yet.
+    for note in &report.left_out {
         eprintln!("note: {note}");
     }
     write(&out.join("report.md"), &report.markdown)?;

@@ -120,6 +120,19 @@ pub enum RecordError {
     },
 }
 
+/// Takes the operating system's advisory lock on `file` (`flock`; `shared`, or exclusive),
+/// without waiting: `Ok(false)` where another handle holds a lock that excludes it. A file
+/// system without locks counts as locked (runs go unguarded there, as before locks were taken).
+fn try_lock(file: &File, path: &Path, shared: bool) -> Result<bool, RecordError> {
+    let taken = if shared { file.try_lock_shared() } else { file.try_lock() };
+    match taken {
+        Ok(()) => Ok(true),
+        Err(std::fs::TryLockError::WouldBlock) => Ok(false),
+        Err(std::fs::TryLockError::Error(e)) if e.kind() == std::io::ErrorKind::Unsupported => Ok(true),
+        Err(std::fs::TryLockError::Error(e)) => Err(io(path)(e)),
+    }
+}
+
 fn io(path: &Path) -> impl FnOnce(std::io::Error) -> RecordError + '_ {
     move |source| RecordError::Io { path: path.to_path_buf(), source }
 }
@@ -320,14 +333,12 @@ impl RecordFile {
         // run the tasks the other has not finished yet and record them twice. The lock is the
         // operating system's advisory file lock (`flock`), held while this value lives and
         // released when the process ends, however it ends, so a killed run leaves none behind.
-        if let Some(file) = &file {
-            match file.try_lock() {
-                Ok(()) => {}
-                Err(std::fs::TryLockError::WouldBlock) => return Err(RecordError::Busy { path }),
-                // A file system without locks: run unguarded, as before locks were taken.
-                Err(std::fs::TryLockError::Error(e)) if e.kind() == std::io::ErrorKind::Unsupported => {}
-                Err(std::fs::TryLockError::Error(e)) => return Err(io(&path)(e)),
-            }
+        // A check takes it shared: it sees a writer as well, and on NFS (locks emulated by
+        // fcntl) an exclusive lock needs a handle open for writing.
+        if let Some(file) = &file
+            && !try_lock(file, &path, check_only)?
+        {
+            return Err(RecordError::Busy { path });
         }
         // With `fresh`, the earlier records are neither read nor (until `settle`) deleted.
         let mut bytes = Vec::new();
@@ -569,13 +580,8 @@ pub fn merge(shards: &[PathBuf], partial: bool) -> Result<Merged, RecordError> {
             )));
         }
         let mut file = File::open(path).map_err(io(path))?;
-        match file.try_lock_shared() {
-            Ok(()) => {}
-            Err(std::fs::TryLockError::WouldBlock) => {
-                return Err(RecordError::Merge(format!("{}: a run is still writing this shard; merge once it has ended", path.display())));
-            }
-            Err(std::fs::TryLockError::Error(e)) if e.kind() == std::io::ErrorKind::Unsupported => {}
-            Err(std::fs::TryLockError::Error(e)) => return Err(io(path)(e)),
+        if !try_lock(&file, path, true)? {
+            return Err(RecordError::Merge(format!("{}: a run is still writing this shard; merge once it has ended", path.display())));
         }
         // Read through the locked handle: where locks are the process's (fcntl, as on NFS),
         // closing another handle to the file would drop this one's.
@@ -695,22 +701,17 @@ pub fn merge(shards: &[PathBuf], partial: bool) -> Result<Merged, RecordError> {
     }
     all.sort_by_key(|r| r.get("index").and_then(Value::as_u64).unwrap_or(u64::MAX));
     let target = first.with_file_name(format!("{base}.jsonl"));
-    if std::fs::metadata(&target).is_ok_and(|m| m.len() > 0) {
+    // The target locked (made if need be) before it is looked at: an empty one may be a run
+    // without shards that has not recorded its first task yet, whose file the merged one would
+    // be renamed over, and none starts writing it until the merge is done.
+    let existing = OpenOptions::new().create(true).truncate(false).write(true).open(&target).map_err(io(&target))?;
+    if !try_lock(&existing, &target, false)? {
+        return Err(RecordError::Merge(format!("{}: a run is writing it; merge once it has ended", target.display())));
+    }
+    if existing.metadata().map_err(io(&target))?.len() > 0 {
         return Err(RecordError::Merge(format!("{}: already holds records; move it away to merge into it", target.display())));
     }
-    // An empty target may be a run without shards that has not recorded its first task yet:
-    // the merged file would be renamed over the file it holds, and its records lost.
-    if let Ok(existing) = File::open(&target) {
-        match existing.try_lock_shared() {
-            Ok(()) => {}
-            Err(std::fs::TryLockError::WouldBlock) => {
-                return Err(RecordError::Merge(format!("{}: a run is writing it; merge once it has ended", target.display())));
-            }
-            Err(std::fs::TryLockError::Error(e)) if e.kind() == std::io::ErrorKind::Unsupported => {}
-            Err(std::fs::TryLockError::Error(e)) => return Err(io(&target)(e)),
-        }
-        locked.push(existing);
-    }
+    locked.push(existing);
     let text: String = all.iter().map(|r| Value::Object(r.clone()).to_string() + "\n").collect();
     write_whole(&target, text.as_bytes())?;
     drop(locked);

@@ -118,7 +118,7 @@ pub struct Report {
     pub records: usize,
     /// Each file left out ([`without_merged_shards`]): a shard read through its merged file, a
     /// file with no record yet.
-    pub merged_shards: Vec<String>,
+    pub left_out: Vec<String>,
 }
 
 /// The report of `sets` (module documentation).
@@ -171,5 +171,5 @@ pub fn build(sets: &[RecordSet], options: &ReportOptions) -> Result<Report, Repo
             episodes.push(Page { path: path.clone(), html: html::episode_page(&study, set, record) });
         }
     }
-    Ok(Report { markdown, figures, index, episodes, files: sets.len(), records, merged_shards: merged })
+    Ok(Report { markdown, figures, index, episodes, files: sets.len(), records, left_out: merged })
 }

@@ -372,6 +372,11 @@ fn a_merged_run_is_not_resumed_by_its_shards_nor_a_written_shard_merged() {
     let error = merge(&paths, true).expect_err("a shard being written");
     assert_eq!(error.to_string(), format!("{}: a run is still writing this shard; merge once it has ended", paths[0].display()));
     drop((first, second));
+    // A run without shards that has not recorded its first task holds the (empty) target.
+    let unsharded = RecordFile::open(&dir, "run", &config, None, false).expect("opens");
+    let error = merge(&paths, true).expect_err("a target being written");
+    assert_eq!(error.to_string(), format!("{}: a run is writing it; merge once it has ended", unsharded.path().display()));
+    drop(unsharded);
     let merged = merge(&paths, true).expect("a partial merge");
     assert_eq!(merged.records, 2);
 

@@ -98,6 +98,10 @@ pub enum HeuristicName {
 }
 
 impl HeuristicName {
+    fn unknown(given: &str) -> UnknownName {
+        UnknownName::of::<HeuristicName>("heuristic", given)
+    }
+
     /// The command-line name (`blind`, `goalcount`, `hmax`, `hadd`, `ff`, `lmcut`), which is also
     /// what the built heuristic's [`Heuristic::name`] returns.
     pub fn name(self) -> &'static str {
@@ -120,12 +124,6 @@ impl HeuristicName {
 /// The error of [`HeuristicName`]'s, [`search::Algorithm`]'s and [`search::Clock`]'s
 /// [`FromStr`](std::str::FromStr): the name given and the names there are.
 pub use transition_model::UnknownName;
-
-impl HeuristicName {
-    fn unknown(given: &str) -> UnknownName {
-        UnknownName::of::<HeuristicName>("heuristic", given)
-    }
-}
 
 /// The heuristics' command-line names, in [`HeuristicName`]'s order.
 pub const NAMES: &[&str] = <HeuristicName as strum::VariantNames>::VARIANTS;

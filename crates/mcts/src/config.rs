@@ -72,9 +72,7 @@ impl ModeName {
     fn unknown(given: &str) -> heuristics::UnknownName {
         heuristics::UnknownName::of::<ModeName>("mode", given)
     }
-}
 
-impl ModeName {
     /// The mode, with default MCTS and sampling settings.
     pub fn mode(self) -> Mode {
         let (constrained, strategy) = match self {

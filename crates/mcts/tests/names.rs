@@ -1,5 +1,5 @@
 //! The command-line names of the decoder's options (and of the surface languages plans are
-//! written in): each parses back to its enum, and a name that is none of them is refused with
+//! written in, and of where a plan may end): each parses back to its enum, and a name that is none of them is refused with
 //! the names there are (`mcts::UnknownName`, the planning stack's one error for this).
 
 use mcts::{Backup, ModeName, Normalization, Tokenization, UnknownName};
@@ -27,6 +27,7 @@ fn every_option_name_parses_and_others_are_refused_with_the_list() {
     names::<Normalization>("normalization", "none");
     names::<Backup>("backup", "Max");
     names::<SurfaceLanguage>("surface language", "textworld");
+    names::<token_constraint::EndPolicy>("end policy", "at_goal");
     let error = "unconstrained_mcts".parse::<ModeName>().expect_err("kebab case");
     assert!(error.to_string().contains("constrained-mcts, constrained-greedy"), "{error}");
 }

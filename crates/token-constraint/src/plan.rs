@@ -15,7 +15,7 @@ use crate::{ChoiceId, TokenId};
 
 /// When the plan may end (command-line names `anywhere`, `at-goal`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, strum::Display, strum::EnumString, strum::IntoStaticStr, strum::VariantNames)]
-#[strum(serialize_all = "kebab-case")]
+#[strum(serialize_all = "kebab-case", parse_err_ty = transition_model::UnknownName, parse_err_fn = EndPolicy::unknown)]
 pub enum EndPolicy {
     /// At every action boundary: the decoder may stop anywhere and the plan is judged by
     /// validation afterwards.
@@ -24,6 +24,12 @@ pub enum EndPolicy {
     /// Only where the goal holds, or where no action applies (so that a dead end still
     /// allows a token: the end).
     AtGoal,
+}
+
+impl EndPolicy {
+    fn unknown(given: &str) -> transition_model::UnknownName {
+        transition_model::UnknownName::of::<EndPolicy>("end policy", given)
+    }
 }
 
 /// The language of one state: its trie, and for each distinct text every applicable

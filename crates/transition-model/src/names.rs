@@ -1,7 +1,7 @@
 //! The error of a name that is none of an enum's command-line names, for the `FromStr` that
 //! `strum` derives (`parse_err_ty`, `parse_err_fn`) on the planning stack's option enums: this
 //! crate's [`crate::SurfaceLanguage`], `heuristics`' heuristic, search and clock names, `mcts`'
-//! mode, tokenization, normalisation and backup names.
+//! mode, tokenization, normalisation and backup names, `token-constraint`'s end policy.
 
 /// A name that is none of an enum's command-line names: what was given, and the names there
 /// are (`` `lm-cut` is not a heuristic: the heuristics are blind, goalcount, hmax, hadd, ff,

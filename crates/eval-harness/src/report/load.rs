@@ -93,8 +93,8 @@ pub fn record_paths(arguments: &[PathBuf]) -> Result<Vec<PathBuf>, ReportError> 
 /// with a note for each one left out: a folder holds both after a merge, and the merged file
 /// holds the shards' records (the same `<stem>-<hash>`, so the same configuration). A shard
 /// record that the merged file lacks, or holds otherwise (a shard written after the merge),
-/// is an error that asks for the merge again. An unsharded file counts as the merged file
-/// only when it holds records, as `RecordFile::check_unmerged` counts it.
+/// is an error that asks for the merge again. An unsharded file with no record is no merged
+/// file.
 pub fn without_merged_shards(sets: &[RecordSet]) -> Result<(Vec<RecordSet>, Vec<String>), ReportError> {
     let mut kept = Vec::with_capacity(sets.len());
     let mut notes = Vec::new();
@@ -113,7 +113,7 @@ pub fn without_merged_shards(sets: &[RecordSet]) -> Result<(Vec<RecordSet>, Vec<
         for record in &set.records {
             if held.get(&task(record)).is_none_or(|m| m.fields != record.fields) {
                 let message = format!(
-                    "task {} is not in the merged file {} as it is here (a shard written after the merge): move the merged file away, then merge the shards again",
+                    "task {} is not in the merged file {} as it is here (a shard written after the merge, or the merged file started over with --fresh): move the merged file away, then merge the shards again",
                     task(record),
                     whole.path.display()
                 );
