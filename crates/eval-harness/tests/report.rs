@@ -30,6 +30,17 @@ fn scratch(name: &str) -> (TempDir, PathBuf) {
     (tmp, dir)
 }
 
+/// A scratch folder holding a copy of the fixture records (the shards of one run, their
+/// configuration).
+fn fixture_copy(name: &str) -> (TempDir, PathBuf) {
+    let (tmp, dir) = scratch(name);
+    for entry in std::fs::read_dir(fixtures()).unwrap() {
+        let path = entry.unwrap().path();
+        std::fs::copy(&path, dir.join(path.file_name().unwrap())).expect("copy");
+    }
+    (tmp, dir)
+}
+
 #[test]
 fn markdown_tables() {
     insta::assert_snapshot!(fixture_report().markdown);
@@ -713,11 +724,7 @@ fn the_task_list_names_the_benchmark_not_the_condition() {
 /// shard resumed after the merge (a record the merged file lacks) asks for the merge again.
 #[test]
 fn shards_beside_their_merged_file_are_read_once() {
-    let (_tmp_dir, dir) = scratch("merged");
-    for entry in std::fs::read_dir(fixtures()).unwrap() {
-        let path = entry.unwrap().path();
-        std::fs::copy(&path, dir.join(path.file_name().unwrap())).expect("copy");
-    }
+    let (_tmp_dir, dir) = fixture_copy("merged");
     let stem = "virtualhome-rearrange-planner-1a1f05079ed4";
     let shards: Vec<PathBuf> = (1..=2).map(|i| dir.join(format!("{stem}.shard-{i}-of-2.jsonl"))).collect();
     let merged = eval_harness::records::merge(&shards, false).expect("the shards merge");
@@ -753,11 +760,7 @@ fn shards_beside_their_merged_file_are_read_once() {
 /// are read as they are, as `eval` resumes them beside it.
 #[test]
 fn files_without_records_are_left_out_and_stand_for_no_merge() {
-    let (_tmp_dir, dir) = scratch("empty");
-    for entry in std::fs::read_dir(fixtures()).unwrap() {
-        let path = entry.unwrap().path();
-        std::fs::copy(&path, dir.join(path.file_name().unwrap())).expect("copy");
-    }
+    let (_tmp_dir, dir) = fixture_copy("empty");
     let stem = "virtualhome-rearrange-planner-1a1f05079ed4";
     let empty = dir.join(format!("{stem}.jsonl"));
     std::fs::write(&empty, "").unwrap();
