@@ -40,7 +40,7 @@ use std::path::{Path, PathBuf};
     strum::VariantNames,
     strum::VariantArray,
 )]
-#[strum(serialize_all = "kebab-case")]
+#[strum(serialize_all = "kebab-case", parse_err_ty = UnknownBenchmark, parse_err_fn = UnknownBenchmark::new)]
 pub enum Benchmark {
     /// ALFWorld's `valid_seen` games (`fixtures/alfworld/valid_seen`); name `alfworld-seen`.
     AlfworldSeen,
@@ -64,6 +64,19 @@ impl Benchmark {
     /// The benchmark with command-line name `name` (see [`Benchmark::name`]); `None` for any other string.
     pub fn from_name(name: &str) -> Option<Benchmark> {
         name.parse().ok()
+    }
+}
+
+/// A name that is none of [`Benchmark`]'s (the error of its [`FromStr`](std::str::FromStr)):
+/// names what was given and lists the benchmarks. (This crate depends on no other of the
+/// workspace, so it does not share `transition_model::UnknownName`.)
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error("`{0}` is not a benchmark: the benchmarks are {names}", names = <Benchmark as strum::VariantNames>::VARIANTS.join(", "))]
+pub struct UnknownBenchmark(pub String);
+
+impl UnknownBenchmark {
+    fn new(given: &str) -> UnknownBenchmark {
+        UnknownBenchmark(given.to_string())
     }
 }
 
