@@ -771,3 +771,79 @@ fn files_without_records_are_left_out_and_stand_for_no_merge() {
     assert!(report.markdown.contains(&format!("- left out: {}: no record yet", empty.display())), "{}", report.markdown);
     assert!(!report.markdown.contains("its records are those of the merged"), "{}", report.markdown);
 }
+
+/// One run of `ours`: its mode, its seed, the tasks it ran (`t00`, ...), which of them it solved.
+type RunSpec<'a> = (&'a str, Option<u64>, &'a [usize], fn(usize) -> bool);
+
+/// Record files of `ours` on ALFWorld, one per run, and the report's Markdown.
+fn runs_of(dir: &Path, runs: &[RunSpec<'_>]) -> String {
+    for &(mode, seed, ran, solves) in runs {
+        let mut config = serde_json::json!({"agent": "ours", "benchmark": "alfworld-seen", "mode": mode, "lm": "uniform"});
+        if let Some(seed) = seed {
+            config["seed"] = seed.into();
+        }
+        let mut file = eval_harness::records::RecordFile::open(dir, "alfworld-seen-ours", &config, None, false).expect("opens");
+        for (index, &task) in ran.iter().enumerate() {
+            let record = serde_json::json!({"task": format!("t{task:02}"), "agent": "ours", "success": solves(task)});
+            file.append(index, &record).expect("appends");
+        }
+    }
+    let paths = record_paths(&[dir.to_path_buf()]).expect("record files");
+    let sets: Vec<_> = paths.iter().map(|p| load(p).expect("a record file")).collect();
+    build(&sets, &ReportOptions::default()).expect("a report").markdown
+}
+
+/// The one row of the McNemar section `heading` that compares two conditions.
+fn comparison_row<'a>(markdown: &'a str, heading: &str) -> &'a str {
+    let section = section_of(markdown, heading);
+    let rows: Vec<&str> = section.lines().filter(|l| l.contains(" vs. ")).collect();
+    assert_eq!(rows.len(), 1, "{section}");
+    rows[0]
+}
+
+/// Two conditions with several runs are paired seed with seed (Appendix B pairs runs, it does
+/// not cross them): seed 0 of sampling solves all ten tasks where seed 0 of constrained sampling
+/// solves none, and seed 42 the other way round, so each seed's pair differs on every task (b/c
+/// 10/0 and 0/10, p = 2/2^10). Crossed, seed 0 against seed 42 is the same outcome twice (p = 1).
+#[test]
+fn two_conditions_with_several_runs_are_paired_seed_with_seed() {
+    let (_tmp_dir, dir) = scratch("seed-pairs");
+    let all: &[usize] = &[0, 1, 2, 3, 4, 5, 6, 7, 8, 9];
+    let markdown = runs_of(
+        &dir,
+        &[
+            ("sample", Some(0), all, |_| true),
+            ("sample", Some(42), all, |_| false),
+            ("constrained-sample", Some(0), all, |_| false),
+            ("constrained-sample", Some(42), all, |_| true),
+        ],
+    );
+    let row = comparison_row(&markdown, "## Paired significance: comparisons beyond the paper's families");
+    let p = stats::mcnemar_exact_p(10, 0);
+    assert!((p - 2.0 / 1024.0).abs() < 1e-12, "{p}");
+    assert!(row.contains(&format!("| 10 (10/0) | {p:.3} |")) || row.contains(&format!("| 10 (0/10) | {p:.3} |")), "{row}");
+}
+
+/// Each run pair is tested on the tasks its own two runs share, not on the tasks every run
+/// holds: seed 1738 of sampling ran the first six of the twelve tasks. Constrained MCTS solves all twelve;
+/// seeds 0 and 42 solve tasks 0-5 only (b/c 6/0 over twelve tasks, p = 2/2^6), seed 1738
+/// fails its six (6/0, the same p). Cut to the six tasks every run holds, seeds 0 and 42 would
+/// equal constrained MCTS there (p = 1) and hide the difference.
+#[test]
+fn each_run_pair_is_tested_on_the_tasks_it_shares() {
+    let (_tmp_dir, dir) = scratch("run-pair-tasks");
+    let all: &[usize] = &[0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11];
+    let markdown = runs_of(
+        &dir,
+        &[
+            ("constrained-mcts", None, all, |_| true),
+            ("sample", Some(0), all, |t| t < 6),
+            ("sample", Some(42), all, |t| t < 6),
+            ("sample", Some(1738), &[0, 1, 2, 3, 4, 5], |_| false),
+        ],
+    );
+    let row = comparison_row(&markdown, "## Paired significance: comparisons beyond the paper's families");
+    let p = stats::mcnemar_exact_p(6, 0);
+    assert!(p < 0.05, "{p}");
+    assert!(row.contains(&format!("| 12 (6/0) | {p:.3} | {p:.3} | ✓ |")), "{row}");
+}

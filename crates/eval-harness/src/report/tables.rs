@@ -366,7 +366,7 @@ fn not_worse_than_the_best(
 struct Test {
     pair: (usize, usize),
     benchmark: usize,
-    /// Tasks both conditions ran (in every run).
+    /// Tasks both runs of the pair whose p is kept ran.
     tasks: usize,
     first_only: u64,
     second_only: u64,
@@ -407,23 +407,37 @@ fn family(a: &Condition, b: &Condition) -> Family {
     }
 }
 
-fn mcnemar_test(first: &[Run<'_>], second: &[Run<'_>]) -> Result<Option<(usize, stats::McNemar)>, ReportError> {
-    let outcomes: Vec<BTreeMap<&str, bool>> = first.iter().chain(second).map(Run::outcomes).collect();
-    let shared: Vec<&str> = outcomes[0].keys().copied().filter(|t| outcomes.iter().all(|o| o.contains_key(t))).collect();
-    if shared.is_empty() {
-        return Ok(None);
-    }
-    let vectors: Vec<Vec<bool>> = outcomes.iter().map(|o| shared.iter().map(|t| o[t]).collect()).collect();
-    let (a, b) = vectors.split_at(first.len());
-    // Against several runs, the largest exact p over the run pairs (the paper's conservative rule).
-    let mut worst: Option<stats::McNemar> = None;
-    for reference in a {
-        let test = stats::mcnemar_exact_max_p_over_runs(reference, b).map_err(stats_error("McNemar"))?.test;
-        if worst.is_none_or(|w| test.p_value > w.p_value) {
-            worst = Some(test);
+/// The run pairs a McNemar test of two conditions compares (Appendix B): a condition with one
+/// run (a deterministic one) against each run of the other; two conditions with several runs
+/// seed with seed, where they share seeds (else every run with every run).
+fn run_pairs<'r, 'a>(first: &'r [Run<'a>], second: &'r [Run<'a>]) -> Vec<(&'r Run<'a>, &'r Run<'a>)> {
+    let every = || first.iter().flat_map(|a| second.iter().map(move |b| (a, b)));
+    if first.len() > 1 && second.len() > 1 {
+        let matched: Vec<_> = every().filter(|(a, b)| a.seed == b.seed).collect();
+        if !matched.is_empty() {
+            return matched;
         }
     }
-    Ok(worst.map(|w| (shared.len(), w)))
+    every().collect()
+}
+
+/// The exact McNemar test of two conditions: each run pair ([`run_pairs`]) on the tasks both of
+/// its runs hold, and of those the largest p (the paper's conservative rule), with the task
+/// count of its pair. `None` where no pair shares a task.
+fn mcnemar_test(first: &[Run<'_>], second: &[Run<'_>]) -> Result<Option<(usize, stats::McNemar)>, ReportError> {
+    let mut worst: Option<(usize, stats::McNemar)> = None;
+    for (a, b) in run_pairs(first, second) {
+        let (a, b) = (a.outcomes(), b.outcomes());
+        let (va, vb): (Vec<bool>, Vec<bool>) = a.iter().filter_map(|(task, &x)| b.get(task).map(|&y| (x, y))).unzip();
+        if va.is_empty() {
+            continue;
+        }
+        let test = stats::mcnemar_exact(&va, &vb).map_err(stats_error("McNemar"))?;
+        if worst.is_none_or(|(_, w)| test.p_value > w.p_value) {
+            worst = Some((va.len(), test));
+        }
+    }
+    Ok(worst)
 }
 
 fn mcnemar_tables(study: &Study<'_>, options: &ReportOptions) -> Result<Vec<Table>, ReportError> {
@@ -469,8 +483,9 @@ fn mcnemar_tables(study: &Study<'_>, options: &ReportOptions) -> Result<Vec<Tabl
     let described = |what: &str, tests: &[Test]| {
         format!(
             "Exact paired McNemar tests ({what}; m = {} tests), Holm correction within the family, significant at α = {}. \
-             n = tasks both conditions ran (in every run); b/c = tasks only the first / only the second solved. Against a \
-             condition with several runs the largest exact p over the run pairs is kept.",
+             n = tasks both runs ran; b/c = tasks only the first / only the second solved. A condition with several runs \
+             is paired run by run (against one run, each run; against several, seed with seed) and the largest exact p \
+             over the pairs is kept, with its pair's n and b/c.",
             tests.len(),
             options.alpha
         )
