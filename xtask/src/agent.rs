@@ -376,7 +376,7 @@ impl PhaseTwoRunner {
         // sent: the transition model says it ends short of the goal, so running it would only
         // spend steps and pass a search failure off as the goal's. A model that ended the plan
         // at once wrote an empty plan, which is its DONE.
-        let no_plan = (!outcome.solved && outcome.stop.searched_out()).then(|| format!("{:?}: no plan", outcome.stop));
+        let no_plan = (!outcome.solved && outcome.stop.searched_out()).then(|| outcome.stop.to_string());
         let invalid_step = outcome.invalid.as_ref().map(|i| i.text.clone());
         Ok(PhaseTwo {
             actions: if no_plan.is_some() { Vec::new() } else { outcome.plan },

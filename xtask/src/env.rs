@@ -31,10 +31,11 @@ pub struct EnvArgs {
     /// alfworld_trace.py prints them; without it, readable text.
     #[arg(long)]
     json: bool,
-    /// VirtualHome: take an instance-level line (`[WALK] <plate> (1001)`) only for a node an
-    /// observation has shown since the reset, as the environment an agent is handed does;
-    /// without it any node of the scene, as EAI's executor takes them (gold programs walk to
-    /// objects in other rooms by id).
+    /// VirtualHome: the environment an agent is handed: nodes named by its own ids (a
+    /// permutation of the task's, not EAI's), an instance-level line (`[WALK] <plate> (12)`)
+    /// taken only for a node an observation has shown since the reset; without it, the scene's
+    /// ids and any node, as EAI's executor takes them (gold programs walk to objects in other
+    /// rooms by id).
     #[arg(long, conflicts_with = "game")]
     as_agent: bool,
 }

@@ -27,8 +27,8 @@ pub struct VirtualhomeEnvArgs {
     pub seed: u64,
     /// JSON lines (step, command, executed, message, observation; the last line the verdict).
     pub json: bool,
-    /// Instance-level lines only for nodes shown since the reset ([`IdScope::Perceived`]);
-    /// else for any node ([`IdScope::Any`]).
+    /// The agent's ids, and instance-level lines only for nodes shown since the reset
+    /// ([`IdScope::Perceived`]); else the scene's ids, for any node ([`IdScope::Any`]).
     pub as_agent: bool,
 }
 

@@ -232,17 +232,15 @@ impl Embodied<'_> {
     fn run(&mut self, suite: Suite, task: &EvalTask) -> anyhow::Result<Value> {
         let start = Instant::now();
         let args = self.args;
-        let (ep, budget) = match task {
+        let ep = match task {
             EvalTask::Game { path, .. } => {
                 let (mut env, mut adapter, goal) = alfworld(path)?;
-                let config = args.episode.config(55);
-                (episode(&mut env, &mut adapter, self.policy.as_mut(), &goal, config, &mut self.phase2)?, config.budget)
+                episode(&mut env, &mut adapter, self.policy.as_mut(), &goal, args.episode.config(55), &mut self.phase2)?
             }
             EvalTask::Virtualhome { id } => {
                 let dir = if suite == Suite::VirtualhomeEai { args.task_dir.as_deref() } else { None };
                 let (mut env, mut adapter, goal) = virtualhome(suite.name(), id, dir)?;
-                let config = args.episode.config(20);
-                (episode(&mut env, &mut adapter, self.policy.as_mut(), &goal, config, &mut self.phase2)?, config.budget)
+                episode(&mut env, &mut adapter, self.policy.as_mut(), &goal, args.episode.config(20), &mut self.phase2)?
             }
             EvalTask::Files(files) => anyhow::bail!("{}: not an environment task", files.id),
         };
@@ -252,7 +250,7 @@ impl Embodied<'_> {
         Ok(json!({
             "task": task.id(), "agent": args.agent, "success": ep.success, "steps": ep.steps.len(),
             "phase1_steps": ep.phase1_steps, "plan_length": ep.plan.len(),
-            "terminal": agent_terminal(ep.success, ep.no_plan, refused, ep.steps.len(), budget), "failure_response": response,
+            "terminal": agent_terminal(ep.success, ep.no_plan, refused, ep.budget_spent), "failure_response": response,
             "attribution": ep.attribution, "precision": ep.precision, "recall": ep.recall,
             "phase1_calls": ep.phase1_usage.calls, "phase1_tokens": ep.phase1_usage.generated_tokens,
             "phase2_calls": ep.phase2_calls, "phase2_tokens": ep.phase2_tokens,

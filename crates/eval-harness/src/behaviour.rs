@@ -71,18 +71,20 @@ pub fn persistent_loop(commands: &[&str]) -> bool {
 }
 
 /// The agent's terminal mechanism (Phase I, then an open-loop plan): success; the search
-/// budget when Phase II returned no plan; the interaction limit when the steps ran out; grounding
-/// when the environment refused a request; else the model's own end (Phase I's `done` with no
-/// plan, or a plan that ran to its end short of the goal: the plan's end is the model's `DONE`).
-pub fn agent_terminal(success: bool, no_plan: bool, any_refused: bool, steps_used: usize, budget: usize) -> Terminal {
+/// budget when Phase II returned no plan; grounding when the environment refused a plan step
+/// (the earlier cause where the steps also ran out after it); the interaction limit when the
+/// step budget ended the episode (`budget_spent`: Phase I spent it, or the plan still had steps
+/// to send); else the model's own end (Phase I's `done` with no plan, or a plan that ran to its
+/// end short of the goal, on the budget's last step too: the plan's end is the model's `DONE`).
+pub fn agent_terminal(success: bool, no_plan: bool, any_refused: bool, budget_spent: bool) -> Terminal {
     if success {
         Terminal::Success
     } else if no_plan {
         Terminal::SearchBudget
-    } else if steps_used >= budget {
-        Terminal::InteractionLimit
     } else if any_refused {
         Terminal::Grounding
+    } else if budget_spent {
+        Terminal::InteractionLimit
     } else {
         Terminal::ModelDone
     }

@@ -38,11 +38,14 @@ fn terminal_mechanisms() {
     assert_eq!(terminal(false, true, 3, 20), Terminal::ModelDone);
     assert_eq!(terminal(false, false, 20, 20), Terminal::InteractionLimit);
     assert_eq!(terminal(false, false, 7, 20), Terminal::Grounding);
-    // The agent: no plan is the search budget, whatever the steps; a plan that ran to its end
-    // short of the goal is the model's end; a refused plan step, grounding.
-    assert_eq!(agent_terminal(true, false, false, 20, 20), Terminal::Success);
-    assert_eq!(agent_terminal(false, true, false, 4, 20), Terminal::SearchBudget);
-    assert_eq!(agent_terminal(false, false, true, 20, 20), Terminal::InteractionLimit);
-    assert_eq!(agent_terminal(false, false, true, 9, 20), Terminal::Grounding);
-    assert_eq!(agent_terminal(false, false, false, 9, 20), Terminal::ModelDone);
+    // The agent: no plan is the search budget, whatever the steps; a refused plan step is
+    // grounding, also when the steps ran out after it; the budget cutting Phase I or the plan
+    // short is the interaction limit; a plan that ran to its end short of the goal is the
+    // model's end, also when its last step was the budget's last.
+    assert_eq!(agent_terminal(true, false, false, true), Terminal::Success);
+    assert_eq!(agent_terminal(false, true, false, false), Terminal::SearchBudget);
+    assert_eq!(agent_terminal(false, false, true, false), Terminal::Grounding);
+    assert_eq!(agent_terminal(false, false, true, true), Terminal::Grounding);
+    assert_eq!(agent_terminal(false, false, false, true), Terminal::InteractionLimit);
+    assert_eq!(agent_terminal(false, false, false, false), Terminal::ModelDone);
 }

@@ -186,6 +186,10 @@ pub struct Episode {
     pub no_plan: bool,
     /// The plan went on with a step that could not be grounded ([`PhaseTwo::invalid_step`]).
     pub plan_invalid: bool,
+    /// The step budget ended the episode: Phase I spent it before a plan could take a step, or
+    /// a plan still had steps to send when it ran out. Not set when the agent ended on its own
+    /// (a plan sent to its end, even on the budget's last step).
+    pub budget_spent: bool,
     /// The failure class (module documentation); `None` on success.
     pub attribution: Option<Attribution>,
     /// Precision of F_τ against the hidden state, in [0, 1], as of Phase I's last stop; `None`
@@ -271,6 +275,7 @@ pub fn run_episode<E: Environment + Judge>(
         failure: None,
         no_plan: false,
         plan_invalid: false,
+        budget_spent: false,
         attribution: None,
         precision,
         recall,
@@ -339,6 +344,7 @@ pub fn run_episode<E: Environment + Judge>(
         if grounded.steps_left == 0 {
             // Phase I spent the budget: no plan could take a step.
             episode.failure = Some("step budget spent before Phase II".into());
+            episode.budget_spent = true;
             // With closed-loop replanning, earlier plans spent steps too.
             explored_out = first_plan;
             break;
@@ -379,6 +385,7 @@ pub fn run_episode<E: Environment + Judge>(
             if episode.steps.len() >= config.budget {
                 // The plan needs more steps than exploration left (planners are told how many);
                 // after a refused step, that refusal is the earlier cause.
+                episode.budget_spent = true;
                 if !not_executed {
                     episode.failure = Some("step budget spent".into());
                     explored_out = first_plan;

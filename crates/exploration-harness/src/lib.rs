@@ -92,8 +92,16 @@
 /// next; a refused EAI line leaves the graph as it was); until 15 it stopped at the first
 /// refused step, so a plan whose refused step changed nothing lost (ALFWorld's
 /// `pick_cool_then_place_in_recep-Pan-None-StoveBurner-18` with SmolLM2: a `go to` a place
-/// sharing the agent's location). Closed loop still replans at the first refusal.
-pub const HARNESS_VERSION: u32 = 16;
+/// sharing the agent's location). Closed loop still replans at the first refusal; 17:
+/// VirtualHome's environment shows the agent ids of its own, a permutation of the task's nodes
+/// ([`household_sim::VirtualhomeEnv`], **Ids**), not EAI's, which tell the objects a task added
+/// (from 1000) from the scene's, and which ordered the sweep and broke β's ties (lowest id); the
+/// engine script keeps EAI's ids. The agent's terminal mechanism is the interaction limit only
+/// where the budget cut the episode short ([`Episode::budget_spent`]; a plan sent to its end on
+/// the budget's last step is the model's end, and a refused step before the budget ran out is
+/// grounding). A search without a plan is recorded as `no plan: cpu-time`, its stop as it is
+/// serialised, where it was `no plan: CpuTime: no plan`.
+pub const HARNESS_VERSION: u32 = 17;
 
 pub mod alfworld;
 pub mod chat_planner;

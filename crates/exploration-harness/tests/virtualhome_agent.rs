@@ -43,6 +43,34 @@ fn a_star(g: &Grounded) -> Result<Vec<grounding::ActionId>, String> {
     heuristics::search::optimal_plan_with(&g.model, &config).map_err(|status| format!("{status:?}"))
 }
 
+/// `class (id)` as the agent is shown the scene's node `scene_id` of `task` (the environment's
+/// ids are not the scene's: `household_sim::VirtualhomeEnv`, **Ids**).
+fn shown(task: &VirtualhomeTask, class: &str, scene_id: u32) -> String {
+    let id = VirtualhomeEnv::new(task.clone(), "virtualhome-eai").shown_id(scene_id).expect("a node of the scene");
+    format!("{class} ({id})")
+}
+
+/// `line` with every `(id)` the agent sent turned into the scene's id, as the engine is given it.
+fn with_scene_ids(task: &VirtualhomeTask, line: &str) -> String {
+    let env = VirtualhomeEnv::new(task.clone(), "virtualhome-eai");
+    let g = &task.init.graph;
+    let scene: BTreeMap<u32, u32> = g.indices().map(|ix| (env.shown_id(g.node(ix).id).unwrap(), g.node(ix).id)).collect();
+    let mut out = String::new();
+    let mut rest = line;
+    while let Some(open) = rest.find(" (") {
+        let (head, tail) = rest.split_at(open + 2);
+        out.push_str(head);
+        let close = tail.find(')').unwrap_or(tail.len());
+        match tail[..close].parse::<u32>() {
+            Ok(id) => out.push_str(&scene.get(&id).copied().unwrap_or(id).to_string()),
+            Err(_) => out.push_str(&tail[..close]),
+        }
+        rest = &tail[close..];
+    }
+    out.push_str(rest);
+    out
+}
+
 fn play_task(task: VirtualhomeTask, path: &Path, benchmark: &str, ontology: &Ontology) -> Episode {
     play_task_with(task, path, benchmark, ontology, EpisodeConfig::open_loop(20))
 }
@@ -78,11 +106,13 @@ fn play_set(dir: &Path, benchmark: &str) -> (usize, usize, BTreeMap<String, usiz
         let episode = play(path, benchmark, &ontology);
         assert!(episode.steps.len() <= 20, "{}: {} steps", path.display(), episode.steps.len());
         // What the real engine is given to replay the record: the very commands sent, Phase I's and
-        // the plan's, each with the outcome it had here.
+        // the plan's, with the scene's ids, each with the outcome it had here.
+        let task = VirtualhomeTask::load(path).unwrap();
         let script: Vec<(&str, bool)> = episode.engine_script.iter().map(|l| (l.line.as_str(), l.executed)).collect();
-        let sent: Vec<(&str, bool)> = episode.steps.iter().map(|s| (s.command.as_str(), s.executed)).collect();
+        let sent: Vec<(String, bool)> = episode.steps.iter().map(|s| (with_scene_ids(&task, &s.command), s.executed)).collect();
+        let sent: Vec<(&str, bool)> = sent.iter().map(|(c, e)| (c.as_str(), *e)).collect();
         assert_eq!(script, sent, "{}", path.display());
-        let mut replay = VirtualhomeEnv::new(VirtualhomeTask::load(path).unwrap(), benchmark);
+        let mut replay = VirtualhomeEnv::new(task, benchmark).with_id_scope(IdScope::Any);
         assert_ends_where_the_engine_does(&mut replay, &episode, &path.display().to_string());
         // Plans are executable by construction: a step the environment refuses from a state
         // Phase I got right would be a soundness bug of the hand-over.
@@ -135,24 +165,25 @@ fn systematic_exploration_then_a_star_on_eai_fixture_tasks() {
 /// dining room, 355 in the home office) and EAI's goal names the dining room's. The sentence
 /// names the kitchen and the dining room, both `dining_room` by the benchmark's own names
 /// (F_str), so Ready waits until that room is entered and β binds its table. Told the same goal
-/// with a sentence that names no room, the agent binds the first table it perceived, sets the
-/// plates on it, and the judge says not won.
+/// with a sentence that names the bedroom, the agent binds the bedroom's table, and the judge
+/// says not won. (With no room named, the table is whichever the agent
+/// perceived first, by the environment's ids, which say nothing of the goal.)
 #[test]
 fn the_rooms_the_task_sentence_names_decide_which_instance_is_meant() {
     let path = fixtures().join("virtualhome-eai/graphs/446_2.json.gz");
     let task = VirtualhomeTask::load(&path).unwrap();
     let table = |episode: &Episode| episode.handover.as_ref().and_then(|h| h.binding.get("table").cloned());
 
+    let (dining_table, bedroom_table) = (shown(&task, "table", 226), shown(&task, "table", 107));
     let told = play_task(task.clone(), &path, "virtualhome-eai", &ontology());
     assert!(told.success, "{:?}; plan {:?}", told.failure, told.plan);
-    assert_eq!(table(&told).as_deref(), Some("table (226)"));
+    assert_eq!(table(&told), Some(dining_table));
 
-    let mut untold = task;
-    untold.description = "Put the dishes on the table.".to_string();
-    let untold = play_task(untold, &path, "virtualhome-eai", &ontology());
-    assert!(!untold.success, "plan {:?}", untold.plan);
-    assert_eq!(untold.attribution, Some(Attribution::Goal));
-    assert_ne!(table(&untold).as_deref(), Some("table (226)"));
+    let mut elsewhere = task;
+    elsewhere.description = "Go to the bedroom and put the dishes on the table.".to_string();
+    let elsewhere = play_task(elsewhere, &path, "virtualhome-eai", &ontology());
+    assert!(!elsewhere.success, "plan {:?}", elsewhere.plan);
+    assert_eq!(table(&elsewhere), Some(bedroom_table));
 }
 
 /// EAI 134_1, "watching TV from sofa": the scene has two televisions, the kitchen's (248, the
@@ -169,16 +200,17 @@ fn the_objects_the_task_sentence_names_decide_which_instance_is_meant() {
     let television = |episode: &Episode| episode.handover.as_ref().and_then(|h| h.binding.get("television").cloned());
 
     let mut told = scene_1004_2_with_goal(goal.clone());
+    let (by_the_sofa, kitchens) = (shown(&told, "television", 410), shown(&told, "television", 248));
     told.description = "watching TV from sofa".to_string();
     let told = play_task(told, &path, "virtualhome-eai", &ontology());
     assert!(told.success, "{:?}; plan {:?}", told.failure, told.plan);
-    assert_eq!(television(&told).as_deref(), Some("television (410)"));
+    assert_eq!(television(&told), Some(by_the_sofa));
 
     let mut untold = scene_1004_2_with_goal(goal);
     untold.description = "Watch TV.".to_string();
     let untold = play_task(untold, &path, "virtualhome-eai", &ontology());
     assert!(!untold.success, "plan {:?}", untold.plan);
-    assert_eq!(television(&untold).as_deref(), Some("television (248)"));
+    assert_eq!(television(&untold), Some(kitchens));
 }
 
 /// EAI's scene of 1004_2 with `goal` as its `vh_goal`.
@@ -233,11 +265,12 @@ fn a_repeated_node_goal_binds_and_changes_as_many_instances() {
             {"id": 411, "class_name": "light", "state": "ON"}, {"id": 411, "class_name": "light", "state": "PLUGGED_IN"}]});
         task["description"] = "Go to the kitchen and living room and turn on the lights.".into();
     });
+    let expected = BTreeSet::from([shown(&task, "light", 245), shown(&task, "light", 411)]);
     let episode = play_task(task, &path, "virtualhome-eai", &ontology());
     assert!(episode.success, "{:?}; plan {:?}", episode.failure, episode.plan);
     let binding = &episode.handover.as_ref().unwrap().binding;
-    let lights: BTreeSet<&str> = binding.values().map(String::as_str).filter(|v| v.starts_with("light (")).collect();
-    assert_eq!(lights, BTreeSet::from(["light (245)", "light (411)"]), "{binding:?}");
+    let lights: BTreeSet<String> = binding.values().filter(|v| v.starts_with("light (")).cloned().collect();
+    assert_eq!(lights, expected, "{binding:?}");
     let switched = episode.steps.iter().filter(|s| s.command.starts_with("[SWITCHON] <light>")).count();
     assert_eq!(switched, 2, "{:?}", episode.steps);
 }
@@ -292,11 +325,12 @@ fn scene_1004_2_with_computer_170(states: &[&str]) -> (VirtualhomeTask, PathBuf)
 fn an_instance_already_as_the_goal_asks_is_not_the_one_the_task_means() {
     // Computer 170 (the bedroom's) on; the goal: computer 417 (the home office's, off) on.
     let (task, path) = scene_1004_2_with_computer_170(&["PLUGGED_IN", "ON", "CLEAN"]);
+    let (on, off) = (shown(&task, "computer", 170), shown(&task, "computer", 417));
     let episode = play_task(task, &path, "virtualhome-eai", &ontology());
     let explored: Vec<&str> = episode.steps.iter().filter(|s| s.phase == "explore").map(|s| s.command.as_str()).collect();
     assert!(episode.success, "{:?}; explored {explored:?}; plan {:?}", episode.failure, episode.plan);
-    assert!(episode.plan.iter().any(|c| c.contains("<computer> (417)")), "plan {:?}", episode.plan);
-    assert!(!episode.plan.iter().any(|c| c.contains("(170)")), "plan {:?}", episode.plan);
+    assert!(episode.plan.iter().any(|c| c.contains(&format!("<{}", off.replace(" (", "> (")))), "plan {:?}", episode.plan);
+    assert!(!episode.plan.iter().any(|c| c.contains(&format!("<{}", on.replace(" (", "> (")))), "plan {:?}", episode.plan);
 }
 
 /// EAI's scenes 1004_2 and 819_1: the first computer the sweep finds (170, the bedroom's) is
@@ -309,24 +343,25 @@ fn an_instance_already_as_the_goal_asks_is_not_the_one_the_task_means() {
 fn an_instance_that_cannot_meet_the_goal_is_set_aside_and_phase_one_goes_on() {
     let task = || scene_1004_2_with_computer_170(&["PLUGGED_OUT", "OFF", "CLEAN"]).0;
     let path = fixtures().join("virtualhome-eai/graphs/1004_2.json.gz");
+    let (unplugged, office) = (shown(&task(), "computer", 170), shown(&task(), "computer", 417));
 
     let paper = play_task_with(task(), &path, "virtualhome-eai", &ontology(), EpisodeConfig::open_loop(20));
     assert!(!paper.success);
     assert!(paper.no_plan, "{:?}", paper.failure);
     assert_eq!(paper.handovers, 1);
     assert!(paper.set_aside.is_empty());
-    assert_eq!(paper.handover.as_ref().unwrap().binding.get("computer").map(String::as_str), Some("computer (170)"));
+    assert_eq!(paper.handover.as_ref().unwrap().binding.get("computer"), Some(&unplugged));
 
     let config = EpisodeConfig { reexplore: true, ..EpisodeConfig::open_loop(20) };
     let episode = play_task_with(task(), &path, "virtualhome-eai", &ontology(), config);
     let explored: Vec<&str> = episode.steps.iter().filter(|s| s.phase == "explore").map(|s| s.command.as_str()).collect();
     assert!(episode.success, "{:?}; explored {explored:?}; plan {:?}", episode.failure, episode.plan);
-    assert_eq!(episode.set_aside, ["computer (170)"]);
+    assert_eq!(episode.set_aside, [unplugged]);
     assert_eq!(episode.handovers, 2);
     assert!(episode.phase1_steps > paper.phase1_steps, "Phase I went on: {} then {}", paper.phase1_steps, episode.phase1_steps);
     assert_eq!(episode.phase1_steps, explored.len());
     assert!(episode.steps.len() <= 20);
-    assert!(episode.plan.iter().any(|c| c.contains("<computer> (417)")), "plan {:?}", episode.plan);
+    assert!(episode.plan.iter().any(|c| c.contains(&format!("<{}", office.replace(" (", "> (")))), "plan {:?}", episode.plan);
 }
 
 /// K_t never offers a way to circle: whatever a policy picks, no `goto`, `open` or `close` of

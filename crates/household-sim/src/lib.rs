@@ -59,5 +59,5 @@ pub use virtualhome::{
     Action as VhAction, IdScope, NodeIx as VhNodeIx, NodeState as VhNodeState, Property as VhProperty, PropertySet as VhPropertySet,
     Relation as VhRelation, RelationSet as VhRelationSet, SceneGraph, SceneNode, ScriptLine, StateSet as VhStateSet, VhGoal,
     VirtualhomeEnv, VirtualhomeError, VirtualhomeTask, World as VhWorld, bind as vh_bind, class_level_goal as vh_class_level_goal,
-    visible_nodes as vh_visible_nodes,
+    shown_ids as vh_shown_ids, visible_nodes as vh_visible_nodes,
 };

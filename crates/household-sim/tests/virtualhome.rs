@@ -82,45 +82,61 @@ fn instance_level_lines_name_only_what_has_been_seen() {
     let task = VirtualhomeTask::from_json(&scene(PLATE_IN_DISHWASHER), "tiny.json").unwrap();
     let mut e = VirtualhomeEnv::new(task.clone(), "virtualhome-eai");
     assert_eq!(e.id_scope(), IdScope::Perceived);
-    assert!(!e.step("[WALK] <fridge> (10)").event.executed(), "before the reset nothing has been shown");
+    // The agent's ids, not the scene's (module documentation of `virtualhome`, **Ids**).
+    let [kitchen, fridge, apple, livingroom, tv, character] = [1, 10, 11, 50, 51, 2].map(|scene| e.shown_id(scene).expect("a node"));
+    let step = |e: &mut VirtualhomeEnv, verb: &str, class: &str, id: u32| e.step(&format!("[{verb}] <{class}> ({id})"));
+    assert!(!step(&mut e, "WALK", "fridge", fridge).event.executed(), "before the reset nothing has been shown");
     let start = e.reset().text;
-    let refused = e.step("[WALK] <tv> (51)");
-    assert_eq!(refused.event, Event::NotExecuted { reason: "no tv (51) has been seen".to_string() });
+    let refused = step(&mut e, "WALK", "tv", tv);
+    assert_eq!(refused.event, Event::NotExecuted { reason: format!("no tv ({tv}) has been seen") });
     assert!(refused.observation.text.ends_with(&start), "nothing changed:\n{}", refused.observation.text);
     // A seen id under another class, an id the scene lacks, and the character are refused too.
-    for (line, reason) in [
-        ("[WALK] <tv> (10)", "no tv (10) has been seen"),
-        ("[WALK] <tv> (99)", "no tv (99) has been seen"),
-        ("[WALK] <character> (2)", "the character (2) is not an object to name"),
+    for (class, id, reason) in [
+        ("tv", fridge, format!("no tv ({fridge}) has been seen")),
+        ("tv", 99, "no tv (99) has been seen".to_string()),
+        ("character", character, format!("the character ({character}) is not an object to name")),
     ] {
-        assert_eq!(e.step(line).event, Event::NotExecuted { reason: reason.to_string() }, "{line}");
+        assert_eq!(step(&mut e, "WALK", class, id).event, Event::NotExecuted { reason }, "{class} {id}");
     }
-    check(&mut e, &[("[WALK] <fridge> (10)", true), ("[GRAB] <apple> (11)", false), ("[OPEN] <fridge> (10)", true)]);
-    let grab = e.step("[GRAB] <apple> (11)");
+    assert!(step(&mut e, "WALK", "fridge", fridge).event.executed());
+    assert!(!step(&mut e, "GRAB", "apple", apple).event.executed());
+    assert!(step(&mut e, "OPEN", "fridge", fridge).event.executed());
+    let grab = step(&mut e, "GRAB", "apple", apple);
     assert_eq!(grab.event, Event::Executed, "the open fridge showed the apple");
     // Walking to the livingroom (every room is listed) shows the tv; back in the kitchen it stays
     // nameable, and a reset forgets it.
-    check(&mut e, &[("[WALK] <livingroom> (50)", true), ("[WALK] <kitchen> (1)", true), ("[WALK] <tv> (51)", true)]);
+    assert!(step(&mut e, "WALK", "livingroom", livingroom).event.executed());
+    assert!(step(&mut e, "WALK", "kitchen", kitchen).event.executed());
+    assert!(step(&mut e, "WALK", "tv", tv).event.executed());
+    // The engine is given the scene's ids.
     let lines: Vec<String> = e.engine_script().into_iter().map(|l| l.line).collect();
     assert!(!lines.iter().any(|l| l.contains("(99)") || l.contains("<character>")), "refused lines never reach the engine: {lines:?}");
     assert_eq!(lines.first().map(String::as_str), Some("[WALK] <fridge> (10)"));
+    assert_eq!(lines.last().map(String::as_str), Some("[WALK] <tv> (51)"));
     e.reset();
-    assert!(!e.step("[WALK] <tv> (51)").event.executed());
+    assert!(!step(&mut e, "WALK", "tv", tv).event.executed());
     let mut any = VirtualhomeEnv::new(task, "virtualhome-eai").with_id_scope(IdScope::Any);
     any.reset();
     check(&mut any, &[("[WALK] <tv> (51)", true)]);
 }
 
 /// A class is compared as script lines read names (lower case, spaces as `_`, as EAI's parser):
-/// a table shown as `Kitchen Table (20)` is named `<Kitchen Table> (20)` or `<kitchen_table> (20)`,
-/// not `<table> (20)`.
+/// a table shown as `Kitchen Table (N)` is named `<Kitchen Table> (N)` or `<kitchen_table> (N)`,
+/// not `<table> (N)`.
 #[test]
 fn a_shown_class_is_compared_as_lines_read_it() {
     let text = scene(PLATE_IN_DISHWASHER).replace(r#""class_name":"table""#, r#""class_name":"Kitchen Table""#);
     let mut e = VirtualhomeEnv::new(VirtualhomeTask::from_json(&text, "tiny.json").unwrap(), "virtualhome-eai");
-    assert!(e.reset().text.contains("- Kitchen Table (20)"));
-    check(&mut e, &[("[WALK] <Kitchen Table> (20)", true), ("[WALK] <kitchen_table> (20)", true)]);
-    assert_eq!(e.step("[WALK] <table> (20)").event, Event::NotExecuted { reason: "no table (20) has been seen".to_string() });
+    let table = e.shown_id(20).expect("the table");
+    assert!(e.reset().text.contains(&format!("- Kitchen Table ({table})")));
+    check(
+        &mut e,
+        &[(format!("[WALK] <Kitchen Table> ({table})").as_str(), true), (format!("[WALK] <kitchen_table> ({table})").as_str(), true)],
+    );
+    assert_eq!(
+        e.step(&format!("[WALK] <table> ({table})")).event,
+        Event::NotExecuted { reason: format!("no table ({table}) has been seen") }
+    );
 }
 
 #[test]
@@ -291,4 +307,49 @@ fn a_hand_built_line_of_the_wrong_arity_fails_without_a_change() {
     assert_eq!(format!("{world:?}"), before);
     let parsed = ScriptLine::parse("[PUTIN] <plate> (21)").expect_err("the parser refuses it too");
     assert_eq!(parsed, "Wrong number of parameters for \"PUTIN\". Got 1, expected 2");
+}
+
+/// The agent's ids (module documentation of `virtualhome`, **Ids**) on an EAI task whose goal
+/// objects the task added (ids from 1000): a permutation of 1..=n, the same for every
+/// environment of the task; every id the observation, the judge's atoms and the unmet goals
+/// name is one of them; the engine script names the scene's ids; `IdScope::Any` shows the scene's.
+#[test]
+fn an_agent_is_shown_ids_of_the_environment_not_the_scenes() {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../fixtures/virtualhome-eai/graphs/201_1.json.gz");
+    let task = VirtualhomeTask::load(&path).unwrap();
+    let n = task.init.graph.len();
+    let ids = household_sim::vh_shown_ids(&task.task_id, n);
+    let mut sorted = ids.clone();
+    sorted.sort_unstable();
+    assert_eq!(sorted, (1..=n as u32).collect::<Vec<_>>());
+    assert_ne!(ids, household_sim::vh_shown_ids("201_2", n), "another task, another permutation");
+    let mut e = VirtualhomeEnv::new(task.clone(), "virtualhome-eai");
+    assert_eq!(VirtualhomeEnv::new(task.clone(), "virtualhome-eai").shown_id(1000), e.shown_id(1000));
+    let scene_ids: Vec<u32> = task.init.graph.indices().map(|ix| task.init.graph.node(ix).id).collect();
+    for (ix, &scene) in scene_ids.iter().enumerate() {
+        assert_eq!(e.shown_id(scene), Some(ids[ix]));
+    }
+    let id_in = |text: &str| -> Vec<u32> {
+        text.split(" (").skip(1).filter_map(|rest| rest.split_once(')').and_then(|(id, _)| id.parse().ok())).collect()
+    };
+    let observation = e.reset().text;
+    let dishwasher = e.shown_id(1000).unwrap();
+    assert!(!observation.contains("(1000)"), "{observation}");
+    let mut named: Vec<u32> = id_in(&observation);
+    named.extend(e.hidden_atoms().iter().flat_map(|a| a.args.iter().flat_map(|arg| id_in(arg))));
+    named.extend(e.unmet_goals().iter().flat_map(|g| id_in(g)));
+    assert!(named.len() > 100 && named.iter().all(|&id| (1..=n as u32).contains(&id)), "{named:?}");
+    assert!(e.unmet_goals().iter().any(|g| g.contains(&format!("dishwasher ({dishwasher})"))), "{:?}", e.unmet_goals());
+    // To the dining room, where the dishwasher is, by the agent's ids; the engine gets the scene's.
+    let dining_room = e.shown_id(201).unwrap();
+    assert!(e.step(&format!("[WALK] <dining_room> ({dining_room})")).event.executed());
+    assert!(e.step(&format!("[WALK] <dishwasher> ({dishwasher})")).event.executed());
+    let lines: Vec<String> = e.engine_script().into_iter().map(|l| l.line).collect();
+    assert_eq!(lines, ["[WALK] <dining_room> (201)", "[WALK] <dishwasher> (1000)"]);
+    assert_eq!(e.executed_lines(), ["[WALK] <dining_room> (201)", "[WALK] <dishwasher> (1000)"]);
+    // Replays take the scene's ids, and their observations show them.
+    let mut any = VirtualhomeEnv::new(task, "virtualhome-eai").with_id_scope(IdScope::Any);
+    any.reset();
+    assert!(any.step("[WALK] <dishwasher> (1000)").event.executed());
+    assert!(any.unmet_goals().iter().any(|g| g.contains("(1000)")), "{:?}", any.unmet_goals());
 }

@@ -1,5 +1,5 @@
 //! The id rule of `VirtualhomeEnv` under `IdScope::Perceived`, checked against the text the
-//! agent was shown: on EAI fixture scenes, random instance-level lines (objects the observation
+//! agent was shown (every id here the agent's, not the scene's): on EAI fixture scenes, random instance-level lines (objects the observation
 //! lists, objects it does not, right and wrong classes, the character) are refused for their id
 //! exactly when `class (id)` has not appeared in an observation since the reset; a refused line
 //! changes nothing and never reaches the engine script.
@@ -56,8 +56,11 @@ proptest! {
         let task = task(["1004_2.json.gz", "152_2.json.gz", "1083_2.json.gz", "229_1.json.gz"][which]);
         let graph = task.init.graph.clone();
         let character = task.init.character;
-        let nodes: Vec<(String, u32)> = graph.indices().map(|ix| (graph.node(ix).class_name.clone(), graph.node(ix).id)).collect();
         let mut env = VirtualhomeEnv::new(task, "virtualhome-eai");
+        // Every node by the id the agent is shown for it (not the scene's).
+        let shown_id = |ix| env.shown_id(graph.node(ix).id).expect("a node");
+        let nodes: Vec<(String, u32)> = graph.indices().map(|ix| (graph.node(ix).class_name.clone(), shown_id(ix))).collect();
+        let character_id = shown_id(character);
         let mut shown = BTreeSet::new();
         named(&env.reset().text, &mut shown);
         for (verb, a, b, how) in picks {
@@ -69,7 +72,7 @@ proptest! {
                     0..=5 if !visible.is_empty() => { let (id, class) = &visible[n as usize % visible.len()]; (class.clone(), *id) }
                     // A node in view named under another node's class (often another class).
                     6 => (nodes[(n as usize + 1 + b as usize) % nodes.len()].0.clone(), visible[a as usize % visible.len()].0),
-                    7 => (graph.node(character).class_name.clone(), graph.node(character).id),
+                    7 => (graph.node(character).class_name.clone(), character_id),
                     _ => nodes[n as usize % nodes.len()].clone(),
                 }
             };
@@ -79,10 +82,10 @@ proptest! {
             let script_before = env.engine_script().len();
             let state_before = env.hidden_atoms();
             let result = env.step(&line);
-            let unseen = objects.iter().find(|o| o.1 == graph.node(character).id || !shown.contains(*o));
+            let unseen = objects.iter().find(|o| o.1 == character_id || !shown.contains(*o));
             match (&result.event, unseen) {
                 (Event::NotExecuted { reason }, Some((class, id))) => {
-                    let expected = if *id == graph.node(character).id {
+                    let expected = if *id == character_id {
                         format!("the character ({id}) is not an object to name")
                     } else {
                         format!("no {class} ({id}) has been seen")

@@ -186,9 +186,10 @@ impl DecodeConfig {
     }
 }
 
-/// Why decoding stopped.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+/// Why decoding stopped; displayed as serialised (`cpu-time`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, strum::Display)]
 #[serde(rename_all = "kebab-case")]
+#[strum(serialize_all = "kebab-case")]
 pub enum StopReason {
     /// A prefix reached the goal.
     Goal,

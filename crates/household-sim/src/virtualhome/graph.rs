@@ -393,6 +393,17 @@ impl SceneGraph {
         out
     }
 
+    /// Gives node `ix` the id `ids[ix]`, for every node (`ids` holds one distinct id per node):
+    /// the ids an environment shows in place of the scene's own ([`crate::VirtualhomeEnv`]).
+    pub(crate) fn relabel(&mut self, ids: &[u32]) {
+        debug_assert_eq!(ids.len(), self.nodes.len());
+        self.by_id.clear();
+        for (ix, (node, &id)) in self.nodes.iter_mut().zip(ids).enumerate() {
+            node.id = id;
+            self.by_id.insert(id, ix as NodeIx);
+        }
+    }
+
     /// `<class> (id)`, as the executor prints a node.
     pub fn label(&self, ix: NodeIx) -> String {
         let node = self.node(ix);

@@ -6,6 +6,17 @@
 //! for nodes an observation has shown, every node for replay and parity, see [`IdScope`]) or
 //! class-level verbs (`grab plate`, `putin plate dishwasher`) that the adapter binds to
 //! instances by [`bind`]'s rule.
+//!
+//! **Ids.** An agent's environment ([`IdScope::Perceived`]) names nodes by ids of its own, not
+//! by the scene's: EAI's ids say how a task was built (the scene's nodes are below 1000, the
+//! objects a task adds from 1000, its distractors from 2000), so `plate (1001)` beside
+//! `plate (301)` would tell the agent which plate the goal is about, which no picture shows.
+//! The shown ids are a permutation of 1..=n over the task's n nodes, drawn from the task id
+//! ([`shown_ids`]): the same for every episode of a task, independent of the scene's ids. They
+//! are in everything the environment says (observations, the executor's messages, the judge's
+//! atoms and unmet goals) and in the lines an agent sends; [`Judge::engine_script`] writes the
+//! scene's ids back, so a replay in EAI's executor runs the same lines. [`IdScope::Any`] (replay,
+//! parity) uses the scene's ids throughout.
 
 mod exec;
 mod graph;
@@ -340,14 +351,21 @@ pub fn bind(world: &World, action: Action, position: usize, class_name: &str) ->
 /// [`VirtualhomeEnv`] may name.
 ///
 /// ```
-/// use household_sim::{Environment, IdScope, VirtualhomeEnv, VirtualhomeTask};
+/// use household_sim::{Environment, IdScope, Judge, VirtualhomeEnv, VirtualhomeTask};
 /// let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../fixtures/virtualhome-eai/graphs/201_1.json.gz");
 /// // As an agent's environment: the character starts in the home office.
 /// let mut env = VirtualhomeEnv::new(VirtualhomeTask::load(&path)?, "virtualhome-eai");
 /// env.reset();
-/// assert!(!env.step("[WALK] <dishwasher> (1000)").event.executed(), "not seen yet");
-/// assert!(env.step("[WALK] <dining_room> (201)").event.executed(), "every room is listed");
-/// assert!(env.step("[WALK] <dishwasher> (1000)").event.executed(), "in view now");
+/// // The agent's ids are not the scene's (the dining room is 201 in the scene).
+/// let shown = |env: &VirtualhomeEnv, class: &str| env.visible_objects().into_iter().find(|(_, c)| c == class).map(|(id, _)| id);
+/// let dining_room = shown(&env, "dining_room").expect("every room is listed");
+/// assert_ne!(dining_room, 201);
+/// assert_eq!(shown(&env, "dishwasher"), None, "not seen yet");
+/// assert!(env.step(&format!("[WALK] <dining_room> ({dining_room})")).event.executed());
+/// let dishwasher = shown(&env, "dishwasher").expect("in view now");
+/// assert!(env.step(&format!("[WALK] <dishwasher> ({dishwasher})")).event.executed());
+/// // What EAI's executor is given names the scene's ids.
+/// assert_eq!(env.engine_script()[1].line, "[WALK] <dishwasher> (1000)");
 /// // As EAI's executor, for a replay of the gold program.
 /// let mut replay = VirtualhomeEnv::new(VirtualhomeTask::load(&path)?, "virtualhome-eai").with_id_scope(IdScope::Any);
 /// replay.reset();
@@ -357,22 +375,39 @@ pub fn bind(world: &World, action: Action, position: usize, class_name: &str) ->
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum IdScope {
     /// Only ids the environment has shown since the reset, each with the class it was shown
-    /// with (an observation lists `fridge (289)`), never the character: what an agent may
-    /// name. Until an observation (a reset's or a step's) has shown a node, it is not
+    /// with (an observation lists `fridge (17)`), never the character: what an agent may
+    /// name. The ids are the environment's own, not the scene's (module documentation, **Ids**). Until an observation (a reset's or a step's) has shown a node, it is not
     /// nameable. Any other line is refused, as not executed, before it is grounded, so it
     /// changes nothing and is not in [`Judge::engine_script`]. Class-level commands (`walk
     /// fridge`) bind to visible instances either way. The default.
     #[default]
     Perceived,
-    /// Every node id of the scene, as EAI's executor takes them: for replays of recorded or
-    /// gold programs and parity with the executor, never for an agent.
+    /// Every node id of the scene, the scene's own ids, as EAI's executor takes them: for
+    /// replays of recorded or gold programs and parity with the executor, never for an agent.
     Any,
+}
+
+/// The ids an agent's environment shows for a task of `count` nodes (module documentation,
+/// **Ids**): node index `ix` is shown as `ids[ix]`, a permutation of 1..=`count` drawn by a
+/// Fisher-Yates shuffle from a generator seeded with the FNV-1a hash of `task_id`.
+pub fn shown_ids(task_id: &str, count: usize) -> Vec<u32> {
+    let seed = task_id.bytes().fold(0xcbf2_9ce4_8422_2325_u64, |h, b| (h ^ u64::from(b)).wrapping_mul(0x0100_0000_01b3));
+    let mut random = crate::python_random::PythonRandom::new(seed);
+    let mut ids: Vec<u32> = (1..=count as u32).collect();
+    for i in (1..ids.len()).rev() {
+        ids.swap(i, random.choice_index(i + 1));
+    }
+    ids
 }
 
 /// A VirtualHome task as an [`Environment`] (and a [`Judge`]).
 #[derive(Debug, Clone)]
 pub struct VirtualhomeEnv {
     task: VirtualhomeTask,
+    /// By node index: the scene's ids (EAI's) and the ids an agent is shown (module
+    /// documentation, **Ids**); the graphs and goals carry the scope's.
+    scene_ids: Vec<u32>,
+    agent_ids: Vec<u32>,
     world: World,
     /// Every grounded line since the reset (instance level) with whether it executed: the
     /// executed ones for the action goals, all for [`Judge::engine_script`].
@@ -401,7 +436,50 @@ impl VirtualhomeEnv {
         };
         let world = task.init.clone();
         let perceived = vec![false; world.graph.len()];
-        VirtualhomeEnv { task, world, script: Vec::new(), steps: 0, annotation, scope: IdScope::default(), perceived }
+        let scene_ids: Vec<u32> = world.graph.indices().map(|ix| world.graph.node(ix).id).collect();
+        let agent_ids = shown_ids(&task.task_id, scene_ids.len());
+        let mut env =
+            VirtualhomeEnv { task, world, scene_ids, agent_ids, script: Vec::new(), steps: 0, annotation, scope: IdScope::Any, perceived };
+        env.set_scope(IdScope::default());
+        env
+    }
+
+    /// Puts the ids of `scope` on the graphs (the task's and the current one) and the goals.
+    fn set_scope(&mut self, scope: IdScope) {
+        let ids = match scope {
+            IdScope::Perceived => self.agent_ids.clone(),
+            IdScope::Any => self.scene_ids.clone(),
+        };
+        let g = &self.task.init.graph;
+        // Goal ids were checked against the scene when the task was loaded.
+        let to = |id: u32| g.index_of(id).map_or(id, |ix| ids[ix as usize]);
+        let goals: Vec<VhGoal> = self
+            .task
+            .goals
+            .iter()
+            .map(|goal| match goal {
+                VhGoal::State { node, class_name, state } => {
+                    VhGoal::State { node: to(*node), class_name: class_name.clone(), state: *state }
+                }
+                VhGoal::Edge { from, relation, to: target } => VhGoal::Edge { from: to(*from), relation: *relation, to: to(*target) },
+                VhGoal::Action { options } => VhGoal::Action { options: options.clone() },
+            })
+            .collect();
+        self.task.goals = goals;
+        self.task.init.graph.relabel(&ids);
+        self.world.graph.relabel(&ids);
+        self.scope = scope;
+    }
+
+    /// `line` as EAI's executor takes it: the scene's ids (module documentation, **Ids**).
+    fn engine_line(&self, line: &ScriptLine) -> String {
+        let g = &self.world.graph;
+        let mut text = format!("[{}]", line.action.name());
+        for (name, id) in &line.objects {
+            let id = g.index_of(*id).map_or(*id, |ix| self.scene_ids[ix as usize]);
+            let _ = write!(text, " <{name}> ({id})");
+        }
+        text
     }
 
     /// This environment with `scope` for the ids of instance-level lines: [`IdScope::Any`]
@@ -409,7 +487,7 @@ impl VirtualhomeEnv {
     /// programs walk to objects in other rooms by id).
     #[must_use]
     pub fn with_id_scope(mut self, scope: IdScope) -> VirtualhomeEnv {
-        self.scope = scope;
+        self.set_scope(scope);
         self
     }
 
@@ -428,6 +506,13 @@ impl VirtualhomeEnv {
         }
     }
 
+    /// The id an agent is shown for the scene's node `scene_id` (module documentation, **Ids**),
+    /// whatever this environment's scope; `None` when the scene has no such node. For tools and
+    /// tests: an agent is handed `&mut dyn Environment`, never this.
+    pub fn shown_id(&self, scene_id: u32) -> Option<u32> {
+        self.scene_ids.iter().position(|&id| id == scene_id).map(|ix| self.agent_ids[ix])
+    }
+
     /// What the agent sees now as `(id, class_name)`, by id (the nodes the observation
     /// lists, rooms included, the character left out).
     pub fn visible_objects(&self) -> Vec<(u32, String)> {
@@ -441,7 +526,8 @@ impl VirtualhomeEnv {
         out
     }
 
-    /// The instance-level lines executed since the reset.
+    /// The instance-level lines executed since the reset, with the scene's ids (as
+    /// [`Judge::engine_script`] writes them).
     pub fn executed_lines(&self) -> Vec<&str> {
         self.script.iter().filter(|l| l.executed).map(|l| l.line.as_str()).collect()
     }
@@ -617,8 +703,9 @@ impl Environment for VirtualhomeEnv {
     fn step(&mut self, command: &str) -> StepResult {
         self.steps += 1;
         let outcome = self.resolve(command).and_then(|(line, text)| {
+            let engine = if self.scope == IdScope::Any { text.clone() } else { self.engine_line(&line) };
             let executed = self.world.execute(&line);
-            self.script.push(EngineLine { line: text.clone(), executed: executed.is_ok() });
+            self.script.push(EngineLine { line: engine, executed: executed.is_ok() });
             executed.map(|()| text)
         });
         let now = self.observe_and_perceive();
