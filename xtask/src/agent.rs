@@ -41,8 +41,11 @@ pub struct AgentArgs {
     planner: String,
     #[command(flatten)]
     episode: EpisodeArgs,
-    /// Write every command sent to the environment, one a line (an ALFWorld episode replays in
-    /// the real engine with `../shared/anchors/alfworld_replay.py GAME FILE`).
+    /// Write every command the engine was given, one a line, as the engine takes it (the
+    /// episode's engine script: ALFWorld's commands as sent, VirtualHome's script lines with the
+    /// scene's ids): an ALFWorld episode replays in the real engine with
+    /// `../shared/anchors/alfworld_replay.py GAME FILE`, a VirtualHome one with `cargo xtask env
+    /// --commands FILE`.
     #[arg(long)]
     commands_out: Option<PathBuf>,
     /// Write the whole episode record as JSON (Phase I decisions, ŝ0, β, the plan, each step).
@@ -485,7 +488,7 @@ pub fn run(args: AgentArgs) -> anyhow::Result<ExitCode> {
         (episode(&mut env, &mut adapter, policy.as_mut(), &goal, config, &mut phase2)?, format!("{benchmark}/{task}"))
     };
     if let Some(path) = &args.commands_out {
-        let text: String = ep.steps.iter().map(|s| format!("{}\n", s.command)).collect();
+        let text: String = ep.engine_script.iter().map(|line| format!("{}\n", line.line)).collect();
         crate::input::write_output(path, "--commands-out", text)?;
     }
     // Who planned: a chat planner in place of the decoder, or `--planner` (with `--lm`).

@@ -99,7 +99,8 @@ pub fn run(args: &VirtualhomeEnvArgs) -> anyhow::Result<ExitCode> {
             if reference.is_empty() {
                 eprintln!("{}: no reference program in the task file; give --commands FILE or --random N to play", args.task);
             }
-            Some(reference)
+            // The program names the scene's ids; an agent's environment shows ids of its own.
+            Some(if args.as_agent { reference.iter().map(|line| env.with_shown_ids(line)).collect() } else { reference })
         }
         None => None,
     };

@@ -567,6 +567,14 @@ fn env_virtualhome_prints_json_lines_and_the_verdict() {
     assert_eq!(output.status.code(), Some(0), "{}", String::from_utf8_lossy(&output.stderr));
     let last: serde_json::Value = serde_json::from_str(stdout(&output).lines().last().expect("verdict")).expect("JSON");
     assert!(last["goal_reached"] == true && last["steps"].as_u64().is_some_and(|s| s > 0), "{last}");
+    // In an agent's environment the program is given the ids that environment shows: its first
+    // lines (the filing cabinet in view, the steak on it) execute; its walk to the freezer in
+    // another room is refused, as nothing has shown the freezer yet.
+    let output = xtask(&["env", "--benchmark", "virtualhome-rearrange", "--task", "fridge-007", "--json", "--as-agent"]);
+    assert_eq!(output.status.code(), Some(1), "{}", String::from_utf8_lossy(&output.stderr));
+    let steps: Vec<serde_json::Value> = stdout(&output).lines().skip(1).map(|l| serde_json::from_str(l).expect("JSON")).collect();
+    assert_eq!((steps[0]["executed"].as_bool(), steps[1]["executed"].as_bool()), (Some(true), Some(true)), "{steps:?}");
+    assert!(steps[2]["message"].as_str().is_some_and(|m| m.starts_with("no freezer (") && m.ends_with(") has been seen")), "{steps:?}");
     let output = xtask(&["env", "--benchmark", "virtualhome-eai", "--task", "201_1", "--json"]);
     assert_eq!((output.status.code(), stdout(&output).lines().count()), (Some(1), 2), "the reset and the verdict");
     assert!(String::from_utf8_lossy(&output.stderr).contains("no reference program"));

@@ -186,9 +186,10 @@ pub struct Episode {
     pub no_plan: bool,
     /// The plan went on with a step that could not be grounded ([`PhaseTwo::invalid_step`]).
     pub plan_invalid: bool,
-    /// The step budget ended the episode: Phase I spent it before a plan could take a step, or
-    /// a plan still had steps to send when it ran out. Not set when the agent ended on its own
-    /// (a plan sent to its end, even on the budget's last step).
+    /// The step budget ended the episode: Phase I spent it before a plan could take a step (or
+    /// before it could hand over), or a plan still had steps to send when it ran out, one that
+    /// could not be grounded included. Not set when the agent ended on its own (a plan sent to
+    /// its end, even on the budget's last step).
     pub budget_spent: bool,
     /// The failure class (module documentation); `None` on success.
     pub attribution: Option<Attribution>,
@@ -310,6 +311,8 @@ pub fn run_episode<E: Environment + Judge>(
             Err(e) => {
                 episode.failure = Some(e);
                 no_handover = true;
+                // Phase I ran out of steps before it could hand over.
+                episode.budget_spent = exploration.stop == "budget";
                 break;
             }
         };
@@ -422,6 +425,10 @@ pub fn run_episode<E: Environment + Judge>(
             }
         }
         episode.plan_invalid = false;
+        if phase2.invalid_step.is_some() && !cut && !env.done() && episode.steps.len() >= config.budget {
+            // The plan had a step left (one that could not be grounded) when the budget ran out.
+            episode.budget_spent = true;
+        }
         if let Some(step) = phase2.invalid_step.as_ref().filter(|_| !cut && episode.steps.len() < config.budget && !env.done()) {
             if !not_executed {
                 episode.failure = Some(format!("plan step {} cannot be grounded: {step}", episode.plan.len() + 1));

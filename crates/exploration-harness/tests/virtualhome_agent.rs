@@ -570,3 +570,19 @@ fn every_virtualhome_percept_holds_in_the_hidden_state() {
     }
     assert!(checked > 100_000, "{checked}");
 }
+
+/// `Episode::budget_spent` (Table 11's interaction limit): EAI 201_1 with one step, where the
+/// dishwasher is in another room than the one the character starts in: Phase I spends the step
+/// and cannot hand over a state with the dishwasher in it, so the budget ended the episode.
+/// With the paper's 20 steps the agent wins, and the flag stays down.
+#[test]
+fn the_budget_ends_an_episode_only_where_it_cuts_it_short() {
+    let path = fixtures().join("virtualhome-eai/graphs/201_1.json.gz");
+    let task = VirtualhomeTask::load(&path).unwrap();
+    let short = play_task_with(task.clone(), &path, "virtualhome-eai", &ontology(), EpisodeConfig::open_loop(1));
+    assert!(!short.success);
+    assert_eq!((short.phase1_stop.as_str(), short.steps.len()), ("budget", 1), "{:?}", short.failure);
+    assert!(short.budget_spent, "{:?}", short.failure);
+    let whole = play_task(task, &path, "virtualhome-eai", &ontology());
+    assert!(whole.success && !whole.budget_spent, "{:?}", whole.failure);
+}

@@ -200,6 +200,17 @@ pub struct ScriptLine {
     pub objects: Vec<(String, u32)>,
 }
 
+/// `[ACTION] <name> (id) ...`, as EAI's executor reads a line.
+impl std::fmt::Display for ScriptLine {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "[{}]", self.action.name())?;
+        for (name, id) in &self.objects {
+            write!(f, " <{name}> ({id})")?;
+        }
+        Ok(())
+    }
+}
+
 impl ScriptLine {
     /// An object's name as a script line reads it: lower-cased, spaces as `_` (as the executor).
     pub(crate) fn object_name(name: &str) -> String {
@@ -237,6 +248,12 @@ impl ScriptLine {
         let line = ScriptLine { action, objects };
         line.check_arity()?;
         Ok(line)
+    }
+
+    /// This line with each id replaced by `map(id)` (an id `map` does not know stays).
+    pub fn map_ids(&self, map: impl Fn(u32) -> Option<u32>) -> ScriptLine {
+        let objects = self.objects.iter().map(|(name, id)| (name.clone(), map(*id).unwrap_or(*id))).collect();
+        ScriptLine { action: self.action, objects }
     }
 
     /// The executor's message when the number of objects is not the action's arity.

@@ -474,12 +474,14 @@ impl VirtualhomeEnv {
     /// `line` as EAI's executor takes it: the scene's ids (module documentation, **Ids**).
     fn engine_line(&self, line: &ScriptLine) -> String {
         let g = &self.world.graph;
-        let mut text = format!("[{}]", line.action.name());
-        for (name, id) in &line.objects {
-            let id = g.index_of(*id).map_or(*id, |ix| self.scene_ids[ix as usize]);
-            let _ = write!(text, " <{name}> ({id})");
-        }
-        text
+        line.map_ids(|id| g.index_of(id).map(|ix| self.scene_ids[ix as usize])).to_string()
+    }
+
+    /// `line` (a script line naming the scene's ids, as EAI's programs do) with the ids an agent
+    /// is shown ([`Self::shown_id`]), for tools that play a program in an agent's environment;
+    /// a line that does not parse is returned as it is, for the environment to refuse.
+    pub fn with_shown_ids(&self, line: &str) -> String {
+        ScriptLine::parse(line).map_or_else(|_| line.to_string(), |parsed| parsed.map_ids(|id| self.shown_id(id)).to_string())
     }
 
     /// This environment with `scope` for the ids of instance-level lines: [`IdScope::Any`]
@@ -646,11 +648,9 @@ impl VirtualhomeEnv {
                 .ok_or_else(|| format!("{class_name} could not be grounded from this pose"))?;
             objects.push((class_name.clone(), self.world.graph.node(ix).id));
         }
-        let mut text = format!("[{}]", action.name());
-        for (name, id) in &objects {
-            let _ = write!(text, " <{name}> ({id})");
-        }
-        Ok((ScriptLine { action, objects }, text))
+        let line = ScriptLine { action, objects };
+        let text = line.to_string();
+        Ok((line, text))
     }
 
     fn goal_holds(&self, goal: &VhGoal) -> bool {
