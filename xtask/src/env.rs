@@ -35,7 +35,8 @@ pub struct EnvArgs {
     /// permutation of the task's, not EAI's), an instance-level line (`[WALK] <plate> (12)`)
     /// taken only for a node an observation has shown since the reset; without it, the scene's
     /// ids and any node, as EAI's executor takes them (gold programs walk to objects in other
-    /// rooms by id).
+    /// rooms by id). A `--commands` file is taken as written; the task's reference program is
+    /// given the agent's ids.
     #[arg(long, conflicts_with = "game")]
     as_agent: bool,
 }

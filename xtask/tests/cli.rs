@@ -539,7 +539,8 @@ fn env_virtualhome_prints_json_lines_and_the_verdict() {
     let observation = reset["observation"].as_str().expect("the observation");
     let room = observation.split("dining_room (").nth(1).and_then(|rest| rest.split(')').next()).expect("the dining room is listed");
     assert_ne!(room, "201", "{observation}");
-    let walk = scratch(&tmp, "vh-201_1-agent.txt", &format!("[WALK] <dining_room> ({room})\n"));
+    // Every room is listed, so only the id can refuse the scene's: the dining room is 201 there.
+    let walk = scratch(&tmp, "vh-201_1-agent.txt", &format!("[WALK] <dining_room> (201)\n[WALK] <dining_room> ({room})\n"));
     let output = xtask(&[
         "env",
         "--benchmark",
@@ -551,8 +552,9 @@ fn env_virtualhome_prints_json_lines_and_the_verdict() {
         "--commands",
         &walk.display().to_string(),
     ]);
-    let step: serde_json::Value = serde_json::from_str(stdout(&output).lines().nth(1).expect("step 1")).expect("JSON");
-    assert_eq!(step["executed"], true, "{step}");
+    let steps: Vec<serde_json::Value> = stdout(&output).lines().skip(1).take(2).map(|l| serde_json::from_str(l).expect("JSON")).collect();
+    assert_eq!(steps[0]["message"], "no dining_room (201) has been seen", "{steps:?}");
+    assert_eq!((steps[0]["executed"].as_bool(), steps[1]["executed"].as_bool()), (Some(false), Some(true)), "{steps:?}");
     let game = fixtures().join("alfworld/valid_seen/look_at_obj_in_light-AlarmClock-None-DeskLamp-323");
     let output = xtask(&["env", "--game", &game.display().to_string(), "--as-agent"]);
     assert_eq!(output.status.code(), Some(2), "--as-agent is VirtualHome's");

@@ -23,7 +23,8 @@ pub enum Terminal {
     /// A request the environment refused ended the episode (or, for the agent, the open-loop
     /// plan with a refused step ran to its end short of the goal).
     Grounding,
-    /// The step budget ran out.
+    /// The step budget ran out (for the agent, only where it cut the episode short:
+    /// `exploration_harness::Episode::budget_spent`).
     InteractionLimit,
     /// The model said it was done short of the goal (for the agent: Phase I's `done` with
     /// nothing planned, or a plan that ran to its end, every step executed, without the goal).
@@ -50,13 +51,21 @@ pub struct FailureResponse {
 /// episode that ended in `success`.
 pub fn failure_response(requests: &[(&str, bool)], success: bool) -> FailureResponse {
     let first_failure = requests.iter().position(|(_, ok)| !ok);
-    let repeats = requests.windows(2).any(|w| !w[0].1 && !w[0].0.is_empty() && w[0].0 == w[1].0);
     FailureResponse {
         encounters_failure: first_failure.is_some(),
         recovers: first_failure.is_some() && success,
-        repeats_failed_request: repeats,
+        repeats_failed_request: failed_transitions(requests).1 > 0,
         persistent_loop: persistent_loop(requests.iter().map(|(c, _)| *c).collect::<Vec<_>>().as_slice()),
     }
+}
+
+/// Failed requests followed by another request, and how many of those the same request
+/// followed (Table 12's "repeats request" is the second over the first). An empty command (a
+/// reply that named no action, recorded as a failed turn) is no request: it neither counts as
+/// a failed request nor as the request that follows one.
+pub fn failed_transitions(requests: &[(&str, bool)]) -> (usize, usize) {
+    let failed: Vec<&[(&str, bool)]> = requests.windows(2).filter(|w| !w[0].1 && !w[0].0.is_empty() && !w[1].0.is_empty()).collect();
+    (failed.len(), failed.iter().filter(|w| w[0].0 == w[1].0).count())
 }
 
 /// At least five identical consecutive requests, or six consecutive requests alternating

@@ -1,6 +1,6 @@
 //! The terminal mechanism and failure response (Tables 11-12) on hand-made request lists.
 
-use eval_harness::behaviour::{FailureResponse, Terminal, agent_terminal, failure_response, persistent_loop, terminal};
+use eval_harness::behaviour::{FailureResponse, Terminal, agent_terminal, failed_transitions, failure_response, persistent_loop, terminal};
 
 #[test]
 fn failure_responses() {
@@ -48,4 +48,16 @@ fn terminal_mechanisms() {
     assert_eq!(agent_terminal(false, false, true, true), Terminal::Grounding);
     assert_eq!(agent_terminal(false, false, false, true), Terminal::InteractionLimit);
     assert_eq!(agent_terminal(false, false, false, false), Terminal::ModelDone);
+}
+
+/// Table 12's "repeats request" counts over failed requests followed by a request: a turn that
+/// named no action (an empty command) is no request, neither the failed one nor the next.
+#[test]
+fn turns_that_name_no_action_are_no_requests() {
+    assert_eq!(failed_transitions(&[("", false), ("", false), ("open fridge", false), ("open fridge", true)]), (1, 1));
+    assert_eq!(failed_transitions(&[("open fridge", false), ("", false), ("open fridge", true)]), (0, 0));
+    assert_eq!(failed_transitions(&[("open fridge", false), ("go to fridge 1", true), ("open fridge 1", false)]), (1, 0));
+    // The episode's flag is the count's.
+    assert!(failure_response(&[("", false), ("open fridge", false), ("open fridge", true)], true).repeats_failed_request);
+    assert!(!failure_response(&[("open fridge", false), ("", false), ("open fridge", true)], true).repeats_failed_request);
 }

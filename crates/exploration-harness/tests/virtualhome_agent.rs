@@ -11,7 +11,7 @@ mod common;
 
 use common::{Restless, assert_ends_where_the_engine_does, assert_no_target_repeats};
 use exploration_harness::{Attribution, Episode, EpisodeConfig, Grounded, Ontology, PhaseTwo, Systematic, parse_goal, run_episode};
-use household_sim::{Environment, IdScope, VirtualhomeEnv, VirtualhomeTask};
+use household_sim::{Environment, IdScope, ScriptLine, VirtualhomeEnv, VirtualhomeTask};
 
 /// A* expansions per plan: a bound that holds on any machine under any load (not a time limit).
 const EXPANSIONS: u64 = 300_000;
@@ -50,25 +50,12 @@ fn shown(task: &VirtualhomeTask, class: &str, scene_id: u32) -> String {
     format!("{class} ({id})")
 }
 
-/// `line` with every `(id)` the agent sent turned into the scene's id, as the engine is given it.
+/// `line`, a script line the agent sent, with the scene's ids, as the engine is given it.
 fn with_scene_ids(task: &VirtualhomeTask, line: &str) -> String {
     let env = VirtualhomeEnv::new(task.clone(), "virtualhome-eai");
     let g = &task.init.graph;
     let scene: BTreeMap<u32, u32> = g.indices().map(|ix| (env.shown_id(g.node(ix).id).unwrap(), g.node(ix).id)).collect();
-    let mut out = String::new();
-    let mut rest = line;
-    while let Some(open) = rest.find(" (") {
-        let (head, tail) = rest.split_at(open + 2);
-        out.push_str(head);
-        let close = tail.find(')').unwrap_or(tail.len());
-        match tail[..close].parse::<u32>() {
-            Ok(id) => out.push_str(&scene.get(&id).copied().unwrap_or(id).to_string()),
-            Err(_) => out.push_str(&tail[..close]),
-        }
-        rest = &tail[close..];
-    }
-    out.push_str(rest);
-    out
+    ScriptLine::parse(line).expect("a script line").map_ids(|id| scene.get(&id).copied()).to_string()
 }
 
 fn play_task(task: VirtualhomeTask, path: &Path, benchmark: &str, ontology: &Ontology) -> Episode {
@@ -585,4 +572,16 @@ fn the_budget_ends_an_episode_only_where_it_cuts_it_short() {
     assert!(short.budget_spent, "{:?}", short.failure);
     let whole = play_task(task, &path, "virtualhome-eai", &ontology());
     assert!(whole.success && !whole.budget_spent, "{:?}", whole.failure);
+    // EAI 1004_2 ("put groceries in the fridge"): the agent puts a food in the freezer, not the
+    // one the judge checks, and loses on `goal`. Given exactly the steps it took, its plan is
+    // sent whole on the last one: the agent ended the episode, not the budget.
+    let path = fixtures().join("virtualhome-eai/graphs/1004_2.json.gz");
+    let task = VirtualhomeTask::load(&path).unwrap();
+    let lost = play_task(task.clone(), &path, "virtualhome-eai", &ontology());
+    assert!(!lost.success && !lost.plan.is_empty() && !lost.budget_spent, "{:?} {:?}", lost.failure, lost.plan);
+    let budget = lost.steps.len();
+    let exact = play_task_with(task, &path, "virtualhome-eai", &ontology(), EpisodeConfig::open_loop(budget));
+    assert_eq!((exact.success, exact.steps.len(), &exact.plan), (false, budget, &lost.plan), "{:?}", exact.failure);
+    assert_eq!(exact.attribution, Some(Attribution::Goal));
+    assert!(!exact.budget_spent, "{:?}", exact.failure);
 }

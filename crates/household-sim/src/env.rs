@@ -152,7 +152,8 @@ pub trait Judge {
     /// (TextWorld answers one it cannot execute itself, "Nothing happens."); VirtualHome the
     /// script line of every command that named an action and objects it could ground (EAI's
     /// adapter turns a class-level command into an instance-level line; a command with no
-    /// line never reaches the executor), executed or refused by its preconditions. Evaluation
+    /// line never reaches the executor), executed or refused by its preconditions, with EAI's
+    /// node ids where the agent was shown the environment's own. Evaluation
     /// only: a grounded line names the instance the environment picked, which the agent may
     /// not have perceived.
     fn engine_script(&self) -> Vec<EngineLine>;

@@ -14,9 +14,11 @@
 //! - the public fields of [`VirtualhomeTask`]: the scene graph and the goal's node ids;
 //! - [`VirtualhomeEnv::with_id_scope`]`(`[`IdScope::Any`]`)`: instance-level script lines
 //!   (`[WALK] <fridge> (289)`) executed for any node id, seen or not, for replays and parity
-//!   with EAI's executor. By default ([`IdScope::Perceived`]) a line may name only a node an
-//!   observation has shown since the reset, so an agent cannot probe ids through
-//!   [`Environment::step`].
+//!   with EAI's executor, the scene's ids throughout. By default ([`IdScope::Perceived`]) the
+//!   environment names nodes by ids of its own, not EAI's, which tell how a task was built
+//!   ([`VirtualhomeEnv`], **Ids**; [`Judge::engine_script`] gives EAI's back), and a line may
+//!   name only a node an observation has shown since the reset, so an agent cannot probe ids
+//!   through [`Environment::step`].
 //!
 //! `exploration-harness` keeps the rule on its side too: its Phase I policies choose among the
 //! skills the controller offers, and its direct policy refuses an instance-level line before it

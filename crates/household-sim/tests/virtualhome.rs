@@ -339,6 +339,39 @@ fn an_agent_is_shown_ids_of_the_environment_not_the_scenes() {
     named.extend(e.hidden_atoms().iter().flat_map(|a| a.args.iter().flat_map(|arg| id_in(arg))));
     named.extend(e.unmet_goals().iter().flat_map(|g| id_in(g)));
     assert!(named.len() > 100 && named.iter().all(|&id| (1..=n as u32).contains(&id)), "{named:?}");
+    // What the agent is shown is what the scene's ids show, each id the permutation's: the
+    // replay environment's observation with its ids mapped has the same lines (in another order,
+    // the order of the ids; the rooms' line too).
+    let mut scene_view = VirtualhomeEnv::new(task.clone(), "virtualhome-eai").with_id_scope(IdScope::Any);
+    let mapped: String = {
+        let text = scene_view.reset().text;
+        let mut out = String::new();
+        let mut rest = text.as_str();
+        while let Some(open) = rest.find(" (") {
+            out.push_str(&rest[..open + 2]);
+            rest = &rest[open + 2..];
+            let close = rest.find(')').expect("a closing parenthesis");
+            out.push_str(&e.shown_id(rest[..close].parse().expect("an id")).expect("a node").to_string());
+            rest = &rest[close..];
+        }
+        out + rest
+    };
+    let lines = |text: &str| -> Vec<String> {
+        let mut lines: Vec<String> = text
+            .lines()
+            .map(|line| match line.strip_prefix("Rooms: ") {
+                Some(rooms) => {
+                    let mut rooms: Vec<&str> = rooms.trim_end_matches('.').split(", ").collect();
+                    rooms.sort_unstable();
+                    format!("Rooms: {}.", rooms.join(", "))
+                }
+                None => line.to_string(),
+            })
+            .collect();
+        lines.sort_unstable();
+        lines
+    };
+    assert_eq!(lines(&mapped), lines(&observation));
     assert!(e.unmet_goals().iter().any(|g| g.contains(&format!("dishwasher ({dishwasher})"))), "{:?}", e.unmet_goals());
     // To the dining room, where the dishwasher is, by the agent's ids; the engine gets the scene's.
     let dining_room = e.shown_id(201).unwrap();

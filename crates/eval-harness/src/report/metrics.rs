@@ -74,27 +74,3 @@ pub(crate) fn requests(record: &Record) -> Option<Vec<(&str, bool)>> {
     let steps = at(record, "episode.steps")?.as_array()?;
     steps.iter().map(|s| Some((s.get("command")?.as_str()?, s.get("executed")?.as_bool()?))).collect()
 }
-
-/// Failed requests followed by another request, and how many of those the same request
-/// followed (Table 12's "repeats request" is the second over the first). An empty command (a
-/// reply that named no action, recorded as a failed turn) is no request: it neither counts as
-/// a failed request nor as the request that follows one.
-pub(crate) fn failed_transitions(requests: &[(&str, bool)]) -> (usize, usize) {
-    let failed: Vec<&[(&str, bool)]> = requests.windows(2).filter(|w| !w[0].1 && !w[0].0.is_empty() && !w[1].0.is_empty()).collect();
-    (failed.len(), failed.iter().filter(|w| w[0].0 == w[1].0).count())
-}
-
-#[cfg(test)]
-mod tests {
-    use super::failed_transitions;
-
-    #[test]
-    fn turns_that_name_no_action_are_no_requests() {
-        // Two empty turns, then a failed request sent again: one failed request followed by a
-        // request, repeated.
-        assert_eq!(failed_transitions(&[("", false), ("", false), ("open fridge", false), ("open fridge", true)]), (1, 1));
-        // A failed request followed by an empty turn is followed by no request.
-        assert_eq!(failed_transitions(&[("open fridge", false), ("", false), ("open fridge", true)]), (0, 0));
-        assert_eq!(failed_transitions(&[("open fridge", false), ("go to fridge 1", true), ("open fridge 1", false)]), (1, 0));
-    }
-}

@@ -409,7 +409,8 @@ fn family(a: &Condition, b: &Condition) -> Family {
 
 /// The run pairs a McNemar test of two conditions compares (Appendix B): a condition with one
 /// run (a deterministic one) against each run of the other; two conditions with several runs
-/// seed with seed, where they share seeds (else every run with every run).
+/// seed with seed, where they share seeds (a run whose seed the other lacks is in no pair),
+/// else every run with every run.
 fn run_pairs<'r, 'a>(first: &'r [Run<'a>], second: &'r [Run<'a>]) -> Vec<(&'r Run<'a>, &'r Run<'a>)> {
     let every = || first.iter().flat_map(|a| second.iter().map(move |b| (a, b)));
     if first.len() > 1 && second.len() > 1 {
@@ -680,7 +681,7 @@ fn failure_response_table(study: &Study<'_>) -> Result<Table, ReportError> {
                 Some(requests) => {
                     let mut followed = Vec::new();
                     for request in &requests {
-                        let (failed, repeated) = metrics::failed_transitions(request);
+                        let (failed, repeated) = crate::behaviour::failed_transitions(request);
                         followed.extend(std::iter::repeat_n(1.0, repeated));
                         followed.extend(std::iter::repeat_n(0.0, failed - repeated));
                     }

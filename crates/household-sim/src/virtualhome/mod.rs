@@ -5,18 +5,8 @@
 //! Commands are either instance-level script lines (`[WALK] <plate> (1001)`: by default only
 //! for nodes an observation has shown, every node for replay and parity, see [`IdScope`]) or
 //! class-level verbs (`grab plate`, `putin plate dishwasher`) that the adapter binds to
-//! instances by [`bind`]'s rule.
-//!
-//! **Ids.** An agent's environment ([`IdScope::Perceived`]) names nodes by ids of its own, not
-//! by the scene's: EAI's ids say how a task was built (the scene's nodes are below 1000, the
-//! objects a task adds from 1000, its distractors from 2000), so `plate (1001)` beside
-//! `plate (301)` would tell the agent which plate the goal is about, which no picture shows.
-//! The shown ids are a permutation of 1..=n over the task's n nodes, drawn from the task id
-//! ([`shown_ids`]): the same for every episode of a task, independent of the scene's ids. They
-//! are in everything the environment says (observations, the executor's messages, the judge's
-//! atoms and unmet goals) and in the lines an agent sends; [`Judge::engine_script`] writes the
-//! scene's ids back, so a replay in EAI's executor runs the same lines. [`IdScope::Any`] (replay,
-//! parity) uses the scene's ids throughout.
+//! instances by [`bind`]'s rule. An agent is shown ids of the environment's own, not EAI's
+//! ([`VirtualhomeEnv`], **Ids**).
 
 mod exec;
 mod graph;
@@ -376,7 +366,8 @@ pub fn bind(world: &World, action: Action, position: usize, class_name: &str) ->
 pub enum IdScope {
     /// Only ids the environment has shown since the reset, each with the class it was shown
     /// with (an observation lists `fridge (17)`), never the character: what an agent may
-    /// name. The ids are the environment's own, not the scene's (module documentation, **Ids**). Until an observation (a reset's or a step's) has shown a node, it is not
+    /// name. The ids are the environment's own, not the scene's ([`VirtualhomeEnv`], **Ids**).
+    /// Until an observation (a reset's or a step's) has shown a node, it is not
     /// nameable. Any other line is refused, as not executed, before it is grounded, so it
     /// changes nothing and is not in [`Judge::engine_script`]. Class-level commands (`walk
     /// fridge`) bind to visible instances either way. The default.
@@ -387,7 +378,7 @@ pub enum IdScope {
     Any,
 }
 
-/// The ids an agent's environment shows for a task of `count` nodes (module documentation,
+/// The ids an agent's environment shows for a task of `count` nodes ([`VirtualhomeEnv`],
 /// **Ids**): node index `ix` is shown as `ids[ix]`, a permutation of 1..=`count` drawn by a
 /// Fisher-Yates shuffle from a generator seeded with the FNV-1a hash of `task_id`.
 pub fn shown_ids(task_id: &str, count: usize) -> Vec<u32> {
@@ -401,11 +392,22 @@ pub fn shown_ids(task_id: &str, count: usize) -> Vec<u32> {
 }
 
 /// A VirtualHome task as an [`Environment`] (and a [`Judge`]).
+///
+/// **Ids.** An agent's environment ([`IdScope::Perceived`]) names nodes by ids of its own, not
+/// by the scene's: EAI's ids say how a task was built (the scene's nodes are below 1000, the
+/// objects a task adds from 1000, its distractors from 2000), so `plate (1001)` beside
+/// `plate (301)` would tell the agent which plate the goal is about, which no picture shows.
+/// The shown ids are a permutation of 1..=n over the task's n nodes, drawn from the task id
+/// ([`shown_ids`]): the same for every episode of a task, independent of the scene's ids. They
+/// are in everything the environment says (observations, the executor's messages, the judge's
+/// atoms and unmet goals) and in the lines an agent sends; [`Judge::engine_script`] writes the
+/// scene's ids back, so a replay in EAI's executor runs the same lines. [`IdScope::Any`] (replay,
+/// parity) uses the scene's ids throughout.
 #[derive(Debug, Clone)]
 pub struct VirtualhomeEnv {
     task: VirtualhomeTask,
-    /// By node index: the scene's ids (EAI's) and the ids an agent is shown (module
-    /// documentation, **Ids**); the graphs and goals carry the scope's.
+    /// By node index: the scene's ids (EAI's) and the ids an agent is shown ([`VirtualhomeEnv`],
+    /// **Ids**); the graphs and goals carry the scope's.
     scene_ids: Vec<u32>,
     agent_ids: Vec<u32>,
     world: World,
@@ -425,8 +427,9 @@ impl VirtualhomeEnv {
     /// The environment of `task`, announced as `benchmark`'s ([`GoalAnnotation::benchmark`]):
     /// `virtualhome-eai` or `virtualhome-rearrange`, the names the agent's goal parser and the
     /// direct policy's action list read (`exploration_harness::parse_goal` refuses a name
-    /// that does not start with `virtualhome`). Instance-level lines may name only what it
-    /// has shown ([`IdScope::Perceived`]); replays widen that with [`Self::with_id_scope`].
+    /// that does not start with `virtualhome`). It shows the agent's ids (**Ids** above), and
+    /// instance-level lines may name only what it has shown ([`IdScope::Perceived`]); replays
+    /// widen that, with the scene's ids, by [`Self::with_id_scope`].
     pub fn new(task: VirtualhomeTask, benchmark: &str) -> VirtualhomeEnv {
         let annotation = GoalAnnotation {
             benchmark: benchmark.to_string(),
@@ -471,7 +474,7 @@ impl VirtualhomeEnv {
         self.scope = scope;
     }
 
-    /// `line` as EAI's executor takes it: the scene's ids (module documentation, **Ids**).
+    /// `line` as EAI's executor takes it: the scene's ids ([`VirtualhomeEnv`], **Ids**).
     fn engine_line(&self, line: &ScriptLine) -> String {
         let g = &self.world.graph;
         line.map_ids(|id| g.index_of(id).map(|ix| self.scene_ids[ix as usize])).to_string()
@@ -480,13 +483,16 @@ impl VirtualhomeEnv {
     /// `line` (a script line naming the scene's ids, as EAI's programs do) with the ids an agent
     /// is shown ([`Self::shown_id`]), for tools that play a program in an agent's environment;
     /// a line that does not parse is returned as it is, for the environment to refuse.
+    /// An id the scene lacks becomes 0, which no node is shown as.
     pub fn with_shown_ids(&self, line: &str) -> String {
-        ScriptLine::parse(line).map_or_else(|_| line.to_string(), |parsed| parsed.map_ids(|id| self.shown_id(id)).to_string())
+        ScriptLine::parse(line).map_or_else(|_| line.to_string(), |parsed| parsed.map_ids(|id| self.shown_id(id).or(Some(0))).to_string())
     }
 
     /// This environment with `scope` for the ids of instance-level lines: [`IdScope::Any`]
     /// to replay a program that names nodes the environment has not shown (EAI's gold
-    /// programs walk to objects in other rooms by id).
+    /// programs walk to objects in other rooms by id). The scope also sets which ids the
+    /// environment names nodes by, in what it says and what it takes: the scene's under
+    /// [`IdScope::Any`], the agent's under [`IdScope::Perceived`].
     #[must_use]
     pub fn with_id_scope(mut self, scope: IdScope) -> VirtualhomeEnv {
         self.set_scope(scope);
@@ -508,7 +514,7 @@ impl VirtualhomeEnv {
         }
     }
 
-    /// The id an agent is shown for the scene's node `scene_id` (module documentation, **Ids**),
+    /// The id an agent is shown for the scene's node `scene_id` ([`VirtualhomeEnv`], **Ids**),
     /// whatever this environment's scope; `None` when the scene has no such node. For tools and
     /// tests: an agent is handed `&mut dyn Environment`, never this.
     pub fn shown_id(&self, scene_id: u32) -> Option<u32> {
@@ -536,16 +542,17 @@ impl VirtualhomeEnv {
 
     /// The observation text: the room, whether the character sits or lies (a line only when it
     /// does), what the character holds, and every visible node
-    /// with its states and its ON/INSIDE relations to visible nodes, one per line, by id:
+    /// with its states and its ON/INSIDE relations to visible nodes, one per line, by id (the
+    /// scope's: an agent's are the environment's own, **Ids** above):
     ///
     /// ```text
-    /// You are in the kitchen (11).
+    /// You are in the kitchen (41).
     /// You are sitting.
-    /// You hold: plate (1001) in the right hand.
-    /// Rooms: bathroom (1), kitchen (11).
+    /// You hold: plate (7) in the right hand.
+    /// Rooms: kitchen (41), bathroom (96).
     /// You see:
-    /// - dishwasher (1000): CLOSED, OFF; close to you
-    /// - plate (1001): on kitchencounter (123); close to you
+    /// - plate (7): on kitchencounter (23); close to you
+    /// - dishwasher (12): CLOSED, OFF; close to you
     /// ```
     pub fn observe(&self) -> String {
         self.render().0
@@ -703,7 +710,7 @@ impl Environment for VirtualhomeEnv {
     fn step(&mut self, command: &str) -> StepResult {
         self.steps += 1;
         let outcome = self.resolve(command).and_then(|(line, text)| {
-            let engine = if self.scope == IdScope::Any { text.clone() } else { self.engine_line(&line) };
+            let engine = self.engine_line(&line);
             let executed = self.world.execute(&line);
             self.script.push(EngineLine { line: engine, executed: executed.is_ok() });
             executed.map(|()| text)
