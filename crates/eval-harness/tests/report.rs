@@ -847,3 +847,24 @@ fn each_run_pair_is_tested_on_the_tasks_it_shares() {
     assert!(p < 0.05, "{p}");
     assert!(row.contains(&format!("| 12 (6/0) | {p:.3} | {p:.3} | ✓ |")), "{row}");
 }
+
+/// A run whose seed the other condition lacks is in a pair all the same, against each run of
+/// the other: sampling has seeds 0 and 42, constrained sampling 0 and 1738. Seed 0 with seed 0
+/// differs on all ten tasks (p = 0.002), but seed 42 and seed 1738 solve the same tasks (p = 1),
+/// and the largest p is kept.
+#[test]
+fn a_run_without_a_seed_to_match_is_paired_with_every_run() {
+    let (_tmp_dir, dir) = scratch("unmatched-seeds");
+    let all: &[usize] = &[0, 1, 2, 3, 4, 5, 6, 7, 8, 9];
+    let markdown = runs_of(
+        &dir,
+        &[
+            ("sample", Some(0), all, |_| true),
+            ("sample", Some(42), all, |_| true),
+            ("constrained-sample", Some(0), all, |_| false),
+            ("constrained-sample", Some(1738), all, |_| true),
+        ],
+    );
+    let row = comparison_row(&markdown, "## Paired significance: comparisons beyond the paper's families");
+    assert!(row.contains("| 10 (0/0) | 1.000 |"), "{row}");
+}

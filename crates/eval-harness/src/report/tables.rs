@@ -409,17 +409,15 @@ fn family(a: &Condition, b: &Condition) -> Family {
 
 /// The run pairs a McNemar test of two conditions compares (Appendix B): a condition with one
 /// run (a deterministic one) against each run of the other; two conditions with several runs
-/// seed with seed, where they share seeds (a run whose seed the other lacks is in no pair),
-/// else every run with every run.
+/// seed with seed, and a run whose seed the other condition lacks against each of its runs
+/// (with no seed in common, every run with every run), so that no run is left out.
 fn run_pairs<'r, 'a>(first: &'r [Run<'a>], second: &'r [Run<'a>]) -> Vec<(&'r Run<'a>, &'r Run<'a>)> {
-    let every = || first.iter().flat_map(|a| second.iter().map(move |b| (a, b)));
-    if first.len() > 1 && second.len() > 1 {
-        let matched: Vec<_> = every().filter(|(a, b)| a.seed == b.seed).collect();
-        if !matched.is_empty() {
-            return matched;
-        }
+    let every = first.iter().flat_map(|a| second.iter().map(move |b| (a, b)));
+    if first.len() == 1 || second.len() == 1 {
+        return every.collect();
     }
-    every().collect()
+    let unmatched = |run: &Run<'_>, others: &[Run<'_>]| !others.iter().any(|other| other.seed == run.seed);
+    every.filter(|(a, b)| a.seed == b.seed || unmatched(a, second) || unmatched(b, first)).collect()
 }
 
 /// The exact McNemar test of two conditions: each run pair ([`run_pairs`]) on the tasks both of
