@@ -483,7 +483,8 @@ fn mcnemar_tables(study: &Study<'_>, options: &ReportOptions) -> Result<Vec<Tabl
         format!(
             "Exact paired McNemar tests ({what}; m = {} tests), Holm correction within the family, significant at α = {}. \
              n = tasks both runs ran; b/c = tasks only the first / only the second solved. A condition with several runs \
-             is paired run by run (against one run, each run; against several, seed with seed) and the largest exact p \
+             is paired run by run (against one run, each run; against several, seed with seed, a run without a match with \
+             each) and the largest exact p \
              over the pairs is kept, with its pair's n and b/c.",
             tests.len(),
             options.alpha
