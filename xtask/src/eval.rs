@@ -2,11 +2,11 @@
 //! summary per benchmark; `cargo xtask merge` joins the records of `--shard` runs.
 //!
 //! Agents:
-//! - `expert` (the default): the benchmark's own expert plan (ALFWorld's walkthrough as
+//! - `expert`: the benchmark's own expert plan (ALFWorld's walkthrough as
 //!   TextWorld commands, EAI's gold PDDL plan) through the symbolic pipeline: parse, ground,
 //!   spell, validate. The oracle row of the paper's tables; it checks the symbolic core on
 //!   every task.
-//! - `ours`: the paper's agent in the environment (Phase I with `--explorer`, the hand-over,
+//! - `ours` (the default): the paper's agent in the environment (Phase I with `--explorer`, the hand-over,
 //!   Phase II with `--lm` and every decoding option, open-loop execution), judged by the
 //!   environment; records carry the episode, the terminal mechanism and the failure response.
 //! - `planner`: the same Phase I, then A* with LM-cut on the grounded problem (the symbolic
