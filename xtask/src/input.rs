@@ -238,9 +238,17 @@ pub fn at_least_one<T: std::str::FromStr + PartialOrd + From<u8>>(text: &str) ->
 }
 
 /// The progress bar of a long command: `prefix [====>   ] done/total (elapsed, eta …) message`,
-/// on standard error (hidden when it is not a terminal).
+/// on standard error. Where standard error is no terminal (a log file, CI), the same text is
+/// written as a plain line at most every [`PROGRESS_LINE_EVERY`] ([`ProgressLines`]), where
+/// indicatif would hide the bar and a run of hours under `nohup` would say nothing until its end.
 pub fn progress_bar(prefix: String, total: usize) -> indicatif::ProgressBar {
-    let bar = indicatif::ProgressBar::new(total as u64);
+    use std::io::IsTerminal;
+    let bar = if std::io::stderr().is_terminal() {
+        indicatif::ProgressBar::new(total as u64)
+    } else {
+        let target = indicatif::ProgressDrawTarget::term_like(Box::new(ProgressLines::new(PROGRESS_LINE_EVERY)));
+        indicatif::ProgressBar::with_draw_target(Some(total as u64), target)
+    };
     bar.set_style(
         indicatif::ProgressStyle::with_template("{prefix} [{bar:30}] {pos}/{len} ({elapsed}, eta {eta}) {wide_msg}")
             .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar())
@@ -248,4 +256,139 @@ pub fn progress_bar(prefix: String, total: usize) -> indicatif::ProgressBar {
     );
     bar.set_prefix(prefix);
     bar
+}
+
+/// How often a progress bar writes a line where standard error is no terminal.
+pub const PROGRESS_LINE_EVERY: std::time::Duration = std::time::Duration::from_secs(60);
+
+/// A progress bar's drawings as plain lines, for a standard error that is no terminal: indicatif
+/// draws through this (cursor moves and clears do nothing), and each drawing becomes one line on
+/// standard error when `every` has passed since the bar began or since the last line; so a
+/// command shorter than `every` writes nothing, as before, and a long one a line a minute at most.
+/// Written here because indicatif has no line mode (its hidden target draws nothing).
+pub struct ProgressLines {
+    every: std::time::Duration,
+    /// The drawing under way, and when the last line was written (at first: when the bar began).
+    state: std::sync::Mutex<(String, std::time::Instant)>,
+    /// Where the lines go (standard error; a buffer in tests).
+    sink: std::sync::Mutex<Box<dyn std::io::Write + Send>>,
+}
+
+impl ProgressLines {
+    /// Lines to standard error, at most one per `every`.
+    pub fn new(every: std::time::Duration) -> ProgressLines {
+        ProgressLines::to(every, Box::new(std::io::stderr()))
+    }
+
+    /// Lines to `sink`, at most one per `every`.
+    pub fn to(every: std::time::Duration, sink: Box<dyn std::io::Write + Send>) -> ProgressLines {
+        ProgressLines { every, state: std::sync::Mutex::new((String::new(), std::time::Instant::now())), sink: std::sync::Mutex::new(sink) }
+    }
+}
+
+impl std::fmt::Debug for ProgressLines {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("ProgressLines").field("every", &self.every).finish_non_exhaustive()
+    }
+}
+
+impl indicatif::TermLike for ProgressLines {
+    fn width(&self) -> u16 {
+        // Wide enough for the bar and the longest task id (ALFWorld's game and trial), as a log
+        // line need not fit a screen.
+        240
+    }
+    fn move_cursor_up(&self, _: usize) -> std::io::Result<()> {
+        Ok(())
+    }
+    fn move_cursor_down(&self, _: usize) -> std::io::Result<()> {
+        Ok(())
+    }
+    fn move_cursor_right(&self, _: usize) -> std::io::Result<()> {
+        Ok(())
+    }
+    fn move_cursor_left(&self, _: usize) -> std::io::Result<()> {
+        Ok(())
+    }
+    fn write_line(&self, text: &str) -> std::io::Result<()> {
+        self.write_str(text)
+    }
+    fn write_str(&self, text: &str) -> std::io::Result<()> {
+        let mut state = self.state.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
+        state.0.push_str(text.trim_start_matches('\r'));
+        Ok(())
+    }
+    fn clear_line(&self) -> std::io::Result<()> {
+        Ok(())
+    }
+    fn flush(&self) -> std::io::Result<()> {
+        use std::io::Write as _;
+        let mut state = self.state.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
+        let line = std::mem::take(&mut state.0);
+        let line = line.trim_end();
+        if line.is_empty() || state.1.elapsed() < self.every {
+            return Ok(());
+        }
+        state.1 = std::time::Instant::now();
+        let mut sink = self.sink.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
+        writeln!(sink, "{line}")?;
+        sink.flush()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use std::sync::{Arc, Mutex};
+    use std::time::Duration;
+
+    use super::ProgressLines;
+
+    /// A sink the test reads back.
+    #[derive(Clone, Default)]
+    struct Shared(Arc<Mutex<Vec<u8>>>);
+
+    impl std::io::Write for Shared {
+        fn write(&mut self, bytes: &[u8]) -> std::io::Result<usize> {
+            self.0.lock().unwrap().extend_from_slice(bytes);
+            Ok(bytes.len())
+        }
+        fn flush(&mut self) -> std::io::Result<()> {
+            Ok(())
+        }
+    }
+
+    fn bar_into(sink: &Shared, every: Duration) -> indicatif::ProgressBar {
+        let lines = ProgressLines::to(every, Box::new(sink.clone()));
+        let target = indicatif::ProgressDrawTarget::term_like(Box::new(lines));
+        let bar = indicatif::ProgressBar::with_draw_target(Some(3), target);
+        bar.set_style(indicatif::ProgressStyle::with_template("{prefix} {pos}/{len} {wide_msg}").unwrap());
+        bar.set_prefix("alfworld-seen ours");
+        bar
+    }
+
+    #[test]
+    fn a_bar_off_a_terminal_writes_whole_lines_once_its_interval_has_passed() {
+        let sink = Shared::default();
+        let bar = bar_into(&sink, Duration::ZERO);
+        bar.set_message("task-a");
+        bar.inc(1);
+        // indicatif draws at most at its refresh rate; `tick` forces a drawing.
+        bar.tick();
+        let text = String::from_utf8(sink.0.lock().unwrap().clone()).unwrap();
+        let last = text.lines().last().expect("a line");
+        assert_eq!(last, "alfworld-seen ours 1/3 task-a", "{text:?}");
+        assert!(text.ends_with('\n') && !text.contains('\r') && !text.contains('\x1b'), "{text:?}");
+    }
+
+    #[test]
+    fn a_command_shorter_than_the_interval_writes_nothing() {
+        let sink = Shared::default();
+        let bar = bar_into(&sink, Duration::from_secs(3600));
+        for _ in 0..3 {
+            bar.inc(1);
+            bar.tick();
+        }
+        bar.finish_and_clear();
+        assert!(sink.0.lock().unwrap().is_empty());
+    }
 }
