@@ -868,3 +868,49 @@ fn a_run_without_a_seed_to_match_is_paired_with_every_run() {
     let row = comparison_row(&markdown, "## Paired significance: comparisons beyond the paper's families");
     assert!(row.contains("| 10 (0/0) | 1.000 |"), "{row}");
 }
+
+/// Table 8 says whether its conditions planned from the same Phase I state, as the paper's
+/// Phase II comparisons do: three conditions of one model, the same hand-over on t00 and t01,
+/// another on t02 in one of them, and t03 run by two of the three only (not shared).
+#[test]
+fn table_8_says_whether_the_conditions_planned_from_the_same_hand_over() {
+    let (_tmp_dir, dir) = scratch("shared-handover");
+    let handover = |task: usize, mode: &str| {
+        let at = if task == 2 && mode == "constrained-greedy" { "(at mug_1 drawer_2)" } else { "(at mug_1 drawer_1)" };
+        serde_json::json!({"problem": format!("(define (problem t{task:02}) (:init {at}))"), "binding": {"mug_1": "mug 1"}})
+    };
+    for (mode, tasks) in [("constrained-mcts", 4), ("unconstrained-mcts", 4), ("constrained-greedy", 3)] {
+        let config = serde_json::json!({"agent": "ours", "benchmark": "alfworld-seen", "mode": mode, "lm": "uniform"});
+        let mut file = eval_harness::records::RecordFile::open(&dir, "alfworld-seen-ours", &config, None, false).expect("opens");
+        for task in 0..tasks {
+            let record = serde_json::json!({
+                "task": format!("t{task:02}"), "agent": "ours", "success": task == 0,
+                "episode": {"handover": handover(task, mode)},
+            });
+            file.append(task, &record).expect("appends");
+        }
+    }
+    let sets: Vec<_> = record_paths(std::slice::from_ref(&dir)).unwrap().iter().map(|p| load(p).unwrap()).collect();
+    let markdown = build(&sets, &ReportOptions::default()).unwrap().markdown;
+    let table_8 = section_of(&markdown, "## Phase II conditions by model");
+    let expected = "alfworld-seen, uniform prior: Phase I's hand-over (ŝ0 and β) is the same in all 3 runs on 2 of the 3 tasks they \
+                    share; on the other 1 (t02) the conditions planned from different states, so they differ in more than planning.";
+    assert!(table_8.contains(expected), "{table_8}");
+    // The same three with the one state mended: every shared task agrees.
+    let greedy = sets.iter().find(|s| s.config_str("mode") == Some("constrained-greedy")).unwrap();
+    let mut mended = greedy.clone();
+    for record in &mut mended.records {
+        let task: usize = record.fields["task"].as_str().unwrap()[1..].parse().unwrap();
+        record.fields["episode"]["handover"] = handover(task, "constrained-mcts");
+    }
+    let sets: Vec<_> = sets.iter().map(|s| if s.path == greedy.path { mended.clone() } else { s.clone() }).collect();
+    let markdown = build(&sets, &ReportOptions::default()).unwrap().markdown;
+    assert!(markdown.contains("is the same in all 3 runs on 3 of the 3 tasks they share."), "{markdown}");
+    // A record without its episode says nothing of its hand-over: left out, and said.
+    let mut cut = mended.clone();
+    cut.records[0].fields.remove("episode");
+    let sets: Vec<_> = sets.iter().map(|s| if s.path == greedy.path { cut.clone() } else { s.clone() }).collect();
+    let markdown = build(&sets, &ReportOptions::default()).unwrap().markdown;
+    let expected = "is the same in all 3 runs on 2 of the 2 tasks they share and whose records hold the episode (1 without it left out).";
+    assert!(markdown.contains(expected), "{markdown}");
+}

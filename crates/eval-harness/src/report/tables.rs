@@ -243,8 +243,52 @@ fn phase2_table(study: &Study<'_>, options: &ReportOptions) -> Result<Table, Rep
         for c in not_worse_than_the_best(study, b, &means, options)? {
             table.rows[row_of(c)][column].bold = true;
         }
+        let runs: Vec<&Run<'_>> = ours.iter().filter(|&&c| study.conditions[c].model == model).flat_map(|&c| study.runs(c, b)).collect();
+        table.notes.extend(shared_handover_note(&study.benchmarks[b], model, &runs));
     }
     Ok(table)
+}
+
+/// Whether the Phase II conditions of one model on one benchmark planned from the same Phase I
+/// state, as the paper's Phase II comparisons do ("they differ only in planning"): each
+/// condition runs Phase I again, greedily, so they should; a served model that answers
+/// otherwise, or records of another harness, would not. Compares every run's last hand-over
+/// (ŝ0 and β, the episode's `handover`; none where none was made) on the tasks all the runs
+/// share. `None` with fewer than two runs or no task to compare.
+fn shared_handover_note(benchmark: &str, model: &str, runs: &[&Run<'_>]) -> Option<String> {
+    if runs.len() < 2 {
+        return None;
+    }
+    // A record without its episode (a hand-written one, an older file) cannot be compared.
+    let handover = |record: &Record| record.fields.get("episode").map(|e| e.get("handover").cloned().unwrap_or(serde_json::Value::Null));
+    let by_task: Vec<BTreeMap<&str, Option<serde_json::Value>>> =
+        runs.iter().map(|run| run.records.iter().map(|(_, r)| (super::study::task(r), handover(r))).collect()).collect();
+    let shared: Vec<&str> = by_task[0].keys().copied().filter(|t| by_task[1..].iter().all(|m| m.contains_key(t))).collect();
+    let (compared, unknown): (Vec<&str>, Vec<&str>) = shared.iter().partition(|t| by_task.iter().all(|m| m[*t].is_some()));
+    if compared.is_empty() {
+        return None;
+    }
+    let differ: Vec<&str> = compared.iter().copied().filter(|t| by_task[1..].iter().any(|m| m[t] != by_task[0][t])).collect();
+    let mut note = format!(
+        "{benchmark}, {model}: Phase I's hand-over (ŝ0 and β) is the same in all {} runs on {} of the {} tasks they share",
+        runs.len(),
+        compared.len() - differ.len(),
+        compared.len()
+    );
+    if !unknown.is_empty() {
+        note.push_str(&format!(" and whose records hold the episode ({} without it left out)", unknown.len()));
+    }
+    if !differ.is_empty() {
+        let shown: Vec<&str> = differ.iter().copied().take(5).collect();
+        note.push_str(&format!(
+            "; on the other {} ({}{}) the conditions planned from different states, so they differ in more than planning",
+            differ.len(),
+            shown.join(", "),
+            if differ.len() > shown.len() { ", …" } else { "" }
+        ));
+    }
+    note.push('.');
+    Some(note)
 }
 
 /// The mean success rate over `runs` and its cell text, `mean ± sample sd` (± 0.0: one run).
