@@ -566,7 +566,10 @@ pub fn merge(shards: &[PathBuf], partial: bool) -> Result<Merged, RecordError> {
         })
         .collect::<Result<_, _>>()?;
     let base = named[0].0.as_str();
-    let mut all: Vec<(PathBuf, Map<String, Value>)> = Vec::new();
+    // Each record with its line as the shard holds it: the merged file is written from the lines,
+    // not from the parsed values, so it holds the bytes the run wrote (serde_json reads a float
+    // to the nearest double only within an ulp or so, and writing it again could change it).
+    let mut all: Vec<(PathBuf, Map<String, Value>, String)> = Vec::new();
     let mut config: Option<String> = None;
     // Each shard's file, locked (shared) until the merged file is written: a shard a run is
     // still writing would go on past the merge, and no run starts one while it is merged.
@@ -592,6 +595,7 @@ pub fn merge(shards: &[PathBuf], partial: bool) -> Result<Merged, RecordError> {
         if torn > 0 {
             return Err(RecordError::Merge(format!("{}: its last record is cut short; resume that shard first", path.display())));
         }
+        let lines: Vec<&str> = text.lines().collect();
         for (line, record) in parse_records(path, &text, None)? {
             // What a report reads of it, checked here: a merged file passes on no record the
             // report would refuse, and the error names the shard's line, not the merged file's.
@@ -618,7 +622,7 @@ pub fn merge(shards: &[PathBuf], partial: bool) -> Result<Merged, RecordError> {
                     shard.count
                 )));
             }
-            all.push((path.clone(), record));
+            all.push((path.clone(), record, lines[line - 1].trim().to_string()));
         }
     }
     let config = config.ok_or_else(|| RecordError::Merge("the shard files hold no records".into()))?;
@@ -659,7 +663,7 @@ pub fn merge(shards: &[PathBuf], partial: bool) -> Result<Merged, RecordError> {
         )));
     }
     let mut seen: BTreeMap<&str, &Path> = BTreeMap::new();
-    for (path, record) in &all {
+    for (path, record, _) in &all {
         let task = record.get("task").and_then(Value::as_str).unwrap_or_default();
         if let Some(other) = seen.insert(task, path) {
             let files = if other == path.as_path() {
@@ -671,7 +675,7 @@ pub fn merge(shards: &[PathBuf], partial: bool) -> Result<Merged, RecordError> {
         }
     }
     if let Some(count) = expected
-        && let Some((path, record)) = all.iter().find(|(_, r)| r.get("index").and_then(Value::as_u64).is_some_and(|i| i >= count))
+        && let Some((path, record, _)) = all.iter().find(|(_, r, _)| r.get("index").and_then(Value::as_u64).is_some_and(|i| i >= count))
     {
         return Err(RecordError::Merge(format!(
             "{}: task {} has index {}, past the run's {count} tasks",
@@ -680,7 +684,7 @@ pub fn merge(shards: &[PathBuf], partial: bool) -> Result<Merged, RecordError> {
             record.get("index").unwrap_or(&Value::Null)
         )));
     }
-    let mut all: Vec<Map<String, Value>> = all.into_iter().map(|(_, record)| record).collect();
+    let mut all: Vec<(Map<String, Value>, String)> = all.into_iter().map(|(_, record, line)| (record, line)).collect();
     if let Some(expected) = expected
         && (all.len() as u64) < expected
         && !partial
@@ -689,7 +693,8 @@ pub fn merge(shards: &[PathBuf], partial: bool) -> Result<Merged, RecordError> {
             .iter()
             .filter_map(|shard| {
                 let want = (0..expected as usize).filter(|&i| shard.selects(i)).count();
-                let have = all.iter().filter(|r| r.get("index").and_then(Value::as_u64).is_some_and(|i| shard.selects(i as usize))).count();
+                let have =
+                    all.iter().filter(|(r, _)| r.get("index").and_then(Value::as_u64).is_some_and(|i| shard.selects(i as usize))).count();
                 (have < want).then(|| format!("shard {} of {} has {have} of its {want}", shard.index, shard.count))
             })
             .collect();
@@ -699,7 +704,7 @@ pub fn merge(shards: &[PathBuf], partial: bool) -> Result<Merged, RecordError> {
             short.join(", ")
         )));
     }
-    all.sort_by_key(|r| r.get("index").and_then(Value::as_u64).unwrap_or(u64::MAX));
+    all.sort_by_key(|(r, _)| r.get("index").and_then(Value::as_u64).unwrap_or(u64::MAX));
     let target = first.with_file_name(format!("{base}.jsonl"));
     // The target locked (made if need be) before it is looked at: an empty one may be a run
     // without shards that has not recorded its first task yet, whose file the merged one would
@@ -712,7 +717,7 @@ pub fn merge(shards: &[PathBuf], partial: bool) -> Result<Merged, RecordError> {
         return Err(RecordError::Merge(format!("{}: already holds records; move it away to merge into it", target.display())));
     }
     locked.push(existing);
-    let text: String = all.iter().map(|r| Value::Object(r.clone()).to_string() + "\n").collect();
+    let text: String = all.iter().map(|(_, line)| format!("{line}\n")).collect();
     write_whole(&target, text.as_bytes())?;
     drop(locked);
     Ok(Merged { path: target, records: all.len(), config, expected })
