@@ -83,7 +83,8 @@ pub struct OpenAiConfig {
     pub retry_backoff: Duration,
     /// The longest `Retry-After` honoured (429, 503); a longer one ends the retries.
     pub max_retry_wait: Duration,
-    /// Answers remembered for repeated requests.
+    /// Answers remembered for repeated requests, at most (rounded up to an even number): the
+    /// most recent half always, an older answer until a newer half replaces it. 0 remembers none.
     pub cache_entries: usize,
 }
 
@@ -115,8 +116,45 @@ pub struct OpenAiModel {
     tokenizer: Arc<Tokenizer>,
     /// Token text → id, for servers that name tokens by text; built on first need.
     text_to_id: Option<FxHashMap<Vec<u8>, TokenId>>,
-    answers: FxHashMap<(Vec<TokenId>, Vec<TokenId>), Logprobs>,
+    answers: Answers,
     usage: Usage,
+}
+
+/// A request's key: the prompt's tokens and the allowed tokens (empty: none named).
+type AnswerKey = (Vec<TokenId>, Vec<TokenId>);
+
+/// Recent answers in two generations: when the newer one holds half the capacity it becomes
+/// the older one, and the answers of the one before are dropped; a hit in the older one moves
+/// the answer to the newer. An answer stays remembered until at least half the capacity of
+/// other answers has been stored since it was last asked for (MCTS asks again for the prefixes
+/// near the root), where emptying one full table would drop the answers just stored too.
+/// Written by hand: two hash maps make an approximate LRU whose every operation is one or two
+/// lookups, with no recency list to keep.
+#[derive(Debug, Default)]
+struct Answers {
+    newer: FxHashMap<AnswerKey, Logprobs>,
+    older: FxHashMap<AnswerKey, Logprobs>,
+}
+
+impl Answers {
+    fn get(&mut self, key: &AnswerKey, capacity: usize) -> Option<Logprobs> {
+        if let Some(answer) = self.newer.get(key) {
+            return Some(answer.clone());
+        }
+        let (key, answer) = self.older.remove_entry(key)?;
+        self.insert(key, answer.clone(), capacity);
+        Some(answer)
+    }
+
+    fn insert(&mut self, key: AnswerKey, answer: Logprobs, capacity: usize) {
+        if capacity == 0 {
+            return;
+        }
+        if self.newer.len() >= capacity.div_ceil(2) {
+            self.older = std::mem::take(&mut self.newer);
+        }
+        self.newer.insert(key, answer);
+    }
 }
 
 impl OpenAiModel {
@@ -135,7 +173,7 @@ impl OpenAiModel {
             config,
             tokenizer,
             text_to_id: None,
-            answers: FxHashMap::default(),
+            answers: Answers::default(),
             usage: Usage::default(),
         })
     }
@@ -156,10 +194,10 @@ impl OpenAiModel {
     fn request(&mut self, tokens: &[TokenId], allowed: Option<&[TokenId]>) -> Result<Logprobs, LmError> {
         let key = (tokens.to_vec(), allowed.map(<[TokenId]>::to_vec).unwrap_or_default());
         self.usage.tokens_generated += 1;
-        if let Some(answer) = self.answers.get(&key) {
+        if let Some(answer) = self.answers.get(&key, self.config.cache_entries) {
             self.usage.cache_hits += 1;
             self.usage.tokens_reused += tokens.len() as u64;
-            return Ok(answer.clone());
+            return Ok(answer);
         }
         let top_k = match allowed {
             Some(allowed) if self.config.dialect == ServerDialect::Vllm => allowed.len().min(self.config.top_logprobs),
@@ -202,12 +240,7 @@ impl OpenAiModel {
         self.usage.forward_calls += u64::from(attempts);
         let (logprobs, prompt_tokens) = parsed?;
         self.usage.tokens_prefilled += prompt_tokens.unwrap_or(tokens.len() as u64);
-        if self.answers.len() >= self.config.cache_entries {
-            self.answers.clear();
-        }
-        if self.config.cache_entries > 0 {
-            self.answers.insert(key, logprobs.clone());
-        }
+        self.answers.insert(key, logprobs.clone(), self.config.cache_entries);
         Ok(logprobs)
     }
 

@@ -430,3 +430,36 @@ fn server_dialects_parse_by_name_and_refuse_others_with_the_list() {
     assert_eq!(error, lm::UnknownDialect("llama.cpp".into()));
     assert_eq!(error.to_string(), "`llama.cpp` is not a server dialect: the dialects are vllm, generic");
 }
+
+/// A full answer memory forgets its oldest answers, not the ones just stored or asked for:
+/// with room for 4, after five prompts the fourth is still answered without the server (which
+/// stops after five requests, so a sixth would fail), and so is one asked for again in between.
+#[test]
+fn a_full_answer_memory_keeps_the_recent_answers() {
+    let dir = TempDir::new("openai-memory");
+    let local = tiny(&dir);
+    let mut served = tiny(&dir);
+    let (address, server) =
+        serve(6, move |_, request| Reply::Send { status: 200, body: model_reply(&mut served, request), chunked: false });
+    let mut config = OpenAiConfig::new(&format!("http://{address}/v1"), "tiny");
+    config.cache_entries = 4;
+    config.timeout = Duration::from_millis(500);
+    config.retry_backoff = Duration::from_millis(1);
+    let mut remote = OpenAiModel::new(config, local.shared_tokenizer().clone()).expect("client");
+    let prompts: Vec<Vec<u32>> = ["open the", "go to the", "take the", "put the", "close the", "clean the"]
+        .iter()
+        .map(|t| local.encode(t).expect("encodes"))
+        .collect();
+    for prompt in &prompts[..5] {
+        remote.next_logprobs(prompt).expect("served");
+    }
+    assert_eq!(remote.usage().forward_calls, 5);
+    // The fourth and fifth are remembered; the fourth, asked again, is kept past a new prompt.
+    remote.next_logprobs(&prompts[3]).expect("remembered");
+    remote.next_logprobs(&prompts[4]).expect("remembered");
+    remote.next_logprobs(&prompts[5]).expect("served");
+    remote.next_logprobs(&prompts[3]).expect("remembered");
+    let usage = remote.usage();
+    assert_eq!((usage.forward_calls, usage.cache_hits), (6, 3));
+    server.join().expect("server");
+}
