@@ -327,8 +327,9 @@ pub fn bench(args: BenchLmArgs) -> anyhow::Result<ExitCode> {
     }
     let full_ms = crate::input::median(full);
 
+    // No figure where nothing was timed (no reference, or `--decode 0`), rather than 0 tok/s.
     let tok_s = |tokens: usize, seconds: &[f64]| {
-        if seconds.is_empty() { None } else { Some(tokens as f64 / crate::input::median(seconds.to_vec())) }
+        if seconds.is_empty() || tokens == 0 { None } else { Some(tokens as f64 / crate::input::median(seconds.to_vec())) }
     };
     let features: Vec<&str> = [
         ("avx2", cfg!(target_feature = "avx2")),
@@ -363,7 +364,7 @@ pub fn bench(args: BenchLmArgs) -> anyhow::Result<ExitCode> {
         "full_recompute_ms": full_ms,
         "llamacpp_bench": llamacpp.as_ref().map(|l| l.binary.display().to_string()),
         "llamacpp_prefill_tok_s": llamacpp.as_ref().map(|l| l.prefill_tok_s),
-        "llamacpp_decode_tok_s": llamacpp.as_ref().map(|l| l.decode_tok_s),
+        "llamacpp_decode_tok_s": llamacpp.as_ref().and_then(|l| l.decode_tok_s),
         "llamacpp_branch_ms_by_suffix": llamacpp.as_ref().map(|l| &l.branch_ms),
     });
     if args.json {
@@ -378,7 +379,8 @@ pub fn bench(args: BenchLmArgs) -> anyhow::Result<ExitCode> {
 struct LlamaCppFigures {
     binary: PathBuf,
     prefill_tok_s: f64,
-    decode_tok_s: f64,
+    /// `None` with `--decode 0` (llama-bench is not asked to decode nothing: it prints no row).
+    decode_tok_s: Option<f64>,
     /// A suffix of k tokens after the shared prefix: llama-bench's prompt of k tokens at depth
     /// `prefix` (the prefix's keys and values are in its cache, as in our branch test).
     branch_ms: serde_json::Map<String, serde_json::Value>,
@@ -431,18 +433,18 @@ fn run_llama_bench(
     };
     let first = |rows: Vec<serde_json::Value>| rows.into_iter().next().context("llama-bench printed no result");
     let prefill = first(run(&["-p".into(), prefix.to_string(), "-n".into(), "0".into()])?)?;
-    let decode_row = first(run(&["-p".into(), "0".into(), "-n".into(), decode.to_string(), "-d".into(), prefix.to_string()])?)?;
+    let decode_tok_s = if decode == 0 {
+        None
+    } else {
+        let row = first(run(&["-p".into(), "0".into(), "-n".into(), decode.to_string(), "-d".into(), prefix.to_string()])?)?;
+        Some(number(&row, "avg_ts")?)
+    };
     let lengths = branches.iter().map(usize::to_string).collect::<Vec<_>>().join(",");
     let mut branch_ms = serde_json::Map::new();
     for row in run(&["-p".into(), lengths, "-n".into(), "0".into(), "-d".into(), prefix.to_string()])? {
         branch_ms.insert(number(&row, "n_prompt")?.to_string(), json!(number(&row, "avg_ns")? / 1e6));
     }
-    Ok(LlamaCppFigures {
-        binary: binary.to_path_buf(),
-        prefill_tok_s: number(&prefill, "avg_ts")?,
-        decode_tok_s: number(&decode_row, "avg_ts")?,
-        branch_ms,
-    })
+    Ok(LlamaCppFigures { binary: binary.to_path_buf(), prefill_tok_s: number(&prefill, "avg_ts")?, decode_tok_s, branch_ms })
 }
 
 fn candle_threads() -> usize {
@@ -451,4 +453,52 @@ fn candle_threads() -> usize {
         .iter()
         .find_map(|v| std::env::var(v).ok().and_then(|s| s.parse().ok()))
         .unwrap_or_else(|| std::thread::available_parallelism().map(usize::from).unwrap_or(1))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A stand-in for `llama-bench`: prints one JSON row per prompt length of `-p` (or one
+    /// decode row for `-p 0 -n N`, N > 0), none for `-p 0 -n 0`, as llama-bench does, and logs
+    /// its arguments.
+    #[cfg(unix)]
+    fn fake_llama_bench(dir: &Path) -> PathBuf {
+        use std::os::unix::fs::PermissionsExt;
+        let path = dir.join("llama-bench");
+        let script = r#"#!/bin/sh
+echo "$@" >> "$(dirname "$0")/calls.txt"
+p=0; n=0
+while [ $# -gt 0 ]; do case "$1" in -p) p=$2; shift;; -n) n=$2; shift;; esac; shift; done
+rows=""
+if [ "$p" = 0 ]; then
+  [ "$n" = 0 ] || rows="{\"n_prompt\": 0, \"n_gen\": $n, \"avg_ts\": 40.0, \"avg_ns\": 1000000}"
+else
+  for length in $(echo "$p" | tr , ' '); do
+    rows="$rows${rows:+,}{\"n_prompt\": $length, \"n_gen\": 0, \"avg_ts\": 100.0, \"avg_ns\": 2000000}"
+  done
+fi
+echo "[$rows]"
+"#;
+        std::fs::write(&path, script).expect("writes the script");
+        std::fs::set_permissions(&path, std::fs::Permissions::from_mode(0o755)).expect("makes it executable");
+        path
+    }
+
+    /// `bench lm --decode 0` asks llama-bench for no decode run and reports no decode figure,
+    /// where it used to ask for `-p 0 -n 0`, get no row, and fail.
+    #[cfg(unix)]
+    #[test]
+    fn llama_bench_is_not_asked_to_decode_nothing() {
+        let dir = tempfile::tempdir().expect("temporary folder");
+        let binary = fake_llama_bench(dir.path());
+        let model = dir.path().join("model.gguf");
+        let figures = run_llama_bench(&binary, &model, 1, 300, 0, 2, &[1, 4]).expect("runs");
+        assert_eq!((figures.prefill_tok_s, figures.decode_tok_s), (100.0, None));
+        assert_eq!(figures.branch_ms.keys().collect::<Vec<_>>(), ["1", "4"]);
+        let calls = std::fs::read_to_string(dir.path().join("calls.txt")).expect("the calls");
+        assert!(!calls.contains("-p 0"), "no decode run: {calls}");
+        let figures = run_llama_bench(&binary, &model, 1, 300, 8, 2, &[1]).expect("runs");
+        assert_eq!(figures.decode_tok_s, Some(40.0));
+    }
 }
