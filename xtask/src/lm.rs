@@ -293,7 +293,9 @@ pub fn bench(args: BenchLmArgs) -> anyhow::Result<ExitCode> {
     }
 
     // Branching: a sibling that shares the prefix and differs in a suffix of k tokens.
-    let suffix_lengths = [1usize, 4, 16, 64];
+    // A suffix is cut from the prompt itself (from token `run + 7`), so only lengths the prompt
+    // holds are timed: with `--prefix 10` a "64-token" suffix was 3 tokens, reported as 64.
+    let suffix_lengths: Vec<usize> = [1usize, 4, 16, 64].into_iter().filter(|&k| k + runs + 7 <= prefix.len()).collect();
     let mut rewind_ms = serde_json::Map::new();
     let mut rewind_1 = f64::NAN;
     for &k in &suffix_lengths {
@@ -344,7 +346,17 @@ pub fn bench(args: BenchLmArgs) -> anyhow::Result<ExitCode> {
         None
     } else {
         llama_bench_binary(args.llama_bench.as_deref())?
-            .map(|binary| run_llama_bench(&binary, &path, candle_threads(), prefix.len(), args.decode, runs, &suffix_lengths[..3]))
+            .map(|binary| {
+                run_llama_bench(
+                    &binary,
+                    &path,
+                    candle_threads(),
+                    prefix.len(),
+                    args.decode,
+                    runs,
+                    &suffix_lengths[..suffix_lengths.len().min(3)],
+                )
+            })
             .transpose()?
     };
     let report = json!({
@@ -441,8 +453,10 @@ fn run_llama_bench(
     };
     let lengths = branches.iter().map(usize::to_string).collect::<Vec<_>>().join(",");
     let mut branch_ms = serde_json::Map::new();
-    for row in run(&["-p".into(), lengths, "-n".into(), "0".into(), "-d".into(), prefix.to_string()])? {
-        branch_ms.insert(number(&row, "n_prompt")?.to_string(), json!(number(&row, "avg_ns")? / 1e6));
+    if !branches.is_empty() {
+        for row in run(&["-p".into(), lengths, "-n".into(), "0".into(), "-d".into(), prefix.to_string()])? {
+            branch_ms.insert(number(&row, "n_prompt")?.to_string(), json!(number(&row, "avg_ns")? / 1e6));
+        }
     }
     Ok(LlamaCppFigures { binary: binary.to_path_buf(), prefill_tok_s: number(&prefill, "avg_ts")?, decode_tok_s, branch_ms })
 }
@@ -500,5 +514,8 @@ echo "[$rows]"
         assert!(!calls.contains("-p 0"), "no decode run: {calls}");
         let figures = run_llama_bench(&binary, &model, 1, 300, 8, 2, &[1]).expect("runs");
         assert_eq!(figures.decode_tok_s, Some(40.0));
+        // A prompt too short for any sibling suffix: no branch run, no branch figure.
+        let figures = run_llama_bench(&binary, &model, 1, 5, 8, 2, &[]).expect("runs");
+        assert!(figures.branch_ms.is_empty());
     }
 }
