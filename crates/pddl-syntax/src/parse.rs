@@ -177,8 +177,17 @@ impl Reader {
             metric: None,
             span,
         };
+        let mut seen: Vec<&str> = Vec::new();
         for section in &sections {
             let Some((keyword, body)) = self.section(section) else { continue };
+            // One of each: a second `:domain`, `:goal` or `:metric` would silently replace the first.
+            if matches!(keyword, ":domain" | ":goal" | ":metric") {
+                if seen.contains(&keyword) {
+                    self.error(DiagnosticKind::Duplicate, section.span(), format!("the problem has a second `({keyword}` section"));
+                    continue;
+                }
+                seen.push(keyword);
+            }
             match keyword {
                 ":domain" => match body {
                     [word] => domain_name = self.name(word, "the domain's name"),
@@ -384,6 +393,7 @@ impl Reader {
         };
         let name = self.name(name_form, "the action's name")?;
         let mut action = Action { name, params: Vec::new(), precondition: None, effect: None, span: form.span() };
+        let mut seen: Vec<&str> = Vec::new();
         let mut i = 1;
         while i < body.len() {
             let key = &body[i];
@@ -391,6 +401,15 @@ impl Reader {
                 self.error(DiagnosticKind::UnexpectedForm, key.span(), format!("{} has no value", key.describe()));
                 break;
             };
+            // Each key once: a second one would silently replace the first.
+            if let Some(word) = key.as_word().filter(|w| matches!(*w, ":parameters" | ":precondition" | ":effect")) {
+                if seen.contains(&word) {
+                    self.error(DiagnosticKind::Duplicate, key.span(), format!("action `{}` has a second `{word}`", action.name));
+                    i += 2;
+                    continue;
+                }
+                seen.push(word);
+            }
             match key.as_word() {
                 Some(":parameters") => match value.as_list() {
                     Some(items) => action.params = self.typed_list(items, true),

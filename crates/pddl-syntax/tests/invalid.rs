@@ -116,3 +116,26 @@ fn a_failed_parse_says_where_its_first_error_is_without_the_source() {
     let boxed: Box<dyn std::error::Error> = Box::new(error);
     assert_eq!(boxed.to_string(), shown);
 }
+
+/// A key an action or a problem has once (`:parameters`, `:precondition`, `:effect`; `:domain`,
+/// `:goal`, `:metric`) written twice is a `duplicate` error at the second, which used to
+/// replace the first silently (a plan for the second precondition was "valid").
+#[test]
+fn a_second_precondition_effect_or_goal_is_an_error_not_a_replacement() {
+    let domain = "(define (domain t) (:predicates (p) (q))\n\
+                  (:action a :parameters () :precondition (p)\n  :precondition (and) :effect (q) :effect (and)))";
+    let (_, diagnostics) = parse_domain_recovering(domain);
+    let rendered: Vec<String> = diagnostics.iter().map(|d| d.render("d.pddl", domain)).collect();
+    assert_eq!(
+        rendered,
+        [
+            "d.pddl:3:3: error[duplicate]: action `a` has a second `:precondition`",
+            "d.pddl:3:35: error[duplicate]: action `a` has a second `:effect`",
+        ],
+        "{rendered:#?}"
+    );
+    let problem = "(define (problem p) (:domain t) (:init)\n(:goal (p)) (:goal (q)))";
+    let (_, diagnostics) = parse_problem_recovering(problem);
+    let rendered: Vec<String> = diagnostics.iter().map(|d| d.render("p.pddl", problem)).collect();
+    assert_eq!(rendered, ["p.pddl:2:13: error[duplicate]: the problem has a second `(:goal` section"], "{rendered:#?}");
+}
