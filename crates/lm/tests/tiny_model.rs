@@ -314,6 +314,10 @@ fn malformed_files_give_typed_errors_that_name_the_field() {
     assert!(matches!(&error, LmError::BadMetadata { key, .. } if key == "llama.attention.head_count"), "{error}");
     let error = load_error("kv-heads", |p| set(p, "llama.attention.head_count_kv", Value::U32(3)));
     assert!(matches!(&error, LmError::BadMetadata { key, .. } if key == "llama.attention.head_count_kv"), "{error}");
+    for (name, base) in [("theta-zero", 0.0), ("theta-negative", -1.0), ("theta-tiny", 1e-30), ("theta-huge", 1e300)] {
+        let error = load_error(name, |p| set(p, "llama.rope.freq_base", Value::F64(base)));
+        assert!(matches!(&error, LmError::BadMetadata { key, .. } if key == "llama.rope.freq_base"), "{error}");
+    }
     let error = load_error("tokenizer-model", |p| set(p, "tokenizer.ggml.model", Value::String("llama".into())));
     assert!(matches!(&error, LmError::UnsupportedTokenizer { key: "tokenizer.ggml.model", .. }), "{error}");
     let error = load_error("pre", |p| set(p, "tokenizer.ggml.pre", Value::String("tekken".into())));

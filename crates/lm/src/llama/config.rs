@@ -134,6 +134,11 @@ impl ModelConfig {
             });
         }
         let base = metadata.float_or(&key("rope.freq_base"), 10_000.0)? as f32;
+        // θ ≤ 1 turns the rotary frequencies into noise (every model uses thousands and more);
+        // a double too large for f32 is infinite here.
+        if !(base > 1.0 && base.is_finite()) {
+            return Err(LmError::BadMetadata { key: key("rope.freq_base"), expected: "a number above 1", found: base.to_string() });
+        }
         let linear_scale = match metadata.optional_string(&key("rope.scaling.type"))? {
             None | Some("none") => 1.0,
             Some("linear") => {
