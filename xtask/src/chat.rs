@@ -43,15 +43,16 @@ pub struct ChatArgs {
     /// A JSON schema file: the reply must be a JSON object satisfying it.
     #[arg(long)]
     schema: Option<PathBuf>,
-    /// Reply length at most, in tokens.
-    #[arg(long, default_value_t = 256)]
+    /// Reply length at most, in tokens (at least 1).
+    #[arg(long, default_value_t = 256, value_parser = crate::input::at_least_one::<u32>)]
     max_tokens: u32,
-    /// Sampling temperature (0: greedy) [default: greedy here, the server's default there].
-    #[arg(long)]
+    /// Sampling temperature, in [0, 1e6] (0: greedy) [default: greedy here, the server's
+    /// default there].
+    #[arg(long, value_parser = crate::input::number_in(0.0, false, 1e6))]
     temperature: Option<f64>,
-    /// Nucleus sampling: sample among the most likely tokens that together hold this much
-    /// probability [default: all, here; the server's default there].
-    #[arg(long)]
+    /// Nucleus sampling, in (0, 1]: sample among the most likely tokens that together hold
+    /// this much probability [default: all, here; the server's default there].
+    #[arg(long, value_parser = crate::input::number_in(0.0, true, 1.0))]
     top_p: Option<f64>,
     /// Sample among this many most likely tokens [default: all, here; the server's default there].
     #[arg(long)]

@@ -182,6 +182,14 @@ pub fn generate(args: GenerateArgs) -> anyhow::Result<ExitCode> {
     if prompt.is_empty() {
         return Err(InputError("the prompt has no tokens".into()).into());
     }
+    let context = model.weights().config().context_length;
+    if prompt.len() >= context {
+        return Err(InputError(format!(
+            "--prompt: {} tokens (with the chat template) leave no room to generate in the model's context of {context}",
+            prompt.len()
+        ))
+        .into());
+    }
     let mut sequence = prompt.clone();
     let mut generated = Vec::new();
     let start = Instant::now();
@@ -198,6 +206,10 @@ pub fn generate(args: GenerateArgs) -> anyhow::Result<ExitCode> {
         generated.push(next);
         sequence.push(next);
         if generated.len() == args.max_tokens {
+            break;
+        }
+        if sequence.len() > context {
+            stopped = "context_length";
             break;
         }
         let step = Instant::now();
@@ -253,6 +265,16 @@ pub fn bench(args: BenchLmArgs) -> anyhow::Result<ExitCode> {
     let path = resolve_model(&args.model)?;
     let runs = args.runs.max(1);
     let mut model = load(&path)?;
+    // The prompt, the decoded tokens and the longest sibling suffix (64) in the context.
+    let context = model.weights().config().context_length;
+    let needed = args.prefix.max(2) + args.decode.max(64);
+    if needed > context {
+        return Err(InputError(format!(
+            "--prefix {} with --decode {}: {needed} tokens do not fit the model's context of {context}",
+            args.prefix, args.decode
+        ))
+        .into());
+    }
     let prefix = bench_prompt(&model, args.prefix.max(2))?;
     let mut reference = if args.no_reference || model.weights().config().architecture != lm::Architecture::Llama {
         None

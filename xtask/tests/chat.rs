@@ -1,6 +1,7 @@
 //! `cargo xtask chat`: a local model's reply decoded under a JSON schema, a served model's
 //! reply over loopback, and the exit codes: 2 for bad input (an unreadable or non-image file,
-//! a schema that is not one), 1 for a server that still fails after its retries.
+//! a schema that is not one, a sampling option out of its range), 3 for a server that still
+//! fails after its retries. And `cargo xtask generate` at the edge of the model's context.
 
 mod common;
 
@@ -157,6 +158,42 @@ fn bad_input_exits_2_and_a_failing_server_exits_3() {
     check(&["chat", "--model", url, "--prompt", "x", "--schema", &bad_type], 2, "unknown type \"dict\"");
     check(&["chat", "--model", "openai:ftp://host/v1", "--prompt", "x"], 2, "bad URL");
     check(&["chat", "--model", url, "--prompt", "x", "--api-key-env", "XTASK_CHAT_TEST_NO_SUCH_KEY"], 2, "XTASK_CHAT_TEST_NO_SUCH_KEY");
+    // Sampling options out of their range are refused before any request (NaN reached a local
+    // model as garbage and a server as `null`, its own default).
+    for (option, value) in [("--temperature", "NaN"), ("--temperature", "-1"), ("--temperature", "inf"), ("--top-p", "0"), ("--top-p", "2")]
+    {
+        check(&["chat", "--model", url, "--prompt", "x", &format!("{option}={value}")], 2, option);
+    }
+    check(&["chat", "--model", url, "--prompt", "x", "--max-tokens", "0"], 2, "--max-tokens");
     // Connection refused on every attempt.
     check(&["chat", "--model", url, "--prompt", "x", "--retries", "1", "--timeout", "5"], 3, "cannot connect");
+}
+
+/// `generate`: a prompt that fills the tiny model's context (256 tokens) is bad input, exit 2,
+/// naming `--prompt` (it was exit 3, "a failure outside the input"); one that nearly fills it
+/// generates up to the context's end and says so.
+#[test]
+fn generate_stops_at_the_context_and_refuses_a_prompt_that_fills_it() {
+    let tmp = scratch_dir("xtask-generate-");
+    let model = tmp.path().join("tiny.gguf");
+    lm::tiny::write_tiny_gguf(&model, &lm::tiny::TinySpec::default()).expect("tiny model");
+    let model = model.display().to_string();
+    let long = "a ".repeat(400);
+    let output = xtask(&["generate", "--model", &model, "--raw", "--prompt", &long, "--max-tokens", "4"]);
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert_eq!(output.status.code(), Some(2), "{stderr}");
+    assert!(stderr.contains("--prompt") && stderr.contains("context of 256"), "{stderr}");
+    // The tiny tokenizer spells "a " as one token or two: find a prompt a few tokens short.
+    let output = xtask(&["generate", "--model", &model, "--raw", "--prompt", &"a ".repeat(120), "--max-tokens", "1", "--json"]);
+    assert_eq!(output.status.code(), Some(0), "{}", String::from_utf8_lossy(&output.stderr));
+    let per_copy = stdout_json(&output)["prompt_tokens"].as_u64().expect("a count") as f64 / 120.0;
+    let copies = ((250.0 / per_copy) as usize).min(255);
+    let output = xtask(&["generate", "--model", &model, "--raw", "--prompt", &"a ".repeat(copies), "--max-tokens", "200", "--json"]);
+    assert_eq!(output.status.code(), Some(0), "{}", String::from_utf8_lossy(&output.stderr));
+    let summary = stdout_json(&output);
+    let (prompt, generated) = (summary["prompt_tokens"].as_u64().expect("count"), summary["generated_tokens"].as_u64().expect("count"));
+    assert!(prompt < 256, "{summary}");
+    // The tiny model's weights are fixed (seed 7): it writes no stop token before the end.
+    assert_eq!(summary["stopped"], "context_length", "{summary}");
+    assert_eq!(prompt + generated, 257, "up to the context, the last token from its full length: {summary}");
 }
