@@ -30,7 +30,6 @@ use eval_harness::records::{RecordFile, Shard};
 use exploration_harness::direct::{DirectConfig, MAX_REPLY_TOKENS, run_direct};
 use serde::Serialize;
 use serde_json::{Value, json};
-use sha2::{Digest, Sha256};
 use transition_model::{Spelling, TransitionModel};
 
 use crate::agent::{EpisodeArgs, PhaseTwoRunner, alfworld, alfworld_env, chat_model, episode, explorer, virtualhome, virtualhome_env};
@@ -352,12 +351,7 @@ fn config(args: &EvalArgs, suite: Suite, tasks: &[EvalTask]) -> anyhow::Result<V
     let mut config = json!({"agent": args.agent, "benchmark": suite.name(), "subset": suite_subset(&args.subset, suite, args.agent)?});
     // The list itself, not only the subset's name: an edited subset file (or another task
     // folder) is another run, whose records never mix with the old list's.
-    let mut ids = Sha256::new();
-    for task in tasks {
-        ids.update(task.id().as_bytes());
-        ids.update(b"\n");
-    }
-    let digest: String = ids.finalize().iter().take(6).map(|b| format!("{b:02x}")).collect();
+    let digest = eval_harness::records::task_list_digest(tasks.iter().map(|task| task.id()));
     config.as_object_mut().expect("object").insert("tasks".into(), json!({"count": tasks.len(), "ids_sha256": digest}));
     // Fixtures read from elsewhere (`NSEA_FIXTURES`) are other inputs.
     if let Some(root) = std::env::var_os("NSEA_FIXTURES") {

@@ -183,6 +183,20 @@ pub fn config_hash(config: &impl Serialize) -> String {
     Sha256::digest(canonical_json(config).as_bytes()).iter().take(6).map(|b| format!("{b:02x}")).collect()
 }
 
+/// The digest of a run's task list that its configuration keeps (`tasks.ids_sha256`): the first
+/// 12 hex digits of the sha256 of the ids in the run's order, each followed by a newline. A
+/// configuration names the list, not only its length, so that an edited subset file is another
+/// run; [`merge`] checks a whole run's records against it.
+pub fn task_list_digest<'a>(ids: impl IntoIterator<Item = &'a str>) -> String {
+    use sha2::{Digest, Sha256};
+    let mut digest = Sha256::new();
+    for id in ids {
+        digest.update(id.as_bytes());
+        digest.update(b"\n");
+    }
+    digest.finalize().iter().take(6).map(|b| format!("{b:02x}")).collect()
+}
+
 /// One of `count` shards (1-based `index`, `1 <= index <= count`, as [`str::parse`] checks):
 /// the tasks whose position is `index - 1` modulo `count`.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -705,6 +719,19 @@ pub fn merge(shards: &[PathBuf], partial: bool) -> Result<Merged, RecordError> {
         )));
     }
     all.sort_by_key(|(r, _)| r.get("index").and_then(Value::as_u64).unwrap_or(u64::MAX));
+    // A whole run's tasks, in its order, are the list its configuration names (a record whose
+    // task was edited, or filed under another run's name, would pass for one of the run's).
+    if let Some(named) = written.pointer("/tasks/ids_sha256").and_then(Value::as_str)
+        && expected == Some(all.len() as u64)
+    {
+        let found = task_list_digest(all.iter().map(|(r, _)| r.get("task").and_then(Value::as_str).unwrap_or_default()));
+        if found != named {
+            return Err(RecordError::Merge(format!(
+                "the records' tasks, in their order, are not the run's: their list's digest is {found}, the configuration's {named} ({})",
+                config_path.display()
+            )));
+        }
+    }
     let target = first.with_file_name(format!("{base}.jsonl"));
     // The target locked (made if need be) before it is looked at: an empty one may be a run
     // without shards that has not recorded its first task yet, whose file the merged one would

@@ -468,3 +468,30 @@ fn a_file_opened_to_check_only_is_read_and_refused_as_open_would_and_left_alone(
     let error = RecordFile::check_only(&dir, "run", &config, None, false).expect_err("another configuration");
     assert!(matches!(error, RecordError::ConfigMismatch { .. }), "{error}");
 }
+
+/// A whole run's merged records must be the tasks its configuration names, in its order
+/// (`tasks.ids_sha256`): a record whose task was edited is refused (it used to be merged and
+/// reported as one of the run's), the run's own records merge.
+#[test]
+fn a_merge_refuses_records_of_tasks_the_run_does_not_name() {
+    let (_tmp_dir, dir) = scratch("task-list");
+    let names = ["t0", "t1", "t2", "t3"];
+    let config = json!({"agent": "expert", "benchmark": "ipc",
+        "tasks": {"count": names.len(), "ids_sha256": eval_harness::records::task_list_digest(names)}});
+    let mut paths = Vec::new();
+    for index in 1..=2 {
+        let shard = Shard { index, count: 2 };
+        let mut file = RecordFile::open(&dir, "run", &config, Some(shard), false).expect("opens");
+        for (i, name) in names.iter().enumerate().filter(|(i, _)| shard.selects(*i)) {
+            file.append(i, &json!({"task": name, "steps": i, "success": true})).expect("appends");
+        }
+        paths.push(file.path().to_path_buf());
+    }
+    let original = std::fs::read_to_string(&paths[1]).expect("reads");
+    std::fs::write(&paths[1], original.replace("\"t3\"", "\"zzz\"")).expect("writes");
+    let error = merge(&paths, false).expect_err("a task the run does not name");
+    assert!(error.to_string().contains("are not the run's"), "{error}");
+    std::fs::write(&paths[1], original).expect("writes");
+    let merged = merge(&paths, false).expect("the run's own tasks merge");
+    assert_eq!(merged.records, names.len());
+}
