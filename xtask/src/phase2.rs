@@ -487,6 +487,7 @@ fn file_safe(name: &str) -> String {
 
 /// `cargo xtask phase2`.
 pub fn run(args: Phase2Args) -> anyhow::Result<ExitCode> {
+    crate::input::folder_to_write(&args.out, "--out")?;
     let benchmark = args.benchmark;
     let mut tasks = match &args.subset {
         Some(subset) => benchmark_data::load_subset(benchmark, subset).map_err(|e| InputError(e.to_string()))?,

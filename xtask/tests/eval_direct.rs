@@ -214,7 +214,11 @@ fn a_run_of_nothing_or_of_a_benchmark_twice_is_refused_before_any_file() {
     assert!(!dir.exists());
     // A file where the records folder or the report's folder would go.
     std::fs::write(&dir, "").expect("writes");
-    for command in [&["eval", "--agent", "expert", "--limit", "1", "--out"][..], &["report", "fixtures", "--out"]] {
+    for command in [
+        &["eval", "--agent", "expert", "--limit", "1", "--out"][..],
+        &["report", "fixtures", "--out"],
+        &["phase2", "--benchmark", "alfworld-seen", "--lm", "uniform", "--limit", "1", "--out"],
+    ] {
         let output = xtask(&[command, &[dir.to_str().unwrap()]].concat());
         let stderr = String::from_utf8_lossy(&output.stderr);
         assert_eq!(output.status.code(), Some(2), "{command:?}: {stderr}");
