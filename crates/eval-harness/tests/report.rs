@@ -303,6 +303,10 @@ fn faults_in_the_input_name_the_file_and_line() {
         ("{", "{\"precision\":2.5,", "`precision` is 2.5, not null or a fraction from 0 to 1"),
         ("{", "{\"episode\":\"oops\",", "`episode` is \"oops\", not an object"),
         ("{", "{\"failure_response\":{\"recovers\":7},", "`failure_response.recovers` is 7, not a boolean"),
+        ("\"success\":true", "\"success\":false", "`outcome` is \"success\" but `success` is false"),
+        ("\"outcome\":\"success\"", "\"outcome\":\"no-plan\"", "`outcome` is \"no-plan\" but `success` is true"),
+        ("{", "{\"terminal\":\"grounding\",", "`terminal` is \"grounding\" but `success` is true"),
+        ("\"task\":\"pick_and_place-Pen-2/trial_T2\"", "\"task\":\"\"", "no `task`"),
     ] {
         std::fs::write(&path, format!("{first}\n{}\n", second.replacen(from, to, 1))).unwrap();
         assert!(message(load(&path)).starts_with(&format!("{shown}:2: {said}")), "{to}: {}", message(load(&path)));

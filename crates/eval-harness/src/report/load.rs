@@ -203,10 +203,23 @@ pub(crate) fn check(path: &Path, line: usize, fields: &Map<String, Value>) -> Re
     if !fields.get("success").is_some_and(Value::is_boolean) {
         return Err(bad("no boolean `success`: every record says whether its task succeeded".into()));
     }
+    if !fields.get("task").and_then(Value::as_str).is_some_and(|task| !task.is_empty()) {
+        return Err(bad("no `task`: every record names its task (a non-empty string)".into()));
+    }
     if let Some(terminal) = fields.get("terminal")
         && !terminal.as_str().is_some_and(|t| TERMINALS.contains(&t))
     {
         return Err(bad(format!("`terminal` is {terminal}, not one of {}", TERMINALS.join(", "))));
+    }
+    // How the episode ended agrees with whether it succeeded (the agents' `terminal`, the
+    // expert's `outcome`): a record that says both cannot be counted either way.
+    let success = fields.get("success").and_then(Value::as_bool) == Some(true);
+    for key in ["terminal", "outcome"] {
+        if let Some(end) = fields.get(key).and_then(Value::as_str)
+            && (end == "success") != success
+        {
+            return Err(bad(format!("`{key}` is \"{end}\" but `success` is {success}")));
+        }
     }
     if let Some(attribution) = fields.get("attribution")
         && !(attribution.is_null() || attribution.as_str().is_some_and(|a| ATTRIBUTIONS.contains(&a)))
