@@ -203,7 +203,7 @@ pub(crate) fn check(path: &Path, line: usize, fields: &Map<String, Value>) -> Re
     if !fields.get("success").is_some_and(Value::is_boolean) {
         return Err(bad("no boolean `success`: every record says whether its task succeeded".into()));
     }
-    if !fields.get("task").and_then(Value::as_str).is_some_and(|task| !task.is_empty()) {
+    if fields.get("task").and_then(Value::as_str).is_none_or(str::is_empty) {
         return Err(bad("no `task`: every record names its task (a non-empty string)".into()));
     }
     if let Some(terminal) = fields.get("terminal")
