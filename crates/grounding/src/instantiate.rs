@@ -149,7 +149,8 @@ impl<'a> Instantiator<'a> {
             Formula::Exists(vars, body, conjs) => {
                 // Only bindings under which the body's relaxation holds on reachable atoms can
                 // make the body true in a reachable state.
-                let join = Join { store: &self.reachable.atoms, domains: &self.lifted.domains, var_domains: &schema.var_domains };
+                let join =
+                    Join { store: &self.reachable.atoms, domains: &self.lifted.domains, var_domains: &schema.var_domains, stop: None };
                 let mut candidates: FxHashSet<SmallVec<[ObjectId; 4]>> = FxHashSet::default();
                 let mut ordered = Vec::new();
                 for conj in conjs {

@@ -72,9 +72,15 @@ pub(crate) struct Join<'a> {
     pub store: &'a AtomStore,
     pub domains: &'a TypeDomains,
     pub var_domains: &'a [DomainId],
+    /// Set (by the caller's `emit`) to end the join early: every loop checks it.
+    pub stop: Option<&'a std::cell::Cell<bool>>,
 }
 
 impl Join<'_> {
+    fn stopped(&self) -> bool {
+        self.stop.is_some_and(std::cell::Cell::get)
+    }
+
     /// Calls `emit` with every extension of `binding` that satisfies `conj` (atoms in the
     /// store, equalities, variable types) and binds every variable in `must_bind`
     /// (unconstrained ones range over their type). Other variables may stay unbound.
@@ -163,11 +169,17 @@ impl Join<'_> {
         match candidates {
             Some(list) => {
                 for &index in list {
+                    if self.stopped() {
+                        return;
+                    }
                     try_tuple(&relation.tuples[index as usize], binding);
                 }
             }
             None => {
                 for tuple in &relation.tuples {
+                    if self.stopped() {
+                        return;
+                    }
                     try_tuple(tuple, binding);
                 }
             }
@@ -181,6 +193,9 @@ impl Join<'_> {
             let position = from + offset;
             let var = must_bind[position];
             for &object in &self.domains.lists[self.var_domains[var as usize]] {
+                if self.stopped() {
+                    break;
+                }
                 binding[var as usize] = Some(object);
                 if self.equalities_possible(conj, binding) {
                     self.finish(conj, binding, must_bind, position + 1, emit);

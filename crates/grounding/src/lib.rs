@@ -40,6 +40,7 @@ pub mod relevance;
 mod task;
 
 pub use ids::{ActionId, FactId, ObjectId, PredicateId, SchemaId};
+pub use reach::MAX_INSTANCES;
 pub use task::{Action, Atom, Condition, ConditionalEffect, Cost, Goal, Literal, Object, Predicate, Schema, Task};
 
 use pddl_syntax::{Diagnostic, Span, check};
@@ -87,6 +88,17 @@ pub enum GroundingError {
         /// The whole `(:action ...)` form, or the goal's condition.
         span: Span,
     },
+    /// An action with more reachable instances than grounding makes
+    /// ([`MAX_INSTANCES`](crate::MAX_INSTANCES)); `span` is the action in the domain.
+    #[error("action `{action}` has more than {limit} reachable instances: give its parameters types, or preconditions that bind them")]
+    TooLarge {
+        /// The action's name.
+        action: String,
+        /// The limit it passed.
+        limit: usize,
+        /// The whole `(:action ...)` form.
+        span: Span,
+    },
     /// `term` is the cost term as instantiated; `span` is where the domain writes it.
     #[error("{action}: its cost {term} has no value in the problem's `:init`")]
     MissingCost {
@@ -119,7 +131,9 @@ impl GroundingError {
     pub fn location(&self) -> Option<(PddlFile, Span)> {
         match self {
             GroundingError::Invalid { .. } | GroundingError::Unresolved(_) => None,
-            GroundingError::Unsupported { span, .. } | GroundingError::MissingCost { span, .. } => Some((PddlFile::Domain, *span)),
+            GroundingError::Unsupported { span, .. } | GroundingError::MissingCost { span, .. } | GroundingError::TooLarge { span, .. } => {
+                Some((PddlFile::Domain, *span))
+            }
             GroundingError::TooManyAlternatives { file, span, .. } | GroundingError::InvalidCost { file, span, .. } => Some((*file, *span)),
         }
     }
@@ -166,7 +180,7 @@ pub fn ground(domain: &pddl_syntax::Domain, problem: &pddl_syntax::Problem) -> R
         return Err(GroundingError::Invalid { domain: report.domain, problem: report.problem });
     }
     let lifted = lifted::lift(domain, problem)?;
-    let reachable = reach::reachable(&lifted);
+    let reachable = reach::reachable(&lifted)?;
     // Fluent atoms: reached and added by a reachable instance, or deleted by one.
     let mut fluent: Vec<(PredicateId, join::Tuple)> = reach::deleted_atoms(&lifted, &reachable);
     {
