@@ -89,7 +89,7 @@ pub enum GroundingError {
         span: Span,
     },
     /// An action with more reachable instances than grounding makes
-    /// ([`MAX_INSTANCES`](crate::MAX_INSTANCES)); `span` is the action in the domain.
+    /// ([`MAX_INSTANCES`]); `span` is the action in the domain.
     #[error("action `{action}` has more than {limit} reachable instances: give its parameters types, or preconditions that bind them")]
     TooLarge {
         /// The action's name.

@@ -34,7 +34,7 @@ pub(crate) fn instantiate_args(args: &[Arg], binding: &Binding) -> Tuple {
         .collect()
 }
 
-/// Action instances grounding makes at most: past it, [`reachable`] stops with
+/// Action instances grounding makes at most: past it, relaxed reachability stops with
 /// [`GroundingError::TooLarge`] naming the action, where it would go on until memory ran out
 /// (an action of five free parameters over 40 objects is 10^8 instances, about 10 GB). The
 /// benchmarks stay far below it: ALFWorld's games ground at most 7,336 actions, EAI's
