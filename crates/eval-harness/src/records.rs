@@ -180,7 +180,12 @@ fn write_sorted(value: &Value, out: &mut String) {
 /// The first 12 hex digits of the sha256 of [`canonical_json`]`(config)`.
 pub fn config_hash(config: &impl Serialize) -> String {
     use sha2::{Digest, Sha256};
-    Sha256::digest(canonical_json(config).as_bytes()).iter().take(6).map(|b| format!("{b:02x}")).collect()
+    short_hex(&Sha256::digest(canonical_json(config).as_bytes()))
+}
+
+/// The first 12 hex digits of a digest: how records name configurations and task lists.
+fn short_hex(digest: &[u8]) -> String {
+    digest.iter().take(6).map(|b| format!("{b:02x}")).collect()
 }
 
 /// The digest of a run's task list that its configuration keeps (`tasks.ids_sha256`): the first
@@ -194,7 +199,7 @@ pub fn task_list_digest<'a>(ids: impl IntoIterator<Item = &'a str>) -> String {
         digest.update(id.as_bytes());
         digest.update(b"\n");
     }
-    digest.finalize().iter().take(6).map(|b| format!("{b:02x}")).collect()
+    short_hex(&digest.finalize())
 }
 
 /// One of `count` shards (1-based `index`, `1 <= index <= count`, as [`str::parse`] checks):
