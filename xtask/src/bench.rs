@@ -31,10 +31,10 @@ enum Which {
         #[arg(long, default_value = "all")]
         benchmark: String,
         /// At most this many tasks per benchmark (evenly spaced).
-        #[arg(long)]
+        #[arg(long, value_parser = crate::input::at_least_one::<usize>)]
         limit: Option<usize>,
         /// Timed runs of ours per task (the median is reported).
-        #[arg(long, default_value_t = 5)]
+        #[arg(long, default_value_t = 5, value_parser = crate::input::at_least_one::<usize>)]
         runs: usize,
         /// Skip Fast Downward.
         #[arg(long)]
@@ -53,7 +53,7 @@ enum Which {
         #[arg(long, default_value = "ipc")]
         benchmark: String,
         /// At most this many tasks of each benchmark, evenly spaced.
-        #[arg(long)]
+        #[arg(long, value_parser = crate::input::at_least_one::<usize>)]
         limit: Option<usize>,
         /// Seconds per search, for both planners.
         #[arg(long, default_value_t = 60.0, value_parser = crate::input::positive_seconds)]
@@ -73,7 +73,7 @@ enum Which {
         #[arg(long, default_value = "ipc")]
         benchmark: String,
         /// At most this many tasks of each benchmark, evenly spaced.
-        #[arg(long)]
+        #[arg(long, value_parser = crate::input::at_least_one::<usize>)]
         limit: Option<usize>,
         /// Only tasks whose id contains this.
         #[arg(long)]
@@ -83,7 +83,7 @@ enum Which {
         #[arg(long, default_value_t = 50)]
         walk: usize,
         /// Timed passes over the states, for both (the median is reported).
-        #[arg(long, default_value_t = 5)]
+        #[arg(long, default_value_t = 5, value_parser = crate::input::at_least_one::<usize>)]
         runs: usize,
         /// Skip pyperplan.
         #[arg(long)]
@@ -98,7 +98,7 @@ enum Which {
         #[arg(long)]
         tokenizer: Option<PathBuf>,
         /// Use every N-th ALFWorld game and VirtualHome problem.
-        #[arg(long, default_value_t = 5)]
+        #[arg(long, default_value_t = 5, value_parser = crate::input::at_least_one::<usize>)]
         every: usize,
         /// Skip llguidance.
         #[arg(long)]
@@ -114,10 +114,10 @@ enum Which {
         #[arg(long, default_value = "alfworld-seen-50")]
         subset: String,
         /// At most this many games (evenly spaced); the engine takes seconds per game.
-        #[arg(long, default_value_t = 12)]
+        #[arg(long, default_value_t = 12, value_parser = crate::input::at_least_one::<usize>)]
         limit: usize,
         /// Timed repetitions of ours per game (the median is reported).
-        #[arg(long, default_value_t = 20)]
+        #[arg(long, default_value_t = 20, value_parser = crate::input::at_least_one::<usize>)]
         runs: usize,
         /// Skip the real engine.
         #[arg(long)]
@@ -132,15 +132,15 @@ enum Which {
 
 pub fn run(args: BenchArgs) -> anyhow::Result<ExitCode> {
     match args.which {
-        Which::Ground { benchmark, limit, runs, no_reference, json } => ground(&benchmark, limit, runs.max(1), no_reference, json),
+        Which::Ground { benchmark, limit, runs, no_reference, json } => ground(&benchmark, limit, runs, no_reference, json),
         Which::Plan { configs, benchmark, limit, time_limit, filter, json } => {
             plan(&configs, &benchmark, limit, time_limit, filter.as_deref(), json)
         }
         Which::Heuristic { benchmark, limit, filter, walk, runs, no_reference, json } => {
-            heuristic(&benchmark, limit, filter.as_deref(), walk, runs.max(1), no_reference, json)
+            heuristic(&benchmark, limit, filter.as_deref(), walk, runs, no_reference, json)
         }
         Which::Mask { tokenizer, every, no_reference, json } => crate::mask_bench::run(tokenizer, every, no_reference, json),
-        Which::Env { subset, limit, runs, no_reference, json } => crate::env::bench(&subset, limit, runs.max(1), no_reference, json),
+        Which::Env { subset, limit, runs, no_reference, json } => crate::env::bench(&subset, limit, runs, no_reference, json),
         Which::Lm(args) => crate::lm::bench(args),
     }
 }

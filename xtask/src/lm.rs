@@ -39,7 +39,7 @@ pub struct GenerateArgs {
     #[arg(long)]
     prompt: String,
     /// At most this many new tokens (fewer if the model ends its turn).
-    #[arg(long, default_value_t = 64)]
+    #[arg(long, default_value_t = 64, value_parser = crate::input::at_least_one::<usize>)]
     max_tokens: usize,
     /// System message for the chat template.
     #[arg(long, default_value = "You are a helpful assistant.")]
@@ -58,13 +58,13 @@ pub struct BenchLmArgs {
     #[arg(long, default_value = "smollm2")]
     model: String,
     /// Prompt length for prefill and the shared prefix of the branch test.
-    #[arg(long, default_value_t = 500)]
+    #[arg(long, default_value_t = 500, value_parser = crate::input::at_least_one::<usize>)]
     prefix: usize,
     /// Tokens decoded one at a time after the prompt.
     #[arg(long, default_value_t = 64)]
     decode: usize,
     /// Timed runs (the median is reported).
-    #[arg(long, default_value_t = 3)]
+    #[arg(long, default_value_t = 3, value_parser = crate::input::at_least_one::<usize>)]
     runs: usize,
     /// Skip candle-transformers' quantized llama.
     #[arg(long)]
@@ -263,7 +263,7 @@ fn argmax(logprobs: &Logprobs) -> anyhow::Result<u32> {
 
 pub fn bench(args: BenchLmArgs) -> anyhow::Result<ExitCode> {
     let path = resolve_model(&args.model)?;
-    let runs = args.runs.max(1);
+    let runs = args.runs;
     let mut model = load(&path)?;
     // The prompt, the decoded tokens and the longest sibling suffix (64) in the context.
     let context = model.weights().config().context_length;

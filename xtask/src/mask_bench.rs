@@ -107,7 +107,7 @@ fn sorted(mut v: Vec<f64>) -> Vec<f64> {
 pub fn run(tokenizer_path: Option<PathBuf>, every: usize, no_reference: bool, json_out: bool) -> anyhow::Result<ExitCode> {
     let path = tokenizer_path.unwrap_or_else(|| benchmark_data::fixtures_dir().join("tokenizers/qwen3/tokenizer.json"));
     let (vocab, tokenizer): (Vocabulary, Tokenizer) = token_constraint::hf::vocabulary_from_file(&path)?;
-    let work = workloads(&tokenizer, every.max(1))?;
+    let work = workloads(&tokenizer, every)?;
     let positions: usize = work.iter().map(|w| w.actions.iter().map(Vec::len).sum::<usize>()).sum();
     eprintln!("{} states, {} masks each side, vocabulary {}", work.len(), positions, vocab.len());
 

@@ -754,6 +754,32 @@ fn time_limits_that_are_not_positive_seconds_are_bad_input() {
     assert!(stderr.contains("1e20") && !stderr.contains("panicked"), "{stderr}");
 }
 
+/// A count of zero (runs, tasks, tokens) is bad input naming the option: `bench` used to take
+/// `--runs 0` and `--limit 0` as 1 and report a median nobody asked for.
+#[test]
+fn counts_of_zero_are_bad_input() {
+    let cases: &[&[&str]] = &[
+        &["bench", "ground", "--runs", "0"],
+        &["bench", "ground", "--limit", "0"],
+        &["bench", "plan", "--limit", "0"],
+        &["bench", "heuristic", "--runs", "0"],
+        &["bench", "heuristic", "--limit", "0"],
+        &["bench", "env", "--runs", "0"],
+        &["bench", "env", "--limit", "0"],
+        &["bench", "mask", "--every", "0"],
+        &["bench", "lm", "--runs", "0"],
+        &["bench", "lm", "--prefix", "0"],
+        &["generate", "--prompt", "x", "--max-tokens", "0"],
+    ];
+    for args in cases {
+        let output = xtask(args);
+        let stderr = String::from_utf8_lossy(&output.stderr);
+        let option = args[args.len() - 2];
+        assert_eq!(output.status.code(), Some(2), "{args:?}: {stderr}");
+        assert!(stderr.contains(option) && stderr.contains("at least 1"), "{args:?}: {stderr}");
+    }
+}
+
 /// `cargo xtask rearrange` from scenes none of which has a family's appliance: bad input
 /// naming the folder and the class (it panicked drawing from no scenes).
 #[test]
