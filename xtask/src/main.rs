@@ -116,6 +116,10 @@ enum Command {
 }
 
 fn main() -> ExitCode {
+    // `cargo xtask env … | head`: once the reader is gone, end as a Unix tool does (killed by
+    // SIGPIPE, quietly) rather than panic in `println!`. Writes to sockets are unaffected (std
+    // sends with MSG_NOSIGNAL), and no command writes to a child's standard input.
+    sigpipe::reset();
     // A negative number after an option is its value (`--limit -1` is then refused by the
     // option's own parser, which names it), not an unknown flag. Numbers only; `--shard` and
     // `--seeds`, whose values are never flags, take any value (`-1/2`, `-1,2`).

@@ -754,6 +754,27 @@ fn time_limits_that_are_not_positive_seconds_are_bad_input() {
     assert!(stderr.contains("1e20") && !stderr.contains("panicked"), "{stderr}");
 }
 
+/// Output into a pipe whose reader has gone (`cargo xtask env … | head -1`) ends the command
+/// as SIGPIPE ends a Unix tool: no panic (it panicked in `println!`, exit 101).
+#[cfg(unix)]
+#[test]
+fn a_closed_standard_output_ends_the_command_without_a_panic() {
+    use std::os::unix::process::ExitStatusExt;
+    use std::process::{Command, Stdio};
+    let mut child = Command::new(env!("CARGO_BIN_EXE_xtask"))
+        .args(["env", "--benchmark", "virtualhome-rearrange", "--task", "dishwasher-000"])
+        .current_dir(Path::new(env!("CARGO_MANIFEST_DIR")).join(".."))
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("xtask runs");
+    drop(child.stdout.take());
+    let output = child.wait_with_output().expect("xtask ends");
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(!stderr.contains("panicked"), "{stderr}");
+    assert_eq!(output.status.signal(), Some(13), "{:?}: {stderr}", output.status);
+}
+
 /// A count of zero (runs, tasks, tokens) is bad input naming the option: `bench` used to take
 /// `--runs 0` and `--limit 0` as 1 and report a median nobody asked for.
 #[test]
