@@ -109,11 +109,12 @@ pub struct RearrangeArgs {
     #[arg(long, default_value = "fixtures/virtualhome-rearrange")]
     out: PathBuf,
     /// A* time limit per candidate, seconds.
-    #[arg(long, default_value_t = 30)]
+    #[arg(long, default_value_t = 30, value_parser = crate::input::at_least_one::<u64>)]
     time_limit: u64,
 }
 
 pub fn run(args: RearrangeArgs) -> anyhow::Result<ExitCode> {
+    crate::input::folder_to_write(&args.out, "--out")?;
     let mut files: Vec<PathBuf> = std::fs::read_dir(&args.scenes)
         .map_err(|e| InputError(format!("{}: cannot read: {e}", args.scenes.display())))?
         .flatten()
@@ -178,10 +179,18 @@ pub fn run(args: RearrangeArgs) -> anyhow::Result<ExitCode> {
     Ok(ExitCode::SUCCESS)
 }
 
+/// A base scene's JSON, once the environment's own loader has accepted the file (so a bad
+/// scene is bad input naming the file and field, as in `env` and `eval`).
 fn read_task(path: &Path) -> anyhow::Result<Value> {
+    VirtualhomeTask::load(path).map_err(|e| InputError(e.to_string()))?;
+    let bytes = std::fs::read(path).with_context(|| format!("cannot read {}", path.display()))?;
     let mut text = String::new();
-    std::io::Read::read_to_string(&mut flate2::read::GzDecoder::new(std::fs::File::open(path)?), &mut text)
-        .with_context(|| format!("{}: bad gzip", path.display()))?;
+    if bytes.starts_with(&[0x1f, 0x8b]) {
+        std::io::Read::read_to_string(&mut flate2::read::GzDecoder::new(&bytes[..]), &mut text)
+            .with_context(|| format!("{}: bad gzip", path.display()))?;
+    } else {
+        text = String::from_utf8(bytes).with_context(|| format!("{}: not UTF-8", path.display()))?;
+    }
     serde_json::from_str(&text).with_context(|| format!("{}: not JSON", path.display()))
 }
 

@@ -801,16 +801,49 @@ fn counts_of_zero_are_bad_input() {
     }
 }
 
-/// `cargo xtask rearrange` from scenes none of which has a family's appliance: bad input
-/// naming the folder and the class (it panicked drawing from no scenes).
+/// `cargo xtask rearrange`'s bad input, each exit 2: scenes none of which has a family's
+/// appliance, naming the folder and the class (it panicked drawing from no scenes); a bad scene
+/// file; an output that is a file; a time limit of zero.
 #[test]
-fn rearrange_from_scenes_without_the_appliance_is_bad_input() {
+fn rearrange_from_bad_scenes_or_options_is_bad_input() {
     let scenes = scratch_dir("rearrange-scenes-");
     let out = scratch_dir("rearrange-out-");
     let output = xtask(&["rearrange", "--scenes", scenes.path().to_str().unwrap(), "--out", out.path().to_str().unwrap()]);
     let stderr = String::from_utf8_lossy(&output.stderr);
     assert_eq!(output.status.code(), Some(2), "{stderr}");
     assert!(stderr.contains(&scenes.path().display().to_string()) && !stderr.contains("panicked"), "{stderr}");
+
+    // A scene the environment would refuse is bad input naming the file and the field (it was
+    // an internal error naming a generated task), and so is garbage in a `.json.gz` (exit 3).
+    let base = std::fs::read(fixtures().join("virtualhome-eai/graphs/201_1.json.gz")).unwrap();
+    std::fs::write(scenes.path().join("201_1.json.gz"), &base).unwrap();
+    let mut text = String::new();
+    std::io::Read::read_to_string(&mut flate2::read::GzDecoder::new(&base[..]), &mut text).unwrap();
+    let mut bogus: serde_json::Value = serde_json::from_str(&text).unwrap();
+    bogus["task_id"] = "183_2".into();
+    bogus["init_graph"]["nodes"][0]["properties"] = serde_json::json!(["BOGUS"]);
+    std::fs::write(scenes.path().join("183_2.json.gz"), bogus.to_string()).unwrap();
+    let output = xtask(&["rearrange", "--scenes", scenes.path().to_str().unwrap(), "--out", out.path().to_str().unwrap()]);
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert_eq!(output.status.code(), Some(2), "{stderr}");
+    assert!(stderr.contains("183_2.json.gz") && stderr.contains("BOGUS"), "{stderr}");
+    std::fs::write(scenes.path().join("183_2.json.gz"), b"garbage").unwrap();
+    let output = xtask(&["rearrange", "--scenes", scenes.path().to_str().unwrap(), "--out", out.path().to_str().unwrap()]);
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert_eq!(output.status.code(), Some(2), "{stderr}");
+    assert!(stderr.contains("183_2.json.gz") && stderr.contains("neither gzip data"), "{stderr}");
+
+    // An output that is a file, and a time limit of nothing, are refused before any work.
+    let file = out.path().join("a-file");
+    std::fs::write(&file, b"").unwrap();
+    let output = xtask(&["rearrange", "--scenes", scenes.path().to_str().unwrap(), "--out", file.to_str().unwrap()]);
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert_eq!(output.status.code(), Some(2), "{stderr}");
+    assert!(stderr.contains("--out") && stderr.contains("a file is there"), "{stderr}");
+    let output = xtask(&["rearrange", "--out", out.path().to_str().unwrap(), "--time-limit", "0"]);
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert_eq!(output.status.code(), Some(2), "{stderr}");
+    assert!(stderr.contains("--time-limit"), "{stderr}");
 }
 
 /// Phase II's A* over states up to interchangeable objects. EAI 783_1 puts five alike plates in
