@@ -475,6 +475,10 @@ pub fn run(args: EvalArgs) -> anyhow::Result<ExitCode> {
             uses_default(&args.episode.explorer) || (args.episode.chat.chat_planner.is_none() && uses_default(&args.episode.lm.lm))
         }
     };
+    // One run per seed: a seed twice would run the same configuration twice into one file.
+    if let Some((_, seed)) = args.seeds.iter().enumerate().find(|&(i, seed)| args.seeds[..i].contains(seed)) {
+        return Err(InputError(format!("--seeds: seed {seed} is given twice; each seed is one run")).into());
+    }
     if !args.seeds.is_empty() && args.agent != AgentName::Ours {
         return Err(InputError(format!(
             "--seeds: the {} agent has no seed (its runs are deterministic)",

@@ -1016,7 +1016,7 @@ fn options_that_would_be_ignored_or_cannot_be_written_are_bad_input() {
     let damaged = scratch(&tmp, "damaged.jsonl", "not a reply\n");
     let damaged_at = format!("{}:1: not a cached reply", damaged.display());
     let closed = "openai:http://127.0.0.1:9/v1";
-    let cases: [(Vec<&str>, &str); 11] = [
+    let cases: [(Vec<&str>, &str); 12] = [
         (vec!["agent", "--game", game, "--lm", "uniform", "--chat-cache", cache.to_str().unwrap()], "the systematic explorer asks none"),
         // A damaged reply file is named before a server (none here) is asked who it serves.
         (vec!["agent", "--game", game, "--explorer", closed, "--lm", "uniform", "--chat-cache", damaged.to_str().unwrap()], &damaged_at),
@@ -1049,6 +1049,10 @@ fn options_that_would_be_ignored_or_cannot_be_written_are_bad_input() {
         (vec!["eval", "--agent", "expert", "--limit", "-1", "--out", out.to_str().unwrap()], "for '--limit <LIMIT>'"),
         (vec!["eval", "--agent", "expert", "--shard", "-1/2", "--out", out.to_str().unwrap()], "for '--shard <SHARD>'"),
         (vec!["eval", "--agent", "expert", "--seeds", "-1,2", "--out", out.to_str().unwrap()], "for '--seeds <SEEDS>'"),
+        (
+            vec!["eval", "--explorer", "systematic", "--lm", "uniform", "--seeds", "7,1,7", "--out", out.to_str().unwrap()],
+            "--seeds: seed 7 is given twice",
+        ),
         (
             vec!["plan", "--domain", &domain, "--problem", &problem, "--planner", "mcts", "--lm", "uniform", "--simulations", "0"],
             "for '--simulations <SIMULATIONS>'",

@@ -334,6 +334,20 @@ fn faults_in_the_input_name_the_file_and_line() {
     assert!(message(record_paths(&[empty])).contains("no `*.jsonl` record files"));
 }
 
+/// A record file named twice (itself, through its folder, under another spelling) is read once,
+/// in the place its first naming puts it: it used to be loaded twice, and the report refused
+/// every task as recorded again by the file itself.
+#[test]
+fn a_file_named_twice_is_read_once() {
+    let once = record_paths(&[fixtures()]).expect("fixture files");
+    let first = once[0].clone();
+    let respelled = fixtures().join("..").join("report").join(first.file_name().unwrap());
+    let twice = record_paths(&[first.clone(), fixtures(), respelled, fixtures()]).expect("fixture files");
+    let mut expected = vec![first.clone()];
+    expected.extend(once.iter().filter(|p| **p != first).cloned());
+    assert_eq!(twice, expected);
+}
+
 #[test]
 fn a_record_cut_short_is_left_out_with_a_warning() {
     let (_tmp_dir, dir) = scratch("cut");

@@ -65,9 +65,16 @@ fn record_stem(path: &Path) -> String {
 }
 
 /// The record files named by `arguments`: a file as itself, a folder as the `*.jsonl` files
-/// directly inside it (sorted).
+/// directly inside it (sorted). A file named twice (itself and through its folder, or under
+/// two spellings of its path) is read once, where its first naming puts it.
 pub fn record_paths(arguments: &[PathBuf]) -> Result<Vec<PathBuf>, ReportError> {
     let mut paths = Vec::new();
+    let mut seen = std::collections::BTreeSet::new();
+    let mut push = |paths: &mut Vec<PathBuf>, path: PathBuf| {
+        if seen.insert(std::fs::canonicalize(&path).unwrap_or_else(|_| path.clone())) {
+            paths.push(path);
+        }
+    };
     for argument in arguments {
         if argument.is_dir() {
             let entries = std::fs::read_dir(argument).map_err(|source| RecordError::Io { path: argument.clone(), source })?;
@@ -77,9 +84,11 @@ pub fn record_paths(arguments: &[PathBuf]) -> Result<Vec<PathBuf>, ReportError> 
                 return Err(ReportError::NoRecords(format!("{}: no `*.jsonl` record files in this folder", argument.display())));
             }
             found.sort();
-            paths.extend(found);
+            for path in found {
+                push(&mut paths, path);
+            }
         } else {
-            paths.push(argument.clone());
+            push(&mut paths, argument.clone());
         }
     }
     if paths.is_empty() {
