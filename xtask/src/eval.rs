@@ -720,6 +720,21 @@ fn plan(args: &EvalArgs) -> anyhow::Result<Vec<Planned>> {
             }
             Ok(kept)
         })
+        .and_then(|planned| {
+            // Every VirtualHome task file the run will take is read now, scene and goal (a
+            // folder of `--task-dir` is the user's): a bad one is named before the first
+            // episode, not after hours of them.
+            for p in &planned {
+                let dir = if p.suite == Suite::VirtualhomeEai { args.task_dir.as_deref() } else { None };
+                let selected = |i: &usize| args.shard.is_none_or(|shard| shard.selects(*i));
+                for i in (0..p.total(args.limit)).filter(selected) {
+                    if let EvalTask::Virtualhome { id } = &p.tasks[i] {
+                        crate::agent::virtualhome_env(p.suite.name(), id, dir)?;
+                    }
+                }
+            }
+            Ok(planned)
+        })
 }
 
 /// One run over the planned suites: the summaries by benchmark and the record files written.

@@ -1016,7 +1016,20 @@ fn options_that_would_be_ignored_or_cannot_be_written_are_bad_input() {
     let damaged = scratch(&tmp, "damaged.jsonl", "not a reply\n");
     let damaged_at = format!("{}:1: not a cached reply", damaged.display());
     let closed = "openai:http://127.0.0.1:9/v1";
-    let cases: [(Vec<&str>, &str); 12] = [
+    // A task folder whose last file (in the run's order) has a goal that is not a list: named
+    // before the first episode (it was read at its turn, after the others had run).
+    let tasks = tmp.path().join("tasks");
+    std::fs::create_dir(&tasks).unwrap();
+    std::fs::copy(fixtures().join("virtualhome-eai/graphs/201_1.json.gz"), tasks.join("201_1.json.gz")).unwrap();
+    let mut text = String::new();
+    std::io::Read::read_to_string(&mut flate2::read::GzDecoder::new(std::fs::File::open(tasks.join("201_1.json.gz")).unwrap()), &mut text)
+        .unwrap();
+    let mut bad: serde_json::Value = serde_json::from_str(&text).unwrap();
+    bad["task_id"] = "zzbad".into();
+    bad["vh_goal"]["actions"] = serde_json::Value::Null;
+    std::fs::write(tasks.join("zzbad.json"), bad.to_string()).unwrap();
+    std::fs::rename(tasks.join("zzbad.json"), tasks.join("zzbad.json.gz")).unwrap();
+    let cases: [(Vec<&str>, &str); 13] = [
         (vec!["agent", "--game", game, "--lm", "uniform", "--chat-cache", cache.to_str().unwrap()], "the systematic explorer asks none"),
         // A damaged reply file is named before a server (none here) is asked who it serves.
         (vec!["agent", "--game", game, "--explorer", closed, "--lm", "uniform", "--chat-cache", damaged.to_str().unwrap()], &damaged_at),
@@ -1052,6 +1065,22 @@ fn options_that_would_be_ignored_or_cannot_be_written_are_bad_input() {
         (
             vec!["eval", "--explorer", "systematic", "--lm", "uniform", "--seeds", "7,1,7", "--out", out.to_str().unwrap()],
             "--seeds: seed 7 is given twice",
+        ),
+        (
+            vec![
+                "eval",
+                "--agent",
+                "planner",
+                "--benchmark",
+                "virtualhome-eai",
+                "--task-dir",
+                tasks.to_str().unwrap(),
+                "--subset",
+                "all",
+                "--out",
+                out.to_str().unwrap(),
+            ],
+            "zzbad.json.gz: field `vh_goal.actions`: not a list",
         ),
         (
             vec!["plan", "--domain", &domain, "--problem", &problem, "--planner", "mcts", "--lm", "uniform", "--simulations", "0"],
