@@ -7,7 +7,7 @@ use std::path::PathBuf;
 /// [`crate::AlfworldEnv::from_game_json`]).
 #[derive(Debug, thiserror::Error)]
 pub enum EnvError {
-    /// The game file could not be read, or is not UTF-8 text.
+    /// The game file could not be read.
     #[error("cannot read {}: {source}", path.display())]
     Io {
         /// The `game.tw-pddl` file.
@@ -15,6 +15,18 @@ pub enum EnvError {
         /// The operating system's error.
         #[source]
         source: std::io::Error,
+    },
+    /// The game file holds a byte that is not UTF-8.
+    #[error("{}:{line}:{column}: not UTF-8 text (byte 0x{byte:02x})", path.display())]
+    NotUtf8 {
+        /// The `game.tw-pddl` file.
+        path: PathBuf,
+        /// 1-based line of the byte.
+        line: usize,
+        /// 1-based column of the byte, in characters.
+        column: usize,
+        /// The byte.
+        byte: u8,
     },
     /// The game file is not valid JSON.
     #[error("{path}:{line}:{column}: not valid JSON: {message}")]

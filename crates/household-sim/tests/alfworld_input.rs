@@ -36,6 +36,25 @@ fn malformed_json_names_line_and_column() {
     assert!(error.to_string().starts_with("bad.tw-pddl:2:"), "{error}");
 }
 
+/// A game file with a byte that is not UTF-8 names the file, line and column (it said only
+/// "stream did not contain valid UTF-8"); a byte-order mark is read past, as `benchmark_data`
+/// reads the same files.
+#[test]
+fn a_game_file_that_is_not_utf8_names_line_and_column() {
+    let dir = std::env::temp_dir().join(format!("alfworld-input-utf8-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("scratch folder");
+    let file = dir.join("game.tw-pddl");
+    std::fs::write(&file, b"{\n  \"pddl_domain\": \"\xc3\xa9\xff\"\n}").expect("written");
+    let error = AlfworldEnv::from_game_file(&file).expect_err("not UTF-8").to_string();
+    assert_eq!(error, format!("{}:2:20: not UTF-8 text (byte 0xff)", file.display()));
+    let mut text = b"\xef\xbb\xbf".to_vec();
+    text.extend(std::fs::read(game_path()).expect("fixture"));
+    std::fs::write(&file, text).expect("written");
+    let loaded = AlfworldEnv::from_game_file(&file);
+    std::fs::remove_dir_all(&dir).expect("removed");
+    loaded.expect("a game after a byte-order mark");
+}
+
 #[test]
 fn a_grammar_naming_an_unknown_symbol_is_an_error_with_its_position() {
     let mut game = game_json();

@@ -175,7 +175,15 @@ impl AlfworldEnv {
     /// starts with one of [`TASK_TYPES`].
     pub fn from_game_file(path: &Path) -> Result<AlfworldEnv, EnvError> {
         let file = if path.is_dir() { path.join("game.tw-pddl") } else { path.to_path_buf() };
-        let text = std::fs::read_to_string(&file).map_err(|source| EnvError::Io { path: file.clone(), source })?;
+        let bytes = std::fs::read(&file).map_err(|source| EnvError::Io { path: file.clone(), source })?;
+        // Without a byte-order mark, as `benchmark_data::read_text` reads the same files.
+        let bytes = bytes.strip_prefix(b"\xef\xbb\xbf").map(<[u8]>::to_vec).unwrap_or(bytes);
+        let text = String::from_utf8(bytes).map_err(|e| {
+            let at = e.utf8_error().valid_up_to();
+            let byte = e.as_bytes()[at];
+            let (line, column) = pddl_syntax::line_column(&String::from_utf8_lossy(&e.as_bytes()[..at]), at);
+            EnvError::NotUtf8 { path: file.clone(), line, column, byte }
+        })?;
         let family = file
             .ancestors()
             .filter_map(|p| p.file_name()?.to_str())
