@@ -105,8 +105,12 @@ impl TaskArgs {
                 warn(&files);
                 Ok(files)
             }
-            (None, None, Some(game)) => benchmark_data::load_alfworld_game(game, Benchmark::AlfworldSeen, game.display().to_string())
-                .map_err(|e| InputError(e.to_string()).into()),
+            (None, None, Some(game)) => {
+                let files = benchmark_data::load_alfworld_game(game, Benchmark::AlfworldSeen, game.display().to_string())
+                    .map_err(|e| InputError(e.to_string()))?;
+                warn(&files);
+                Ok(files)
+            }
             _ => bail!(InputError("give either --domain D --problem P, or --game G".into())),
         }
     }
@@ -116,7 +120,7 @@ impl TaskArgs {
     }
 }
 
-/// The checker's warnings on the user's own PDDL files (a problem for another domain, an object
+/// The checker's warnings on the user's own PDDL files or game (a problem for another domain, an object
 /// declared twice, a type its own ancestor), each `file:line:column: warning[kind]: ...` on
 /// standard error: they do not stop the command, but are not dropped. Errors are [`ground`]'s.
 fn warn(files: &TaskFiles) {
@@ -124,8 +128,8 @@ fn warn(files: &TaskFiles) {
         return;
     };
     let report = pddl_syntax::check(&domain, Some(&problem));
-    let domain_path = files.domain_path.display().to_string();
-    let problem_path = files.problem_path.display().to_string();
+    let domain_path = embedded(files, &files.domain_path, "pddl_domain");
+    let problem_path = embedded(files, &files.problem_path, "pddl_problem");
     for (diagnostics, path, source) in [(&report.domain, &domain_path, &files.domain), (&report.problem, &problem_path, &files.problem)] {
         for warning in diagnostics.iter().filter(|d| !d.is_error()) {
             eprintln!("{}", warning.render(path, source));
@@ -133,15 +137,15 @@ fn warn(files: &TaskFiles) {
     }
 }
 
+/// How a diagnostic names the file of PDDL text: the path, and for an ALFWorld game (whose
+/// PDDL is a JSON string field) the field, since lines and columns count inside it.
+fn embedded(files: &TaskFiles, path: &Path, field: &str) -> String {
+    if matches!(files.extra, Extra::Alfworld(_)) { format!("{} (embedded {field})", path.display()) } else { path.display().to_string() }
+}
+
 /// Parses and grounds, turning diagnostics into `file:line:column` errors (exit code 2).
 pub fn ground(files: &TaskFiles) -> anyhow::Result<Task> {
-    let where_ = |path: &Path, embedded: &str| {
-        if matches!(files.extra, Extra::Alfworld(_)) {
-            format!("{} (embedded {embedded})", path.display())
-        } else {
-            path.display().to_string()
-        }
-    };
+    let where_ = |path: &Path, field: &str| embedded(files, path, field);
     let domain = pddl_syntax::parse_domain(&files.domain)
         .map_err(|e| InputError(e.render(&where_(&files.domain_path, "pddl_domain"), &files.domain)))?;
     let problem = pddl_syntax::parse_problem(&files.problem)

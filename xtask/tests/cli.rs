@@ -58,6 +58,21 @@ fn pddl_warnings_name_file_line_and_column() {
     let shown = problem.display().to_string();
     assert!(stderr.lines().any(|l| l.starts_with(&format!("{shown}:2:")) && l.contains(": warning[")), "{stderr}");
     assert!(stderr.lines().any(|l| l.starts_with(&format!("{shown}:3:")) && l.contains(": warning[")), "{stderr}");
+
+    // The same in a game's embedded problem, named by its field (it was dropped for `--game`).
+    let game = "fixtures/alfworld/valid_seen/look_at_obj_in_light-AlarmClock-None-DeskLamp-323/trial_T20190909_044715_250790";
+    let mut json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(fixtures().join("..").join(game).join("game.tw-pddl")).unwrap()).unwrap();
+    let problem = json["pddl_problem"].as_str().unwrap().replace("(:domain alfred)", "(:domain other)");
+    json["pddl_problem"] = problem.into();
+    let file = scratch(&tmp, "game.tw-pddl", &json.to_string());
+    let output = xtask(&["ground", "--game", &file.display().to_string()]);
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert_eq!(output.status.code(), Some(0), "{stderr}");
+    let shown = format!("{} (embedded pddl_problem):", file.display());
+    assert!(stderr.lines().any(|l| l.starts_with(&shown) && l.contains("warning[domain-mismatch]")), "{stderr}");
+    let output = xtask(&["ground", "--game", game]);
+    assert_eq!(String::from_utf8_lossy(&output.stderr), "", "the benchmark's own game warns of nothing");
 }
 
 #[test]
