@@ -19,6 +19,27 @@ pub struct TaskArgs {
     pub game: Option<PathBuf>,
 }
 
+/// The options of `given`, a group of options flattened into a command, whose values are not
+/// the group's defaults, each as `--name`, in the group's order (`except` left out): for a
+/// command to refuse settings that its other choices would pass over in silence. An option
+/// given at its default value changes nothing, and is not named.
+pub fn changed_options<T>(given: &T, except: &[&str]) -> anyhow::Result<Vec<String>>
+where
+    T: clap::Args + clap::FromArgMatches + serde::Serialize,
+{
+    let command = T::augment_args(clap::Command::new("defaults"));
+    let defaults = T::from_arg_matches(&command.try_get_matches_from(["defaults"])?)?;
+    let (given, defaults) = (serde_json::to_value(given)?, serde_json::to_value(defaults)?);
+    let (Some(given), Some(defaults)) = (given.as_object(), defaults.as_object()) else {
+        bail!("an option group that is not a JSON object");
+    };
+    Ok(given
+        .iter()
+        .filter(|(name, value)| !except.contains(&name.as_str()) && defaults.get(*name) != Some(value))
+        .map(|(name, _)| format!("--{}", name.replace('_', "-")))
+        .collect())
+}
+
 /// A user error: bad input, reported with exit code 2.
 #[derive(Debug)]
 pub struct InputError(pub String);

@@ -85,6 +85,24 @@ pub fn plan(args: PlanArgs) -> anyhow::Result<ExitCode> {
     if args.symmetries && args.planner != Planner::Astar {
         return Err(crate::input::InputError("--symmetries is a setting of --planner astar".to_string()).into());
     }
+    // A setting of one planner given to another would be passed over in silence.
+    if args.preferred && !matches!(args.planner, Planner::Gbfs | Planner::LazyGbfs) {
+        return Err(crate::input::InputError("--preferred is a setting of --planner gbfs or lazy-gbfs".to_string()).into());
+    }
+    let passed_over = if args.planner == Planner::Mcts {
+        let classical = [(args.heuristic != HeuristicName::Ff, "--heuristic"), (args.max_expansions.is_some(), "--max-expansions")];
+        classical.iter().filter(|(given, _)| *given).map(|(_, name)| name.to_string()).collect()
+    } else {
+        let mut options = input::changed_options(&args.lm, &[])?;
+        options.extend(input::changed_options(&args.decode, &["clock"])?);
+        options
+    };
+    if let Some(first) = passed_over.first() {
+        let whose = if args.planner == Planner::Mcts { "the classical planners (astar, gbfs, lazy-gbfs)" } else { "--planner mcts" };
+        let what =
+            if passed_over.len() == 1 { format!("{first} is a setting") } else { format!("{} are settings", passed_over.join(", ")) };
+        return Err(crate::input::InputError(format!("{what} of {whose}")).into());
+    }
     args.out.as_deref().map(|out| input::file_to_write(out, "--out")).transpose()?;
     let files = args.task.load()?;
     let Some(algorithm) = args.planner.algorithm() else {

@@ -777,7 +777,9 @@ fn a_closed_standard_output_ends_the_command_without_a_panic() {
     use std::os::unix::process::ExitStatusExt;
     use std::process::{Command, Stdio};
     let mut child = Command::new(env!("CARGO_BIN_EXE_xtask"))
-        .args(["env", "--benchmark", "virtualhome-rearrange", "--task", "dishwasher-000"])
+        // 0.9 MB, far more than a pipe holds: another test's child, forked between our spawn
+        // and its exec, may hold the reading end for a moment, and the writes must outlast it.
+        .args(["env", "--benchmark", "virtualhome-rearrange", "--task", "dishwasher-000", "--random", "300"])
         .current_dir(Path::new(env!("CARGO_MANIFEST_DIR")).join(".."))
         .stdout(Stdio::piped())
         .stderr(Stdio::piped())

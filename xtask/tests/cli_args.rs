@@ -1,7 +1,8 @@
 //! No command line panics or answers with the wrong exit code: random values for every
 //! numeric and named option of `plan` (and `validate --spelling`), checked against the rules
-//! each option states. All values valid: the run ends with its verdict (0 or 1); any value
-//! invalid: exit 2 (bad input) with clap's message. Never a panic, never exit 3.
+//! each option states. All values valid: the run ends with its verdict (0 or 1), or, where a
+//! setting is another planner's, exit 2 naming it; any value invalid: exit 2 (bad input) with
+//! clap's message. Never a panic, never exit 3.
 
 mod common;
 
@@ -85,6 +86,44 @@ fn valid(option: &str, value: &str) -> bool {
     }
 }
 
+/// Whether `option` at `value` (a valid one) is a default of `plan`'s: Phase II's settings
+/// at their defaults change nothing for a classical planner.
+fn is_default(option: &str, value: &str) -> bool {
+    let at = |default: f64| number(value) == Some(default);
+    match option {
+        "--mode" => value == "constrained-mcts",
+        "--backup" => value == "max",
+        "--normalization" => value == "siblings",
+        "--tokenization" => value == "canonical",
+        "--end" => value == "anywhere",
+        "--width" => at(16.0),
+        "--max-actions" => at(64.0),
+        "--top-k" => at(20.0),
+        "--seed" => at(0.0),
+        "--exploration" => at(2.5),
+        "--lambda" => at(0.1),
+        "--base" => at(10.0),
+        "--prior-mix" => at(0.0),
+        "--temperature" => at(1.0),
+        "--top-p" => at(0.95),
+        _ => false,
+    }
+}
+
+/// Whether `option` at `value` is a setting of another planner than `planner`, which `plan`
+/// refuses rather than pass over: `--heuristic` (but ff, the default) and `--max-expansions`
+/// are the classical planners', Phase II's settings (but their defaults) are `mcts`'s; the
+/// time limit and the clock are everyone's.
+fn passed_over(option: &str, value: &str, planner: &str) -> bool {
+    let mcts = planner == "mcts";
+    match option {
+        "--time-limit" | "--clock" | "--planner" => false,
+        "--heuristic" => mcts && value != "ff",
+        "--max-expansions" => mcts,
+        _ => !mcts && !is_default(option, value),
+    }
+}
+
 const OPTIONS: &[&str] = &[
     "--time-limit",
     "--heuristic",
@@ -127,14 +166,16 @@ proptest! {
         // `--option=value`, so that values such as `-1` reach the option's parser instead of
         // being read as flags.
         let assigned: Vec<String> = chosen.iter().map(|(option, value)| format!("{option}={value}")).collect();
+        let planner = chosen.iter().find(|(o, _)| *o == "--planner").map_or("lazy-gbfs", |(_, v)| *v);
         let mut args: Vec<&str> = vec![
             "plan", "--domain", "fixtures/ipc/blocks/domain.pddl", "--problem", "fixtures/ipc/blocks/instance-1.pddl",
-            // Short runs whatever else is chosen: Phase II stops after 20 simulations or 20
-            // tokens, a classical search after 100,000 expansions (blocks 1 needs a handful).
-            "--simulations", "20", "--max-tokens", "20",
         ];
         args.extend(assigned.iter().map(String::as_str));
-        if !chosen.iter().any(|(o, _)| *o == "--max-expansions") {
+        // Short runs whatever else is chosen: Phase II stops after 20 simulations or 20
+        // tokens, a classical search after 100,000 expansions (blocks 1 needs a handful).
+        if planner == "mcts" {
+            args.extend(["--simulations", "20", "--max-tokens", "20"]);
+        } else if !chosen.iter().any(|(o, _)| *o == "--max-expansions") {
             args.extend(["--max-expansions", "100000"]);
         }
         let output = xtask(&args);
@@ -142,7 +183,10 @@ proptest! {
         prop_assert!(!stderr.contains("panicked"), "{args:?}: {stderr}");
         let all_valid = chosen.iter().all(|(o, v)| valid(o, v));
         let code = output.status.code();
-        if all_valid {
+        if all_valid && chosen.iter().any(|(o, v)| passed_over(o, v, planner)) {
+            prop_assert_eq!(code, Some(2), "{:?}: {}", args, stderr);
+            prop_assert!(stderr.contains("is a setting of") || stderr.contains("are settings of"), "{args:?}: {stderr}");
+        } else if all_valid {
             prop_assert!(matches!(code, Some(0 | 1)), "{args:?}: exit {code:?}: {stderr}");
         } else {
             prop_assert_eq!(code, Some(2), "{:?}: {}", args, stderr);
