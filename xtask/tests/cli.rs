@@ -1046,7 +1046,7 @@ fn options_that_would_be_ignored_or_cannot_be_written_are_bad_input() {
     bad["vh_goal"]["actions"] = serde_json::Value::Null;
     std::fs::write(tasks.join("zzbad.json"), bad.to_string()).unwrap();
     std::fs::rename(tasks.join("zzbad.json"), tasks.join("zzbad.json.gz")).unwrap();
-    let cases: [(Vec<&str>, &str); 13] = [
+    let cases: [(Vec<&str>, &str); 16] = [
         (vec!["agent", "--game", game, "--lm", "uniform", "--chat-cache", cache.to_str().unwrap()], "the systematic explorer asks none"),
         // A damaged reply file is named before a server (none here) is asked who it serves.
         (vec!["agent", "--game", game, "--explorer", closed, "--lm", "uniform", "--chat-cache", damaged.to_str().unwrap()], &damaged_at),
@@ -1075,6 +1075,18 @@ fn options_that_would_be_ignored_or_cannot_be_written_are_bad_input() {
             "for --benchmark virtualhome-eai",
         ),
         (vec!["plan", "--domain", &domain, "--problem", &problem, "--out", tmp.path().to_str().unwrap()], "a folder is there, not a file"),
+        (
+            vec!["plan", "--domain", &domain, "--problem", &problem, "--planner", "astar", "--preferred"],
+            "--preferred is a setting of --planner gbfs",
+        ),
+        (
+            vec!["plan", "--domain", &domain, "--problem", &problem, "--planner", "astar", "--width", "3", "--simulations", "5"],
+            "--simulations, --width are settings of --planner mcts",
+        ),
+        (
+            vec!["plan", "--domain", &domain, "--problem", &problem, "--planner", "mcts", "--heuristic", "blind"],
+            "--heuristic is a setting of the classical planners",
+        ),
         (vec!["agent", "--game", game, "--lm", "uniform", "--trace", "no/such/folder/t.json"], "no folder no/such/folder to write it in"),
         (vec!["eval", "--agent", "expert", "--limit", "-1", "--out", out.to_str().unwrap()], "for '--limit <LIMIT>'"),
         (vec!["eval", "--agent", "expert", "--shard", "-1/2", "--out", out.to_str().unwrap()], "for '--shard <SHARD>'"),
