@@ -77,7 +77,7 @@ pub fn load_task(benchmark: &str, task: &str, task_dir: Option<&std::path::Path>
         bail!(crate::input::InputError(format!("{}: no such folder of task files", dir.display())));
     }
     if !path.is_file() {
-        bail!(crate::input::InputError(format!("no task {task} in {} (task files there are `<id>.json.gz`)", dir.display())));
+        bail!(crate::input::InputError(format!("no task `{task}` in {} (task files there are `<id>.json.gz`)", dir.display())));
     }
     Ok(VirtualhomeTask::load(&path).map_err(|e| crate::input::InputError(e.to_string()))?)
 }

@@ -704,6 +704,7 @@ fn agent_solves_a_virtualhome_rearrangement_task_with_a_trace() {
     assert!(episode["handover"]["problem"].as_str().unwrap().contains("(:domain virtualhome-sound)"));
     let output = xtask(&["agent", "--benchmark", "virtualhome-rearrange", "--task", "no-such-task"]);
     assert_eq!(output.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&output.stderr).contains("no task `no-such-task` in"));
 }
 
 #[test]
