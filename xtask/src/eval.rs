@@ -313,6 +313,12 @@ fn served_model(args: &EvalArgs) -> Option<&str> {
 /// The subset `--subset` names for `suite` (`None`: the whole set). A list names one per
 /// benchmark, by the benchmark's name at the start of the subset's (a path's file name); a
 /// benchmark the list does not name runs whole.
+/// A subset's file name, by which a list of subsets says whose each one is (`alfworld-seen-12`,
+/// `/tmp/virtualhome-eai-hard.txt`).
+fn subset_stem(name: &str) -> &str {
+    Path::new(name).file_name().and_then(|n| n.to_str()).unwrap_or(name)
+}
+
 fn suite_subset(subset: &str, suite: Suite, agent: AgentName) -> Result<Option<String>, InputError> {
     match subset {
         "all" => return Ok(None),
@@ -331,13 +337,12 @@ fn suite_subset(subset: &str, suite: Suite, agent: AgentName) -> Result<Option<S
     if let [one] = names[..] {
         return Ok(Some(one.to_string()));
     }
-    let stem = |name: &str| Path::new(name).file_name().and_then(|n| n.to_str()).unwrap_or(name).to_string();
     for name in &names {
-        if !Suite::ALL.iter().any(|s| stem(name).starts_with(s.name())) {
+        if !Suite::ALL.iter().any(|s| subset_stem(name).starts_with(s.name())) {
             return Err(InputError(format!("--subset {name}: in a list, each subset's name starts with its benchmark's")));
         }
     }
-    let mine: Vec<&&str> = names.iter().filter(|name| stem(name).starts_with(suite.name())).collect();
+    let mine: Vec<&&str> = names.iter().filter(|name| subset_stem(name).starts_with(suite.name())).collect();
     if let [first, second, ..] = mine[..] {
         return Err(InputError(format!("--subset: {first} and {second} are both subsets of {}: give one a benchmark", suite.name())));
     }
@@ -625,6 +630,15 @@ fn plan(args: &EvalArgs) -> anyhow::Result<Vec<Planned>> {
     // One run of a benchmark per command: twice would write one record file twice over.
     if let Some(twice) = suites.iter().enumerate().find(|(i, s)| suites[..*i].contains(s)).map(|(_, s)| s.name()) {
         return Err(InputError(format!("--benchmark names {twice} twice")).into());
+    }
+    // A list of subsets, one a benchmark: one for a benchmark the run does not take would be
+    // passed over.
+    let subsets: Vec<&str> = args.subset.split(',').map(str::trim).collect();
+    if subsets.len() > 1
+        && let Some(other) = subsets.iter().find(|name| !suites.iter().any(|s| subset_stem(name).starts_with(s.name())))
+    {
+        let run: Vec<&str> = suites.iter().map(|s| s.name()).collect();
+        return Err(InputError(format!("--subset {other}: a subset of none of the run's benchmarks ({})", run.join(", "))).into());
     }
     crate::input::folder_to_write(&args.out, "--out")?;
     // A task folder is read for EAI's set by the agents that run episodes; given otherwise, it

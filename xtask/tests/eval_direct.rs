@@ -180,7 +180,7 @@ fn a_served_model_is_named_by_what_its_server_lists() {
 
 /// Input that leaves nothing to run, or runs a benchmark twice, is refused before any file is
 /// made: an empty subset, a shard that selects no task, a benchmark named twice, two subsets
-/// of one benchmark, `--limit 0`.
+/// of one benchmark, a subset of a benchmark the run does not take, `--limit 0`.
 #[test]
 fn a_run_of_nothing_or_of_a_benchmark_twice_is_refused_before_any_file() {
     let (tmp_dir, dir) = out("nothing");
@@ -195,6 +195,11 @@ fn a_run_of_nothing_or_of_a_benchmark_twice_is_refused_before_any_file() {
         (vec!["--subset", &empty], "virtualhome-eai: no task to run"),
         (vec!["--subset", &one, "--shard", "2/2"], "--shard 2/2: selects no task of the run"),
         (vec!["--subset", &both], "are both subsets of virtualhome-eai"),
+        // A subset for a benchmark the run does not take (it was passed over).
+        (
+            vec!["--subset", "virtualhome-eai-50,alfworld-seen-12"],
+            "--subset alfworld-seen-12: a subset of none of the run's benchmarks (virtualhome-eai)",
+        ),
     ];
     for (extra, said) in &cases {
         let mut args = vec!["eval"];
