@@ -349,6 +349,24 @@ fn suite_subset(subset: &str, suite: Suite, agent: AgentName) -> Result<Option<S
     Ok(mine.first().map(|name| name.to_string()))
 }
 
+/// Where a run reads the fixtures from, for its configuration: the folder `NSEA_FIXTURES`
+/// names (other inputs than the checkout's), `None` where it is unset or empty (which
+/// `benchmark_data` reads as unset: the same run is then named the same).
+pub fn fixtures_entry() -> Option<String> {
+    std::env::var_os("NSEA_FIXTURES").filter(|root| !root.is_empty()).map(|root| root.to_string_lossy().into_owned())
+}
+
+/// Model files named by their path, by content for a run's configuration (`{path: sha256}`;
+/// `None` for none): a file replaced at the same path is another model.
+pub fn files_entry(paths: &[PathBuf]) -> anyhow::Result<Option<Value>> {
+    let mut files = serde_json::Map::new();
+    for path in paths {
+        let digest = crate::pypi::sha256_remembered(path).map_err(|e| InputError(format!("{e:#}")))?;
+        files.insert(path.display().to_string(), json!(digest));
+    }
+    Ok((!files.is_empty()).then_some(Value::Object(files)))
+}
+
 /// The configuration that names a run's records: everything that changes what it finds.
 /// `tasks` is the suite's whole task list (before `--limit` and `--shard`, which choose among
 /// them: a shorter or sharded run resumes into the whole one).
@@ -358,15 +376,13 @@ fn config(args: &EvalArgs, suite: Suite, tasks: &[EvalTask]) -> anyhow::Result<V
     // folder) is another run, whose records never mix with the old list's.
     let digest = eval_harness::records::task_list_digest(tasks.iter().map(|task| task.id()));
     config.as_object_mut().expect("object").insert("tasks".into(), json!({"count": tasks.len(), "ids_sha256": digest}));
-    // Fixtures read from elsewhere (`NSEA_FIXTURES`) are other inputs.
-    if let Some(root) = std::env::var_os("NSEA_FIXTURES") {
-        config.as_object_mut().expect("object").insert("fixtures".into(), json!(root.to_string_lossy()));
+    if let Some(root) = fixtures_entry() {
+        config.as_object_mut().expect("object").insert("fixtures".into(), json!(root));
     }
     // A model or tokenizer named by its path is named by its content too: a file replaced at
     // the same path is another model (`smollm2` is fetched by a pinned digest already).
     // Only the models this agent loads: Phase I's (the direct agent's), and for `ours` Phase
     // II's, `--lm` with its tokenizer or the chat planner.
-    let mut files = serde_json::Map::new();
     let mut loaded: Vec<PathBuf> = Vec::new();
     if args.agent != AgentName::Expert
         && let crate::model_spec::ModelSpec::Gguf(path) = &args.episode.explorer
@@ -385,12 +401,8 @@ fn config(args: &EvalArgs, suite: Suite, tasks: &[EvalTask]) -> anyhow::Result<V
             }
         }
     }
-    for path in loaded {
-        let digest = crate::pypi::sha256_remembered(&path).map_err(|e| InputError(format!("{e:#}")))?;
-        files.insert(path.display().to_string(), json!(digest));
-    }
-    if !files.is_empty() {
-        config.as_object_mut().expect("object").insert("files_sha256".into(), Value::Object(files));
+    if let Some(files) = files_entry(&loaded)? {
+        config.as_object_mut().expect("object").insert("files_sha256".into(), files);
     }
     // What each server the agent asks serves (a request's model name does not say: llama.cpp's
     // server answers to any name), so that another model behind the same URL and name is

@@ -243,10 +243,20 @@ fn tokenizer_at(path: &Path) -> anyhow::Result<Tokenizer> {
     let result =
         if path.extension().is_some_and(|e| e == "gguf") { Tokenizer::from_gguf_file(path) } else { Tokenizer::from_tokenizer_json(path) };
     // Named once: most of the tokenizer's errors name their file already.
-    result.map_err(|e| {
+    let tokenizer = result.map_err(|e| {
         let (shown, text) = (path.display().to_string(), e.to_string());
-        InputError(if text.contains(&shown) { text } else { format!("{shown}: {text}") }).into()
-    })
+        InputError(if text.contains(&shown) { text } else { format!("{shown}: {text}") })
+    })?;
+    // Phase II's prompt is a chat: a `tokenizer.json` alone has no template (it is in the
+    // `tokenizer_config.json` or `chat_template.jinja` beside it).
+    if tokenizer.chat_template().is_none() {
+        return Err(InputError(format!(
+            "--tokenizer {}: no chat template (a `tokenizer_config.json` with `chat_template`, or a `chat_template.jinja`, beside a `tokenizer.json`); Phase II's prompt is a chat",
+            path.display()
+        ))
+        .into());
+    }
+    Ok(tokenizer)
 }
 
 /// The model `args` names.
@@ -264,6 +274,13 @@ pub fn load_lm(args: &LmArgs) -> anyhow::Result<Box<dyn LanguageModel>> {
     }
     let path = crate::lm::resolve_spec(&args.lm)?;
     let model = lm::LocalModel::load(&path).map_err(|e| InputError(format!("{}: {e}", path.display())))?;
+    if model.tokenizer().chat_template().is_none() {
+        return Err(InputError(format!(
+            "{}: the model has no chat template (`tokenizer.chat_template`); Phase II's prompt is a chat",
+            path.display()
+        ))
+        .into());
+    }
     Ok(Box::new(model))
 }
 
@@ -331,6 +348,18 @@ pub struct RunConfig<'a> {
     /// What an `openai:` server serves ([`crate::model_spec::served_entry`]); absent otherwise.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub served: Option<serde_json::Value>,
+    /// A run's whole task list (before `--limit`, which takes the first of them: a shorter run's
+    /// records are a longer one's), as `eval` names it: another subset file of the same name is
+    /// another run. Absent for one task (`plan --planner mcts`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub tasks: Option<serde_json::Value>,
+    /// The fixtures folder where `NSEA_FIXTURES` names one ([`crate::eval::fixtures_entry`]).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub fixtures: Option<String>,
+    /// The model's files (a GGUF, a tokenizer given by path) by content: another file at the
+    /// same path is another model ([`crate::eval::files_entry`]).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub files_sha256: Option<serde_json::Value>,
 }
 
 impl<'a> RunConfig<'a> {
@@ -338,7 +367,20 @@ impl<'a> RunConfig<'a> {
     /// `openai:` server what it serves.
     pub fn new(benchmark: &'a str, set: &'a str, lm: &'a LmArgs, decode: &'a DecodeArgs, time_limit: f64) -> anyhow::Result<Self> {
         let served = crate::model_spec::served_entry(&[(&lm.lm, &lm.served_model)])?;
-        Ok(RunConfig { benchmark, set, lm, decode, time_limit, served })
+        let mut loaded: Vec<PathBuf> = lm.tokenizer.iter().cloned().collect();
+        if let ModelSpec::Gguf(path) = &lm.lm {
+            loaded.insert(0, path.clone());
+        }
+        let files_sha256 = crate::eval::files_entry(&loaded)?;
+        Ok(RunConfig { benchmark, set, lm, decode, time_limit, served, tasks: None, fixtures: crate::eval::fixtures_entry(), files_sha256 })
+    }
+
+    /// The same, for a run over `ids`, its whole task list.
+    pub fn with_tasks<'b>(mut self, ids: impl IntoIterator<Item = &'b str>) -> Self {
+        let ids: Vec<&str> = ids.into_iter().collect();
+        let digest = eval_harness::records::task_list_digest(ids.iter().copied());
+        self.tasks = Some(serde_json::json!({"count": ids.len(), "ids_sha256": digest}));
+        self
     }
 }
 
@@ -489,15 +531,18 @@ fn file_safe(name: &str) -> String {
 pub fn run(args: Phase2Args) -> anyhow::Result<ExitCode> {
     crate::input::folder_to_write(&args.out, "--out")?;
     let benchmark = args.benchmark;
-    let mut tasks = match &args.subset {
-        Some(subset) => benchmark_data::load_subset(benchmark, subset).map_err(|e| InputError(e.to_string()))?,
-        None => benchmark_data::load(benchmark)?,
+    let all = match &args.subset {
+        Some(subset) => benchmark_data::load_subset(benchmark, subset),
+        None => benchmark_data::load(benchmark),
+    }
+    .map_err(|e| InputError(e.to_string()))?;
+    let listed = match &args.subset {
+        Some(subset) => format!("the subset {subset} lists none"),
+        None => format!("no task files in {}", benchmark_data::fixtures_dir().display()),
     };
-    tasks.truncate(args.limit.unwrap_or(usize::MAX));
+    let tasks = &all[..all.len().min(args.limit.unwrap_or(usize::MAX))];
     if tasks.is_empty() {
-        return Err(
-            InputError(format!("{}: no task to run (the subset lists none)", args.subset.as_deref().unwrap_or(benchmark.name()))).into()
-        );
+        return Err(InputError(format!("{}: no task to run ({listed})", benchmark.name())).into());
     }
     let lm_name = args.lm.lm.short_name();
     // A subset given as a path is named by its file stem (`/tmp/hard.txt` → `hard`).
@@ -511,11 +556,14 @@ pub fn run(args: Phase2Args) -> anyhow::Result<ExitCode> {
     let variant = args.decode.variant();
     // The model's files (a tokenizer, a GGUF) are checked before a server is asked.
     let mut lm = load_lm(&args.lm)?;
-    let config = RunConfig::new(args.benchmark.name(), &set, &args.lm, &args.decode, args.time_limit)?;
+    let config =
+        RunConfig::new(args.benchmark.name(), &set, &args.lm, &args.decode, args.time_limit)?.with_tasks(all.iter().map(|t| t.id.as_str()));
     // Records in `<stem>-<hash>.jsonl`, the configuration beside them, appended whole and
     // resumed (eval_harness::records); a file of another configuration's records is refused.
     let stem = file_safe(&format!("{set}-{}{variant}-{lm_name}", args.decode.mode));
-    let mut file = RecordFile::open(&args.out, &stem, &config, None, args.fresh).map_err(|e| InputError(e.to_string()))?;
+    let mut file = RecordFile::open(&args.out, &stem, &config, None, args.fresh)
+        .and_then(|file| file.check_tasks(&all.iter().map(|t| t.id.as_str()).collect()).map(|()| file))
+        .map_err(|e| InputError(e.to_string()))?;
     let path = file.path().to_path_buf();
     let hash = file.hash().to_string();
     let mut records: Vec<Record> = file
@@ -544,8 +592,8 @@ pub fn run(args: Phase2Args) -> anyhow::Result<ExitCode> {
     }
     bar.finish_and_clear();
 
-    let keep: BTreeSet<&str> = tasks.iter().map(|t| t.id.as_str()).collect();
-    records.retain(|r| keep.contains(r.task.as_str()));
+    // The summary beside the record file is the file's: every task it holds, those of an
+    // earlier, longer run of the configuration included.
     let summary = summarize(&records, &set, &args.decode, &lm_name, &path);
     std::fs::write(path.with_extension("summary.json"), serde_json::to_string_pretty(&summary)? + "\n")?;
     if args.json {

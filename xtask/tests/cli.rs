@@ -359,6 +359,65 @@ fn bench_mask_reports_the_issue_figures_and_agrees_with_llguidance() {
     assert_eq!(report["vocab_bytes_agree"], true, "our tokenizer.json reading equals llguidance's");
 }
 
+/// `phase2`'s records are named by the run's whole task list and its fixtures folder: two
+/// subset files of one name, or other fixtures, wrote into one file (a record index twice).
+/// The summary beside the file is the file's. A tokenizer without a chat template, and a
+/// fixtures folder that is not there, are bad input before any file is made.
+#[test]
+fn phase2_names_its_records_by_the_task_list_and_summarises_the_file() {
+    let tmp = scratch_dir("xtask-phase2-");
+    let out = tmp.path().join("records");
+    let out_text = out.display().to_string();
+    let run = |subset: &Path, extra: &[&str]| {
+        let subset = subset.display().to_string();
+        let mut args =
+            vec!["phase2", "--benchmark", "virtualhome-eai", "--subset", &subset, "--lm", "uniform", "--out", &out_text, "--json"];
+        args.extend(extra);
+        let output = xtask(&args);
+        assert!(output.status.success(), "{args:?}: {}", String::from_utf8_lossy(&output.stderr));
+        serde_json::from_str::<serde_json::Value>(stdout(&output).trim()).expect("one JSON object")
+    };
+    for (dir, ids) in [("a", "1004_2\n201_1\n"), ("b", "201_1\n")] {
+        std::fs::create_dir_all(tmp.path().join(dir)).unwrap();
+        std::fs::write(tmp.path().join(dir).join("s.txt"), ids).unwrap();
+    }
+    let a = run(&tmp.path().join("a/s.txt"), &["--limit", "1"]);
+    let b = run(&tmp.path().join("b/s.txt"), &[]);
+    assert_ne!(a["records"], b["records"], "two lists, two files");
+    // The whole list names the run: `--limit 1`, then the rest, into the same file, and the
+    // summary counts both.
+    let whole = run(&tmp.path().join("a/s.txt"), &[]);
+    assert_eq!(whole["records"], a["records"]);
+    assert_eq!(whole["tasks"], 2);
+    let again = run(&tmp.path().join("a/s.txt"), &["--limit", "1"]);
+    assert_eq!(again["tasks"], 2, "the summary of the file, not of the last command's tasks");
+    let records = std::fs::read_to_string(a["records"].as_str().unwrap()).unwrap();
+    let indices: Vec<u64> =
+        records.lines().map(|l| serde_json::from_str::<serde_json::Value>(l).unwrap()["index"].as_u64().unwrap()).collect();
+    assert_eq!(indices, [0, 1]);
+
+    let fresh = tmp.path().join("fresh");
+    let fresh_text = fresh.display().to_string();
+    let tokenizer = tmp.path().join("tok/tokenizer.json");
+    std::fs::create_dir_all(tokenizer.parent().unwrap()).unwrap();
+    std::fs::copy(fixtures().join("tokenizers/qwen3/tokenizer.json"), &tokenizer).unwrap();
+    let tokenizer_text = tokenizer.display().to_string();
+    let output = xtask(&["phase2", "--benchmark", "alfworld-seen", "--limit", "1", "--tokenizer", &tokenizer_text, "--out", &fresh_text]);
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert_eq!(output.status.code(), Some(2), "{stderr}");
+    assert!(stderr.contains("--tokenizer") && stderr.contains("no chat template"), "{stderr}");
+    let output = Command::new(env!("CARGO_BIN_EXE_xtask"))
+        .args(["phase2", "--benchmark", "alfworld-seen", "--limit", "1", "--out", &fresh_text])
+        .current_dir(Path::new(env!("CARGO_MANIFEST_DIR")).join(".."))
+        .env("NSEA_FIXTURES", tmp.path().join("no-such-fixtures"))
+        .output()
+        .expect("xtask runs");
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert_eq!(output.status.code(), Some(2), "{stderr}");
+    assert!(stderr.contains("no-such-fixtures"), "{stderr}");
+    assert!(!fresh.exists(), "no records for a run refused");
+}
+
 #[test]
 fn phase2_writes_records_resumes_and_plan_mcts_prints_json() {
     let tmp = scratch_dir("xtask-cli-");
