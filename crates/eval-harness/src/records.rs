@@ -103,6 +103,19 @@ pub enum RecordError {
         /// How many of the shard's tasks are not recorded yet.
         left: usize,
     },
+    /// A run without shards whose file holds no record yet, beside shard files of the same
+    /// run that hold records: it would run their tasks again, and the folder would then hold
+    /// a file the shards disagree with (in their times), which reports refuse.
+    #[error(
+        "{path}: shard files of this run are beside it with records ({}) and it holds none: merge them first          (`cargo xtask merge`; a run without --shard then resumes the merged file), or resume each with its --shard",
+        shards.iter().map(|p| p.display().to_string()).collect::<Vec<_>>().join(", ")
+    )]
+    Unmerged {
+        /// The unsharded record file.
+        path: PathBuf,
+        /// The shard files beside it that hold records.
+        shards: Vec<PathBuf>,
+    },
     /// [`RecordFile::settle`] or [`RecordFile::append`] on a file opened by
     /// [`RecordFile::check_only`]; nothing was written.
     #[error("{path}: opened to be checked only, not written")]
@@ -426,13 +439,36 @@ impl RecordFile {
     /// made it, or a run without shards wrote it): that file would then miss what the shard
     /// adds, while reports and replays read the shard through it. A shard with nothing left
     /// to run, a shard beside an empty or absent unsharded file, and an unsharded file pass.
+    ///
+    /// The other way round, an unsharded file that holds no record yet is refused beside shard
+    /// files of its run that hold records ([`RecordError::Unmerged`]): they are to be merged
+    /// into it first.
     pub fn check_unmerged(&self, left: usize) -> Result<(), RecordError> {
         match &self.merged {
             Some(merged) if left > 0 && std::fs::metadata(merged).is_ok_and(|m| m.len() > 0) => {
                 Err(RecordError::Merged { path: self.path.clone(), merged: merged.clone(), left })
             }
+            None if self.records.is_empty() => {
+                let shards = self.shards_beside();
+                if shards.is_empty() { Ok(()) } else { Err(RecordError::Unmerged { path: self.path.clone(), shards }) }
+            }
             _ => Ok(()),
         }
+    }
+
+    /// The shard files of this (unsharded) file's run beside it that hold records, sorted.
+    fn shards_beside(&self) -> Vec<PathBuf> {
+        let (Some(dir), Some(name)) = (self.path.parent(), self.path.file_name().and_then(|n| n.to_str())) else { return Vec::new() };
+        let prefix = format!("{}.shard-", name.strip_suffix(".jsonl").unwrap_or(name));
+        let Ok(entries) = std::fs::read_dir(dir) else { return Vec::new() };
+        let mut shards: Vec<PathBuf> = entries
+            .flatten()
+            .map(|e| e.path())
+            .filter(|p| p.file_name().and_then(|n| n.to_str()).is_some_and(|n| n.starts_with(&prefix) && n.ends_with(".jsonl")))
+            .filter(|p| std::fs::metadata(p).is_ok_and(|m| m.len() > 0))
+            .collect();
+        shards.sort();
+        shards
     }
 
     /// The record file (`<dir>/<stem>-<hash>[.shard-i-of-n].jsonl`).

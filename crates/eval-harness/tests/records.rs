@@ -363,7 +363,8 @@ fn canonical_json_sorts_keys_at_every_level() {
 /// Shards and their merged file stay one run: a shard a run is still writing is not merged, and
 /// once the merged file holds records a shard with tasks left is not resumed beside it (it would
 /// leave that file short of them), `fresh` included, whose refusal then deletes nothing; a
-/// shard with nothing left, or an unsharded file, passes.
+/// shard with nothing left, or an unsharded file holding records, passes; an unsharded file
+/// with none beside shards holding records does not (they are to be merged into it).
 #[test]
 fn a_merged_run_is_not_resumed_by_its_shards_nor_a_written_shard_merged() {
     let (_tmp_dir, dir) = scratch("merged");
@@ -406,6 +407,11 @@ fn a_merged_run_is_not_resumed_by_its_shards_nor_a_written_shard_merged() {
     RecordFile::open(&dir, "run", &config, None, false).expect("opens").check_unmerged(2).expect("not a shard");
     std::fs::write(&merged.path, "").expect("empties");
     RecordFile::open(&dir, "run", &config, Some(one), false).expect("opens").check_unmerged(1).expect("no records beside it");
+    // Nor is that empty unsharded file resumed beside the shards' records: they are merged
+    // into it first (it would run their tasks again, and disagree with them).
+    let error = RecordFile::open(&dir, "run", &config, None, false).expect("opens").check_unmerged(2).expect_err("unmerged shards");
+    assert!(matches!(&error, RecordError::Unmerged { path, shards } if *path == merged.path && shards[..] == paths[..]), "{error}");
+    assert!(error.to_string().contains("merge them first"), "{error}");
 }
 
 /// `fresh` deletes the earlier records when the run settles the file (or appends), not when it
