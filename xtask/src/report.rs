@@ -1,6 +1,8 @@
 //! `cargo xtask report RECORDS... [--out DIR]`: the paper's tables, figures and a page per
 //! episode from `eval` records ([`eval_harness::report`] makes them; this writes them):
-//! `report.md`, `index.html`, `<figure>.svg`, `episodes/<file stem>/<index>.html`.
+//! `report.md`, `index.html`, `<figure>.svg`, `episodes/<file stem>/<index>.html`, and the list
+//! of them (`.report-files`), by which the next report into the folder removes what it does
+//! not write again.
 
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
@@ -45,6 +47,34 @@ pub fn run(args: ReportArgs) -> anyhow::Result<ExitCode> {
     Ok(ExitCode::SUCCESS)
 }
 
+/// The list of the files the last report in a folder wrote, relative to it, one a line.
+const MANIFEST: &str = ".report-files";
+
+/// Deletes the files the folder's last report wrote (its [`MANIFEST`]) that this one, `written`,
+/// did not (the pages of records no longer reported: a page nothing links to would pass for one
+/// of this report's), then the folders they leave empty, and keeps the new list. Only paths
+/// inside `out` are touched; nothing without a manifest (another program's folder).
+fn remove_stale(out: &Path, written: &std::collections::BTreeSet<PathBuf>) -> anyhow::Result<()> {
+    let manifest = out.join(MANIFEST);
+    let before = std::fs::read_to_string(&manifest).unwrap_or_default();
+    let inside = |path: &Path| path.components().all(|c| matches!(c, std::path::Component::Normal(_)));
+    for stale in before.lines().map(PathBuf::from).filter(|p| inside(p) && !written.contains(p)) {
+        match std::fs::remove_file(out.join(&stale)) {
+            Ok(()) => {}
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound => {}
+            Err(e) => return Err(e).with_context(|| format!("{}: cannot remove the last report's file", out.join(&stale).display())),
+        }
+        // Its folders, where now empty (`remove_dir` removes only an empty one).
+        for dir in stale.ancestors().skip(1).filter(|d| !d.as_os_str().is_empty()) {
+            if std::fs::remove_dir(out.join(dir)).is_err() {
+                break;
+            }
+        }
+    }
+    let list: String = written.iter().map(|p| format!("{}\n", p.display())).collect();
+    write(&manifest, &list)
+}
+
 /// The report of the record files (or folders of them) `records` into `out`, with Table 7's
 /// bootstrap at `replicates` and `seed`; returns the line that says what was written where.
 pub fn write_report(records: &[PathBuf], out: &Path, replicates: usize, seed: u64) -> anyhow::Result<String> {
@@ -60,14 +90,13 @@ pub fn write_report(records: &[PathBuf], out: &Path, replicates: usize, seed: u6
     for note in &report.left_out {
         eprintln!("note: {note}");
     }
-    write(&out.join("report.md"), &report.markdown)?;
-    write(&out.join("index.html"), &report.index)?;
-    for figure in &report.figures {
-        write(&out.join(figure.name), &figure.svg)?;
+    let mut files: Vec<(PathBuf, &str)> = vec![("report.md".into(), &report.markdown), ("index.html".into(), &report.index)];
+    files.extend(report.figures.iter().map(|figure| (PathBuf::from(figure.name), figure.svg.as_str())));
+    files.extend(report.episodes.iter().map(|page| (PathBuf::from(&page.path), page.html.as_str())));
+    for (path, text) in &files {
+        write(&out.join(path), text)?;
     }
-    for page in &report.episodes {
-        write(&out.join(&page.path), &page.html)?;
-    }
+    remove_stale(out, &files.iter().map(|(path, _)| path.clone()).collect())?;
     Ok(format!(
         "{} record file(s), {} record(s) -> {} ({} episode pages), {}, {} figure(s)",
         report.files,

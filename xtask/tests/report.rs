@@ -46,6 +46,23 @@ fn report_writes_tables_figures_and_a_page_per_episode() {
     }
     assert_eq!(pages, 60);
     assert_eq!(trees, 1, "the one record with a search tree shows it");
+
+    // Another report into the same folder, of one file: the last report's pages of the other
+    // files are gone with their folders (they stayed, linked from nothing), and a file that is
+    // not the report's is left alone.
+    std::fs::write(out.join("notes.txt"), "mine").unwrap();
+    let one = fixtures().join("alfworld-seen-expert-8ab1a4359acc.jsonl");
+    let output = xtask(&["report", &one.display().to_string(), "--out", &out.display().to_string(), "--replicates", "200"]);
+    assert!(output.status.success(), "{}", String::from_utf8_lossy(&output.stderr));
+    let runs: Vec<String> =
+        std::fs::read_dir(out.join("episodes")).unwrap().flatten().map(|e| e.file_name().to_string_lossy().into_owned()).collect();
+    assert_eq!(runs, ["alfworld-seen-expert-8ab1a4359acc"]);
+    let index = std::fs::read_to_string(out.join("index.html")).expect("index.html");
+    for page in std::fs::read_dir(out.join("episodes/alfworld-seen-expert-8ab1a4359acc")).unwrap().flatten() {
+        let relative = page.path().strip_prefix(&out).expect("under out").display().to_string();
+        assert!(index.contains(&format!("href=\"{relative}\"")), "{relative} is not linked");
+    }
+    assert_eq!(std::fs::read_to_string(out.join("notes.txt")).unwrap(), "mine");
 }
 
 #[test]
