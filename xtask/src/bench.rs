@@ -238,13 +238,30 @@ fn benchmarks_named(benchmarks: &str) -> anyhow::Result<Vec<Benchmark>> {
     if benchmarks == "all" {
         return Ok(vec![Benchmark::Ipc, Benchmark::AlfworldSeen, Benchmark::AlfworldTrain, Benchmark::VirtualhomeEai]);
     }
-    benchmarks
+    let named: Vec<Benchmark> = benchmarks
         .split(',')
         .map(|n| {
-            Benchmark::from_name(n.trim())
-                .ok_or_else(|| crate::input::unknown("benchmark", n, Benchmark::ALL.iter().map(|b| b.name())).into())
+            Benchmark::from_name(n.trim()).ok_or_else(|| crate::input::unknown("benchmark", n, Benchmark::ALL.iter().map(|b| b.name())))
         })
-        .collect()
+        .collect::<Result<_, _>>()?;
+    // Twice would time its tasks twice, and its figures would be counted as two sets' (or one
+    // overwrite the other).
+    if let Some(twice) = named.iter().enumerate().find(|(i, b)| named[..*i].contains(b)).map(|(_, b)| b.name()) {
+        return Err(crate::input::InputError(format!("--benchmark names {twice} twice")).into());
+    }
+    Ok(named)
+}
+
+/// Bad input where `--filter` leaves no task: a run of nothing that would print empty tables.
+fn check_filter(filter: Option<&str>, matched: usize, benchmarks: &[Benchmark]) -> anyhow::Result<()> {
+    match filter {
+        Some(filter) if matched == 0 => {
+            let names: Vec<&str> = benchmarks.iter().map(|b| b.name()).collect();
+            Err(crate::input::InputError(format!("--filter {filter}: no task id of {} (after --limit) contains it", names.join(", ")))
+                .into())
+        }
+        _ => Ok(()),
+    }
 }
 
 /// At most `limit` of `all`, evenly spaced.
@@ -494,6 +511,7 @@ fn plan(
             all.extend(spaced(&loaded, limit).into_iter().cloned().map(|files| (*benchmark, files)));
         }
         all.retain(|(_, files)| filter.is_none_or(|f| files.id.contains(f)));
+        check_filter(filter, all.len(), &benchmarks)?;
         let bar = crate::input::progress_bar(format!("plan {}", config.name), all.len());
         for (benchmark, files) in all {
             bar.set_message(files.id.clone());
@@ -650,6 +668,14 @@ fn heuristic(
     json: bool,
 ) -> anyhow::Result<ExitCode> {
     let benchmarks = benchmarks_named(benchmarks)?;
+    let mut selected = Vec::with_capacity(benchmarks.len());
+    for benchmark in &benchmarks {
+        let loaded = benchmark_data::load(*benchmark)?;
+        let mut tasks: Vec<TaskFiles> = spaced(&loaded, limit).into_iter().cloned().collect();
+        tasks.retain(|files| filter.is_none_or(|f| files.id.contains(f)));
+        selected.push((*benchmark, tasks));
+    }
+    check_filter(filter, selected.iter().map(|(_, tasks)| tasks.len()).sum(), &benchmarks)?;
     let python = anchor_venv().join("bin/python");
     let reference = !no_reference && {
         let found = Command::new(&python).args(["-c", "import pyperplan"]).output().is_ok_and(|o| o.status.success());
@@ -670,10 +696,7 @@ fn heuristic(
             "task", "states", "facts", "h", "ours µs", "pyperplan µs", "ratio", "agree"
         );
     }
-    for benchmark in &benchmarks {
-        let loaded = benchmark_data::load(*benchmark)?;
-        let mut tasks = spaced(&loaded, limit);
-        tasks.retain(|files| filter.is_none_or(|f| files.id.contains(f)));
+    for (benchmark, tasks) in &selected {
         let bar = crate::input::progress_bar(format!("heuristic {}", benchmark.name()), tasks.len());
         for files in tasks {
             bar.set_message(files.id.clone());

@@ -852,6 +852,25 @@ fn a_closed_standard_output_ends_the_command_without_a_panic() {
     assert_eq!(output.status.signal(), Some(13), "{:?}: {stderr}", output.status);
 }
 
+/// `bench` with a benchmark named twice (its tasks were timed twice, one set's figures
+/// overwriting the other's), or a `--filter` that leaves no task (empty tables, exit 0): exit 2.
+#[test]
+fn bench_refuses_a_benchmark_twice_and_a_filter_of_nothing() {
+    let cases: &[(&[&str], &str)] = &[
+        (&["bench", "ground", "--no-reference", "--benchmark", "ipc,ipc"], "--benchmark names ipc twice"),
+        (&["bench", "heuristic", "--no-reference", "--benchmark", "ipc, ipc"], "--benchmark names ipc twice"),
+        (&["bench", "heuristic", "--no-reference", "--filter", "zzzz"], "--filter zzzz: no task id of ipc"),
+        (&["bench", "plan", "--filter", "zzzz"], "--filter zzzz: no task id of ipc"),
+    ];
+    for (args, said) in cases {
+        let output = xtask(args);
+        let stderr = String::from_utf8_lossy(&output.stderr);
+        assert_eq!(output.status.code(), Some(2), "{args:?}: {stderr}");
+        assert!(stderr.contains(said), "{args:?}: {stderr}");
+        assert_eq!(String::from_utf8_lossy(&output.stdout), "", "{args:?}: nothing printed");
+    }
+}
+
 /// A count of zero (runs, tasks, tokens) is bad input naming the option: `bench` used to take
 /// `--runs 0` and `--limit 0` as 1 and report a median nobody asked for.
 #[test]
