@@ -233,6 +233,16 @@ impl PhaseTwoRunner {
         if symmetries && planner != "astar" {
             return Err(InputError(format!("--symmetries is a setting of --planner astar, not --planner {planner}")).into());
         }
+        // A* decodes no plan: Phase II's model and decoding settings (but the clock) would be
+        // passed over.
+        if planner == "astar" {
+            let mut given = crate::input::given::<LmArgs>(&["served_model"]);
+            given.extend(crate::input::given::<DecodeArgs>(&["clock"]));
+            if !given.is_empty() {
+                let what = if given.len() == 1 { "is a setting" } else { "are settings" };
+                return Err(InputError(format!("{} {what} of --planner mcts, not --planner astar", given.join(", "))).into());
+            }
+        }
         if let Some(name) = &chat.chat_planner {
             if planner != "mcts" {
                 return Err(InputError(format!("--chat-planner plans in place of the decoder, not with --planner {planner}")).into());

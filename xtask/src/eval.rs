@@ -512,6 +512,22 @@ pub fn run(args: EvalArgs) -> anyhow::Result<ExitCode> {
         ))
         .into());
     }
+    // Phase II's model and decoding settings are `ours`'s: the other agents decode no plan
+    // (the planner's A* takes only the clock), and would pass them over.
+    if args.agent != AgentName::Ours {
+        let mut given = crate::input::given::<crate::phase2::LmArgs>(&["served_model"]);
+        let except: &[&str] = if args.agent == AgentName::Planner { &["clock"] } else { &[] };
+        given.extend(crate::input::given::<crate::phase2::DecodeArgs>(except));
+        if !given.is_empty() {
+            let what = if given.len() == 1 { "is a setting" } else { "are settings" };
+            return Err(InputError(format!(
+                "{} {what} of the agent `ours`'s Phase II; the {} agent decodes no plan",
+                given.join(", "),
+                serde_json::to_value(args.agent)?.as_str().unwrap_or_default()
+            ))
+            .into());
+        }
+    }
     if args.episode.symmetries && args.agent != AgentName::Planner {
         return Err(InputError(format!(
             "--symmetries is a setting of the planner agent's A*; the {} agent does not plan by A*",

@@ -19,25 +19,38 @@ pub struct TaskArgs {
     pub game: Option<PathBuf>,
 }
 
-/// The options of `given`, a group of options flattened into a command, whose values are not
-/// the group's defaults, each as `--name`, in the group's order (`except` left out): for a
-/// command to refuse settings that its other choices would pass over in silence. An option
-/// given at its default value changes nothing, and is not named.
-pub fn changed_options<T>(given: &T, except: &[&str]) -> anyhow::Result<Vec<String>>
-where
-    T: clap::Args + clap::FromArgMatches + serde::Serialize,
-{
-    let command = T::augment_args(clap::Command::new("defaults"));
-    let defaults = T::from_arg_matches(&command.try_get_matches_from(["defaults"])?)?;
-    let (given, defaults) = (serde_json::to_value(given)?, serde_json::to_value(defaults)?);
-    let (Some(given), Some(defaults)) = (given.as_object(), defaults.as_object()) else {
-        bail!("an option group that is not a JSON object");
-    };
-    Ok(given
-        .iter()
-        .filter(|(name, value)| !except.contains(&name.as_str()) && defaults.get(*name) != Some(value))
-        .map(|(name, _)| format!("--{}", name.replace('_', "-")))
-        .collect())
+/// The innermost subcommand's matches of this process's command line ([`keep_command_line`]).
+static COMMAND_LINE: std::sync::OnceLock<clap::ArgMatches> = std::sync::OnceLock::new();
+
+/// Keeps the command line's matches, for [`given`] to tell an option typed from a default.
+pub fn keep_command_line(matches: &clap::ArgMatches) {
+    let mut innermost = matches;
+    while let Some((_, sub)) = innermost.subcommand() {
+        innermost = sub;
+    }
+    COMMAND_LINE.get_or_init(|| innermost.clone());
+}
+
+/// The options of the group `T` (flattened into the running command) typed on its command
+/// line, each as `--name`, in the group's order, `except` left out: for a command to refuse
+/// settings that its other choices would pass over in silence. A default is never named, also
+/// where the command changes the group's own (`eval`'s `--lm smollm2`); nothing is named where
+/// no command line was kept (a test calling a command's function).
+pub fn given<T: clap::Args>(except: &[&str]) -> Vec<String> {
+    let group = T::augment_args(clap::Command::new("group"));
+    group
+        .get_arguments()
+        .map(|arg| arg.get_id().as_str())
+        .filter(|id| !except.contains(id) && typed(id))
+        .map(|id| format!("--{}", id.replace('_', "-")))
+        .collect()
+}
+
+/// Whether the option of id `id` (its field's name) was typed on the running command's line.
+pub fn typed(id: &str) -> bool {
+    COMMAND_LINE.get().is_some_and(|matches| {
+        matches!(matches.try_contains_id(id), Ok(true)) && matches.value_source(id) == Some(clap::parser::ValueSource::CommandLine)
+    })
 }
 
 /// A user error: bad input, reported with exit code 2.

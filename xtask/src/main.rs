@@ -128,10 +128,10 @@ fn main() -> ExitCode {
             .mut_args(|arg| if arg.get_action().takes_values() { arg.allow_negative_numbers(true) } else { arg })
             .mut_subcommands(negative_numbers)
     }
-    let cli = match negative_numbers(<Cli as clap::CommandFactory>::command())
-        .try_get_matches()
-        .and_then(|matches| <Cli as clap::FromArgMatches>::from_arg_matches(&matches))
-    {
+    let cli = match negative_numbers(<Cli as clap::CommandFactory>::command()).try_get_matches().and_then(|matches| {
+        input::keep_command_line(&matches);
+        <Cli as clap::FromArgMatches>::from_arg_matches(&matches)
+    }) {
         Ok(cli) => cli,
         Err(error) => error.exit(),
     };

@@ -90,11 +90,10 @@ pub fn plan(args: PlanArgs) -> anyhow::Result<ExitCode> {
         return Err(crate::input::InputError("--preferred is a setting of --planner gbfs or lazy-gbfs".to_string()).into());
     }
     let passed_over = if args.planner == Planner::Mcts {
-        let classical = [(args.heuristic != HeuristicName::Ff, "--heuristic"), (args.max_expansions.is_some(), "--max-expansions")];
-        classical.iter().filter(|(given, _)| *given).map(|(_, name)| name.to_string()).collect()
+        ["heuristic", "max_expansions"].iter().filter(|id| input::typed(id)).map(|id| format!("--{}", id.replace('_', "-"))).collect()
     } else {
-        let mut options = input::changed_options(&args.lm, &[])?;
-        options.extend(input::changed_options(&args.decode, &["clock"])?);
+        let mut options = input::given::<crate::phase2::LmArgs>(&[]);
+        options.extend(input::given::<crate::phase2::DecodeArgs>(&["clock"]));
         options
     };
     if let Some(first) = passed_over.first() {

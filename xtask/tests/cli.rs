@@ -1125,7 +1125,7 @@ fn options_that_would_be_ignored_or_cannot_be_written_are_bad_input() {
     bad["vh_goal"]["actions"] = serde_json::Value::Null;
     std::fs::write(tasks.join("zzbad.json"), bad.to_string()).unwrap();
     std::fs::rename(tasks.join("zzbad.json"), tasks.join("zzbad.json.gz")).unwrap();
-    let cases: [(Vec<&str>, &str); 16] = [
+    let cases: [(Vec<&str>, &str); 19] = [
         (vec!["agent", "--game", game, "--lm", "uniform", "--chat-cache", cache.to_str().unwrap()], "the systematic explorer asks none"),
         // A damaged reply file is named before a server (none here) is asked who it serves.
         (vec!["agent", "--game", game, "--explorer", closed, "--lm", "uniform", "--chat-cache", damaged.to_str().unwrap()], &damaged_at),
@@ -1165,6 +1165,16 @@ fn options_that_would_be_ignored_or_cannot_be_written_are_bad_input() {
         (
             vec!["plan", "--domain", &domain, "--problem", &problem, "--planner", "mcts", "--heuristic", "blind"],
             "--heuristic is a setting of the classical planners",
+        ),
+        // Phase II's settings to an agent that decodes no plan (the planner's A* takes the clock).
+        (
+            vec!["eval", "--agent", "planner", "--clock", "cpu", "--mode", "sample", "--seed", "7", "--out", out.to_str().unwrap()],
+            "--mode, --seed are settings of the agent `ours`'s Phase II; the planner agent decodes no plan",
+        ),
+        (vec!["eval", "--agent", "expert", "--lm", "uniform", "--out", out.to_str().unwrap()], "--lm is a setting of the agent `ours`'s"),
+        (
+            vec!["agent", "--game", game, "--planner", "astar", "--mode", "sample"],
+            "--mode is a setting of --planner mcts, not --planner astar",
         ),
         (vec!["agent", "--game", game, "--lm", "uniform", "--trace", "no/such/folder/t.json"], "no folder no/such/folder to write it in"),
         (vec!["eval", "--agent", "expert", "--limit", "-1", "--out", out.to_str().unwrap()], "for '--limit <LIMIT>'"),
