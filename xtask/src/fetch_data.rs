@@ -45,6 +45,13 @@ pub fn run(args: FetchDataArgs) -> anyhow::Result<ExitCode> {
         println!("{}", tasks.display());
         return Ok(ExitCode::SUCCESS);
     }
+    // Fetched again: not complete until the new files are all written (a run killed midway
+    // would otherwise leave the old marker beside files cut short).
+    match std::fs::remove_file(&done) {
+        Ok(()) => {}
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => {}
+        Err(e) => return Err(e).with_context(|| format!("cannot remove {}", done.display())),
+    }
     let hint = format!("install Python 3 with pip to fetch {PACKAGE} from PyPI");
     let count = match with_pip(&root, &hint, |python, scratch| fetch(python, scratch, &root))? {
         Ok(count) => count,

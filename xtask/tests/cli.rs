@@ -871,6 +871,29 @@ fn bench_refuses_a_benchmark_twice_and_a_filter_of_nothing() {
     }
 }
 
+/// `fetch-data --force` that does not finish (here no index answers pip) leaves no COMPLETE
+/// marker: it stayed beside the files it had begun to rewrite, and the next `fetch-data` took
+/// the cache as complete.
+#[test]
+fn a_forced_fetch_that_fails_leaves_the_cache_incomplete() {
+    let dir = scratch_dir("xtask-fetch-data-");
+    let root = dir.path().join("virtualhome-eai");
+    std::fs::create_dir_all(root.join("tasks")).unwrap();
+    std::fs::write(root.join("COMPLETE"), "an earlier fetch\n").unwrap();
+    let output = Command::new(env!("CARGO_BIN_EXE_xtask"))
+        .args(["fetch-data", "--force"])
+        .current_dir(Path::new(env!("CARGO_MANIFEST_DIR")).join(".."))
+        .env("NSEA_DATA_DIR", dir.path())
+        .env("PIP_INDEX_URL", "http://127.0.0.1:9/simple")
+        .env("PIP_RETRIES", "0")
+        .env("PIP_TIMEOUT", "1")
+        .output()
+        .expect("xtask runs");
+    assert!(!output.status.success(), "{}", String::from_utf8_lossy(&output.stderr));
+    assert!(!root.join("COMPLETE").exists(), "the marker of the earlier fetch is gone");
+    assert_eq!(String::from_utf8_lossy(&output.stdout), "", "no task folder printed as fetched");
+}
+
 /// A count of zero (runs, tasks, tokens) is bad input naming the option: `bench` used to take
 /// `--runs 0` and `--limit 0` as 1 and report a median nobody asked for.
 #[test]
