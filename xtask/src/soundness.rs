@@ -27,9 +27,10 @@ pub struct SoundnessArgs {
     /// task: the folder `cargo xtask fetch-data` prints].
     #[arg(long)]
     tasks: Option<PathBuf>,
-    /// EAI's problem files (their objects name the task-relevant classes) and gold PDDL plans.
-    #[arg(long, default_value = "fixtures/virtualhome-eai")]
-    eai: PathBuf,
+    /// EAI's problem files (their objects name the task-relevant classes) and gold PDDL plans
+    /// [default: fixtures/virtualhome-eai].
+    #[arg(long)]
+    eai: Option<PathBuf>,
     /// Search time limit per task, seconds.
     #[arg(long, default_value_t = 60.0, value_parser = crate::input::positive_seconds)]
     time_limit: f64,
@@ -75,7 +76,11 @@ pub fn run(args: SoundnessArgs) -> anyhow::Result<ExitCode> {
         ))
         .into());
     }
-    let dir = args.tasks.clone().unwrap_or_else(|| PathBuf::from("fixtures/virtualhome-eai/graphs"));
+    // The defaults are in the fixtures folder `benchmark_data` reads (`NSEA_FIXTURES`, else the
+    // checkout's, whatever the working folder), as `eval`'s and `phase2`'s are.
+    let fixtures = benchmark_data::fixtures_dir();
+    let dir = args.tasks.clone().unwrap_or_else(|| fixtures.join("virtualhome-eai/graphs"));
+    let eai = args.eai.clone().unwrap_or_else(|| fixtures.join("virtualhome-eai"));
     let mut files: Vec<PathBuf> = std::fs::read_dir(&dir)
         .map_err(|e| InputError(format!("{}: cannot read the task folder: {e}", dir.display())))?
         .flatten()
@@ -87,8 +92,8 @@ pub fn run(args: SoundnessArgs) -> anyhow::Result<ExitCode> {
     if ids.is_empty() {
         return Err(InputError(format!("{}: no task files (`<id>.json.gz`) there", dir.display())).into());
     }
-    let classes = eai_problem_classes(&args.eai.join("problem_pddl"))?;
-    let gold_path = args.eai.join("gold_pddl_plan.json");
+    let classes = eai_problem_classes(&eai.join("problem_pddl"))?;
+    let gold_path = eai.join("gold_pddl_plan.json");
     let gold_text = std::fs::read_to_string(&gold_path).map_err(|e| InputError(format!("{}: cannot read: {e}", gold_path.display())))?;
     let gold: BTreeMap<String, Vec<String>> =
         serde_json::from_str(&gold_text).map_err(|e| InputError(format!("{}: {e}", gold_path.display())))?;
