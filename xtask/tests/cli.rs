@@ -809,6 +809,14 @@ fn soundness_plans_fixture_tasks_and_they_reach_their_goals() {
         assert_eq!(output.status.code(), Some(2), "{stderr}");
         assert!(stderr.contains(message), "{args:?}: {stderr}");
     }
+    // From another working folder: the defaults are the fixtures', the same run, resumed.
+    let output = Command::new(env!("CARGO_BIN_EXE_xtask"))
+        .args(["soundness", "--limit", "2", "--out", out.to_str().unwrap()])
+        .current_dir(tmp.path())
+        .output()
+        .expect("xtask runs");
+    assert_eq!(output.status.code(), Some(0), "{}", String::from_utf8_lossy(&output.stderr));
+    assert_eq!(PathBuf::from(stdout(&output).trim()), records);
 }
 
 /// Durations a user can type wrong are bad input (exit 2), never a panic.
