@@ -238,9 +238,8 @@ impl PhaseTwoRunner {
         if planner == "astar" {
             let mut given = crate::input::given::<LmArgs>(&["served_model"]);
             given.extend(crate::input::given::<DecodeArgs>(&["clock"]));
-            if !given.is_empty() {
-                let what = if given.len() == 1 { "is a setting" } else { "are settings" };
-                return Err(InputError(format!("{} {what} of --planner mcts, not --planner astar", given.join(", "))).into());
+            if let Some(error) = crate::input::settings_of(&given, "--planner mcts, not --planner astar") {
+                return Err(error.into());
             }
         }
         if let Some(name) = &chat.chat_planner {

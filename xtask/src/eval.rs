@@ -310,15 +310,15 @@ fn served_model(args: &EvalArgs) -> Option<&str> {
     args.episode.explorer.url().map(|_| args.episode.lm.served_model.as_str())
 }
 
-/// The subset `--subset` names for `suite` (`None`: the whole set). A list names one per
-/// benchmark, by the benchmark's name at the start of the subset's (a path's file name); a
-/// benchmark the list does not name runs whole.
 /// A subset's file name, by which a list of subsets says whose each one is (`alfworld-seen-12`,
 /// `/tmp/virtualhome-eai-hard.txt`).
 fn subset_stem(name: &str) -> &str {
     Path::new(name).file_name().and_then(|n| n.to_str()).unwrap_or(name)
 }
 
+/// The subset `--subset` names for `suite` (`None`: the whole set). A list names one per
+/// benchmark, by the benchmark's name at the start of the subset's (a path's file name); a
+/// benchmark the list does not name runs whole.
 fn suite_subset(subset: &str, suite: Suite, agent: AgentName) -> Result<Option<String>, InputError> {
     match subset {
         "all" => return Ok(None),
@@ -518,14 +518,10 @@ pub fn run(args: EvalArgs) -> anyhow::Result<ExitCode> {
         let mut given = crate::input::given::<crate::phase2::LmArgs>(&["served_model"]);
         let except: &[&str] = if args.agent == AgentName::Planner { &["clock"] } else { &[] };
         given.extend(crate::input::given::<crate::phase2::DecodeArgs>(except));
-        if !given.is_empty() {
-            let what = if given.len() == 1 { "is a setting" } else { "are settings" };
-            return Err(InputError(format!(
-                "{} {what} of the agent `ours`'s Phase II; the {} agent decodes no plan",
-                given.join(", "),
-                serde_json::to_value(args.agent)?.as_str().unwrap_or_default()
-            ))
-            .into());
+        let agent = serde_json::to_value(args.agent)?;
+        let whose = format!("the agent `ours`'s Phase II; the {} agent decodes no plan", agent.as_str().unwrap_or_default());
+        if let Some(error) = crate::input::settings_of(&given, &whose) {
+            return Err(error.into());
         }
     }
     if args.episode.symmetries && args.agent != AgentName::Planner {

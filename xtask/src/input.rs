@@ -38,12 +38,23 @@ pub fn keep_command_line(matches: &clap::ArgMatches) {
 /// no command line was kept (a test calling a command's function).
 pub fn given<T: clap::Args>(except: &[&str]) -> Vec<String> {
     let group = T::augment_args(clap::Command::new("group"));
-    group
-        .get_arguments()
-        .map(|arg| arg.get_id().as_str())
-        .filter(|id| !except.contains(id) && typed(id))
-        .map(|id| format!("--{}", id.replace('_', "-")))
-        .collect()
+    group.get_arguments().map(|arg| arg.get_id().as_str()).filter(|id| !except.contains(id) && typed(id)).map(option_name).collect()
+}
+
+/// The option of a field: `max_expansions` → `--max-expansions`.
+pub fn option_name(id: &str) -> String {
+    format!("--{}", id.replace('_', "-"))
+}
+
+/// Bad input naming `options` (a command's settings its other choices pass over) as settings
+/// of `whose`; `None` for none.
+pub fn settings_of(options: &[String], whose: &str) -> Option<InputError> {
+    let what = match options {
+        [] => return None,
+        [one] => format!("{one} is a setting"),
+        _ => format!("{} are settings", options.join(", ")),
+    };
+    Some(InputError(format!("{what} of {whose}")))
 }
 
 /// Whether the option of id `id` (its field's name) was typed on the running command's line.

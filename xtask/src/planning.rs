@@ -90,17 +90,15 @@ pub fn plan(args: PlanArgs) -> anyhow::Result<ExitCode> {
         return Err(crate::input::InputError("--preferred is a setting of --planner gbfs or lazy-gbfs".to_string()).into());
     }
     let passed_over = if args.planner == Planner::Mcts {
-        ["heuristic", "max_expansions"].iter().filter(|id| input::typed(id)).map(|id| format!("--{}", id.replace('_', "-"))).collect()
+        ["heuristic", "max_expansions"].into_iter().filter(|id| input::typed(id)).map(input::option_name).collect()
     } else {
         let mut options = input::given::<crate::phase2::LmArgs>(&[]);
         options.extend(input::given::<crate::phase2::DecodeArgs>(&["clock"]));
         options
     };
-    if let Some(first) = passed_over.first() {
-        let whose = if args.planner == Planner::Mcts { "the classical planners (astar, gbfs, lazy-gbfs)" } else { "--planner mcts" };
-        let what =
-            if passed_over.len() == 1 { format!("{first} is a setting") } else { format!("{} are settings", passed_over.join(", ")) };
-        return Err(crate::input::InputError(format!("{what} of {whose}")).into());
+    let whose = if args.planner == Planner::Mcts { "the classical planners (astar, gbfs, lazy-gbfs)" } else { "--planner mcts" };
+    if let Some(error) = input::settings_of(&passed_over, whose) {
+        return Err(error.into());
     }
     args.out.as_deref().map(|out| input::file_to_write(out, "--out")).transpose()?;
     let files = args.task.load()?;

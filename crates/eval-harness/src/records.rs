@@ -107,7 +107,7 @@ pub enum RecordError {
     /// run that hold records: it would run their tasks again, and the folder would then hold
     /// a file the shards disagree with (in their times), which reports refuse.
     #[error(
-        "{path}: shard files of this run are beside it with records ({}) and it holds none: merge them first          (`cargo xtask merge`; a run without --shard then resumes the merged file), or resume each with its --shard",
+        "{path}: shard files of this run are beside it with records ({}) and it holds none: merge them first (`cargo xtask merge`; a run without --shard then resumes the merged file), or resume each with its --shard",
         shards.iter().map(|p| p.display().to_string()).collect::<Vec<_>>().join(", ")
     )]
     Unmerged {
