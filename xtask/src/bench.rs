@@ -110,10 +110,11 @@ enum Which {
     /// Household environment speed (reset, step), ours beside the real engine on the same
     /// games and commands (ALFWorld: TextWorld 1.7.0 + alfworld 0.4.2, from install.sh alfworld).
     Env {
-        /// Games of this subset of fixtures/ (a name in fixtures/subsets or a file).
+        /// ALFWorld's games: this subset of fixtures/ (a name in fixtures/subsets or a file).
+        /// VirtualHome's tasks are always the 33 with a gold program in the parity recordings.
         #[arg(long, default_value = "alfworld-seen-50")]
         subset: String,
-        /// At most this many games (evenly spaced); the engine takes seconds per game.
+        /// At most this many ALFWorld games (evenly spaced); the engine takes seconds per game.
         #[arg(long, default_value_t = 12, value_parser = crate::input::at_least_one::<usize>)]
         limit: usize,
         /// Timed repetitions of ours per game (the median is reported).
