@@ -64,6 +64,29 @@ pub fn typed(id: &str) -> bool {
     })
 }
 
+/// The worker counts the environment asks of candle's pool (`CANDLE_NUM_THREADS`,
+/// `RAYON_NUM_THREADS`): empty or `0` for the default (one per processor, as candle and rayon
+/// read them), else a whole number up to the larger of 1,024 and four per processor; anything
+/// else is bad input naming the variable. Unchecked, `abc` was taken as unset, and 99999 made
+/// the pool abort the process (no stack left for its threads).
+pub fn check_thread_counts() -> Result<(), InputError> {
+    let most = std::thread::available_parallelism().map_or(1, usize::from).saturating_mul(4).max(1024);
+    for name in ["CANDLE_NUM_THREADS", "RAYON_NUM_THREADS"] {
+        let Some(value) = std::env::var_os(name) else { continue };
+        let text = value.to_string_lossy();
+        match text.trim() {
+            "" => {}
+            trimmed => match trimmed.parse::<usize>() {
+                Ok(n) if n <= most => {}
+                _ => {
+                    return Err(InputError(format!("{name}={text}: not a number of threads up to {most} (0 or empty: one per processor)")));
+                }
+            },
+        }
+    }
+    Ok(())
+}
+
 /// A user error: bad input, reported with exit code 2.
 #[derive(Debug)]
 pub struct InputError(pub String);

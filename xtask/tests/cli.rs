@@ -902,6 +902,25 @@ fn a_forced_fetch_that_fails_leaves_the_cache_incomplete() {
     assert_eq!(String::from_utf8_lossy(&output.stdout), "", "no task folder printed as fetched");
 }
 
+/// A thread count candle's pool cannot take, in the environment, is bad input naming the
+/// variable (99999 aborted the process; `abc` was taken as unset); 0 and empty are the default.
+#[test]
+fn thread_counts_in_the_environment_are_checked() {
+    for (value, code) in [("abc", 2), ("99999", 2), ("-1", 2), ("0", 0), ("", 0), ("2", 0)] {
+        for name in ["CANDLE_NUM_THREADS", "RAYON_NUM_THREADS"] {
+            let output = Command::new(env!("CARGO_BIN_EXE_xtask"))
+                .args(["ground", "--domain", "fixtures/ipc/blocks/domain.pddl", "--problem", "fixtures/ipc/blocks/instance-1.pddl"])
+                .current_dir(Path::new(env!("CARGO_MANIFEST_DIR")).join(".."))
+                .env(name, value)
+                .output()
+                .expect("xtask runs");
+            let stderr = String::from_utf8_lossy(&output.stderr);
+            assert_eq!(output.status.code(), Some(code), "{name}={value}: {stderr}");
+            assert!(code == 0 || stderr.contains(&format!("{name}={value}: not a number of threads")), "{stderr}");
+        }
+    }
+}
+
 /// A count of zero (runs, tasks, tokens) is bad input naming the option: `bench` used to take
 /// `--runs 0` and `--limit 0` as 1 and report a median nobody asked for.
 #[test]
