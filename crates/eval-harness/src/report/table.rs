@@ -88,7 +88,7 @@ impl Table {
         if self.rows.is_empty() {
             out.push_str(&format!("_{}_\n", self.empty));
         } else {
-            let cell = |text: &str| text.replace('|', "\\|").replace('\n', " ");
+            let cell = |text: &str| markdown_cell(text);
             let names = self.columns.iter().zip(&self.groups).map(|(c, g)| if g.is_empty() { cell(c) } else { cell(&format!("{g} {c}")) });
             out.push_str(&format!("| {} |\n", names.collect::<Vec<_>>().join(" | ")));
             out.push_str(&format!("|{}|\n", self.numeric.iter().map(|n| if *n { "---:" } else { "---" }).collect::<Vec<_>>().join("|")));
@@ -143,5 +143,36 @@ impl Table {
         }
         out.push_str("</section>\n");
         out
+    }
+}
+
+/// A table cell's text as Markdown shows it as written: `|` escaped (it would end the cell),
+/// a line break a space, and `<` before what would start an HTML tag (`<i>` in a model's file
+/// name) as `&lt;`, so that a renderer shows it rather than takes it for markup. A `<` before a
+/// digit (`<0.001`) starts no tag, and stays.
+fn markdown_cell(text: &str) -> String {
+    let mut out = String::with_capacity(text.len());
+    let mut chars = text.chars().peekable();
+    while let Some(c) = chars.next() {
+        match c {
+            '|' => out.push_str("\\|"),
+            '\n' => out.push(' '),
+            '<' if chars.peek().is_some_and(|n| n.is_ascii_alphabetic() || matches!(n, '/' | '!' | '?')) => out.push_str("&lt;"),
+            c => out.push(c),
+        }
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::markdown_cell;
+
+    #[test]
+    fn a_cell_shows_what_would_be_markup_as_written() {
+        assert_eq!(markdown_cell("we<i>rd&\"x.gguf | 2"), "we&lt;i>rd&\"x.gguf \\| 2");
+        assert_eq!(markdown_cell("</b><!-- x --><?x"), "&lt;/b>&lt;!-- x -->&lt;?x");
+        assert_eq!(markdown_cell("<0.001"), "<0.001");
+        assert_eq!(markdown_cell("a\nb <"), "a b <");
     }
 }
