@@ -122,18 +122,25 @@ fn a_line_naming_no_applicable_action_ends_the_plan_at_its_valid_prefix() {
 }
 
 /// A planner that cannot reach its model stops the run: no episode to record (a rerun resumes
-/// the task); a request the server refuses for itself (a prompt past the context) is the
+/// the task), and so does a server that rejects the request's form or answers with something
+/// that is no chat completion; a request the server refuses as past the model's context is the
 /// planner's failure, recorded as no plan.
 #[test]
 fn an_unreachable_planner_stops_the_run_and_a_refused_request_is_no_plan() {
     let answer = |plan: &[String]| plan.join("\n");
-    for kind in [ChatErrorKind::Connect("refused".into()), ChatErrorKind::Status { status: 503, body: String::new(), retry_after: None }] {
+    let status = |status: u16, body: &str| ChatErrorKind::Status { status, body: body.into(), retry_after: None };
+    for kind in [
+        ChatErrorKind::Connect("refused".into()),
+        status(503, ""),
+        status(400, "Unrecognized request argument supplied: chat_template_kwargs"),
+        ChatErrorKind::MalformedReply("not JSON: <html>Bad Gateway</html>".into()),
+    ] {
         let (ep, requests) = attempt(&answer, &ChatPlannerConfig::greedy(), Some(kind.clone()));
         let error = ep.expect_err("the run stops");
         assert!(error.0.contains("unavailable"), "{kind:?}: {error}");
         assert_eq!(requests.len(), 1);
     }
-    let too_long = ChatErrorKind::Status { status: 400, body: "the prompt is too long".into(), retry_after: None };
+    let too_long = status(400, "This model's maximum context length is 4096 tokens. However, you requested 5000 tokens (too long)");
     let (ep, _) = attempt(&answer, &ChatPlannerConfig::greedy(), Some(too_long));
     let ep = ep.expect("an episode");
     assert!(!ep.success && ep.no_plan, "{:?}", ep.failure);

@@ -188,14 +188,13 @@ impl HttpErrorKind {
         }
     }
 
-    /// A server that refused this request for itself (a 4xx: a prompt past its context, say),
-    /// not one that cannot be asked (transient errors, 401, 403, 404, as
-    /// `vlm_client::ChatErrorKind::is_unavailable` has them): the request's failure, which a
-    /// harness records rather than stopping on.
+    /// A server that refused this request because it does not fit the model's context (a 4xx
+    /// that says so: `vlm_client::context_overflow`), as a local model's context overflow: the
+    /// request's failure, which a harness records rather than stopping on. Any other 4xx (the
+    /// credentials, the model, a field the server does not know) is the run's, as
+    /// `vlm_client::ChatErrorKind::is_unavailable` has it.
     pub fn is_refusal(&self) -> bool {
-        matches!(self, HttpErrorKind::Status { status: 400..=499, .. })
-            && !self.is_transient()
-            && !matches!(self, HttpErrorKind::Status { status: 401 | 403 | 404, .. })
+        matches!(self, HttpErrorKind::Status { status, body, .. } if vlm_client::context_overflow(*status, body))
     }
 }
 
@@ -203,13 +202,26 @@ impl HttpErrorKind {
 mod tests {
     use super::*;
 
-    /// A 4xx the server gives the request itself is a refusal; one about the server, the key or
-    /// the rate, and any other failure, is not.
+    /// A 4xx that says the request is longer than the model's context is a refusal; one about
+    /// the request's form, the server, the key or the rate, and any other failure, is not.
     #[test]
     fn a_refusal_is_a_4xx_about_the_request() {
-        let status = |status| HttpErrorKind::Status { status, body: String::new(), retry_after: None };
-        assert!(status(400).is_refusal() && status(413).is_refusal() && status(422).is_refusal());
-        for other in [status(401), status(403), status(404), status(408), status(429), status(500), HttpErrorKind::Io("reset".into())] {
+        let status = |status, body: &str| HttpErrorKind::Status { status, body: body.into(), retry_after: None };
+        let vllm = "This model's maximum context length is 8192 tokens. However, you requested 9000 tokens";
+        assert!(status(400, vllm).is_refusal() && status(413, "").is_refusal());
+        assert!(status(400, "{\"error\":{\"code\":\"context_length_exceeded\"}}").is_refusal());
+        assert!(status(400, "the request exceeds the available context size, try increasing it").is_refusal());
+        for other in [
+            status(400, "Unrecognized request argument supplied: allowed_token_ids"),
+            status(422, ""),
+            status(401, "context length"),
+            status(403, ""),
+            status(404, ""),
+            status(408, ""),
+            status(429, ""),
+            status(500, "maximum context length"),
+            HttpErrorKind::Io("reset".into()),
+        ] {
             assert!(!other.is_refusal(), "{other}");
         }
     }

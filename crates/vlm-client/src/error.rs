@@ -76,13 +76,64 @@ impl ChatErrorKind {
         }
     }
 
-    /// Errors of the run rather than of the model's answer: the model could not be asked
-    /// (transient errors that outlived the retries, a bad URL, a missing key, a server that
-    /// refuses the credentials or does not serve the model: 401, 403, 404). A harness stops
-    /// on these instead of counting them against the model.
+    /// Errors of the run rather than of the model's answer: the model could not be asked, or
+    /// what came back is no model's answer. Transient errors that outlived the retries, a bad
+    /// URL, a missing key; a body that is not a chat completion (an HTML error page, an
+    /// `error` object, no `choices`: [`ChatErrorKind::MalformedReply`]); and any 4xx but one
+    /// that says the request is longer than the model's context ([`context_overflow`]): a
+    /// server that refuses the credentials, does not serve the model, or rejects the request's
+    /// form (a field it does not know) would otherwise pass for a model that loses every task.
+    /// A harness stops on these instead of counting them against the model.
     pub fn is_unavailable(&self) -> bool {
         self.is_transient()
-            || matches!(self, ChatErrorKind::BadUrl(_) | ChatErrorKind::MissingApiKey(_))
-            || matches!(self, ChatErrorKind::Status { status: 401 | 403 | 404, .. })
+            || matches!(self, ChatErrorKind::BadUrl(_) | ChatErrorKind::MissingApiKey(_) | ChatErrorKind::MalformedReply(_))
+            || matches!(self, ChatErrorKind::Status { status: status @ 400..=499, body, .. } if !context_overflow(*status, body))
+    }
+}
+
+/// Whether a server's 4xx (`status`, the start of its `body`) says the request does not fit
+/// the model's context: a request this model cannot take, an outcome of the task (as a local
+/// model's context overflow is), not of the run. 413 (the body too large) always; a 400 or 422
+/// in the words vLLM, OpenAI, llama.cpp's server and Ollama use for it.
+pub fn context_overflow(status: u16, body: &str) -> bool {
+    const SAID: [&str; 7] = [
+        "context length",
+        "context_length",
+        "context window",
+        "context size",
+        "maximum context",
+        "too many tokens",
+        "exceeds the available context",
+    ];
+    let body = body.to_lowercase();
+    status == 413 || (matches!(status, 400 | 422) && SAID.iter().any(|said| body.contains(said)))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// What the run stops on, and what is the model's: a 4xx is the run's unless it says the
+    /// request is past the model's context, and a body that is no chat completion is the run's.
+    #[test]
+    fn only_the_models_answers_are_counted_against_it() {
+        let status = |status, body: &str| ChatErrorKind::Status { status, body: body.into(), retry_after: None };
+        for run in [
+            status(400, "Unrecognized request argument supplied: allowed_token_ids"),
+            status(401, ""),
+            status(422, "unknown field `chat_template_kwargs`"),
+            status(503, ""),
+            ChatErrorKind::MalformedReply("the server reports an error: overloaded".into()),
+            ChatErrorKind::Timeout(Duration::from_secs(1)),
+        ] {
+            assert!(run.is_unavailable(), "{run}");
+        }
+        for answer in [
+            status(400, "This model's maximum context length is 8192 tokens"),
+            status(413, ""),
+            ChatErrorKind::InvalidJson { error: "not an object".into(), reply: "hello".into() },
+        ] {
+            assert!(!answer.is_unavailable(), "{answer}");
+        }
     }
 }

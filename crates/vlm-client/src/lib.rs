@@ -46,7 +46,7 @@ pub mod transport;
 
 pub use cache::{CacheError, CachedChat};
 pub use client::{ChatClient, ChatModel, ClientConfig};
-pub use error::{ChatError, ChatErrorKind};
+pub use error::{ChatError, ChatErrorKind, context_overflow};
 pub use json::{JsonReply, chat_json, check_schema, first_object, read_json, validate};
 pub use message::{Image, ImageFormat, Message, Part, Role};
 pub use models::{ServedModel, parse_models, served_models};
