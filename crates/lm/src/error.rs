@@ -194,11 +194,15 @@ impl HttpErrorKind {
     /// credentials, the model, a field the server does not know) is the run's, as
     /// `vlm_client::ChatErrorKind::is_unavailable` has it.
     pub fn is_refusal(&self) -> bool {
-        matches!(self, HttpErrorKind::Status { status, body, .. } if vlm_client::context_overflow(*status, body))
+        // Only the server backend (feature `openai`, over vlm-client) makes these errors.
+        #[cfg(feature = "openai")]
+        return matches!(self, HttpErrorKind::Status { status, body, .. } if vlm_client::context_overflow(*status, body));
+        #[cfg(not(feature = "openai"))]
+        false
     }
 }
 
-#[cfg(test)]
+#[cfg(all(test, feature = "openai"))]
 mod tests {
     use super::*;
 

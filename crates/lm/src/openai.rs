@@ -348,7 +348,9 @@ fn http_kind(kind: ChatErrorKind) -> HttpErrorKind {
         ChatErrorKind::Timeout(after) => HttpErrorKind::Timeout(after),
         ChatErrorKind::Status { status, body, retry_after } => HttpErrorKind::Status { status, body, retry_after },
         ChatErrorKind::MalformedReply(why) | ChatErrorKind::InvalidJson { error: why, .. } => HttpErrorKind::MalformedJson(why),
-        other @ (ChatErrorKind::Io(_) | ChatErrorKind::MissingApiKey(_) | ChatErrorKind::BadInput(_) | ChatErrorKind::Model(_)) => {
+        // Said once: both kinds print "connection failed: ".
+        ChatErrorKind::Io(why) => HttpErrorKind::Io(why),
+        other @ (ChatErrorKind::MissingApiKey(_) | ChatErrorKind::BadInput(_) | ChatErrorKind::Model(_)) => {
             HttpErrorKind::Io(other.to_string())
         }
     }

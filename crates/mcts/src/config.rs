@@ -298,18 +298,21 @@ pub struct Outcome {
 }
 
 /// Why decoding failed (as opposed to producing a bad plan, which is an [`Outcome`]).
+///
+/// Each variant that wraps another error says it in its own message and gives no `source`, so
+/// that a chain printed whole (`anyhow`'s `{:#}`) says it once.
 #[derive(Debug, thiserror::Error)]
 pub enum DecodeError {
     /// The language model failed (a forward pass, a server request, the tokenizer).
     #[error("language model: {0}")]
-    Model(#[from] LmError),
+    Model(LmError),
     /// A state's action texts cannot make a byte-level language (an empty text or separator, a
     /// text holding the separator or starting with the end marker).
     #[error("action language: {0}")]
-    Language(#[from] token_constraint::LanguageError),
+    Language(token_constraint::LanguageError),
     /// A bug: the decoder wrote a token the constraint does not allow.
     #[error("internal error: the decoder wrote a token the constraint refuses: {0}")]
-    Token(#[from] token_constraint::PlanTokenError),
+    Token(token_constraint::PlanTokenError),
     /// The model and the constraint's vocabulary differ in size (the vocabulary was made for
     /// another model).
     #[error("the model's vocabulary has {model} tokens, the constraint's {constraint}")]
@@ -325,6 +328,24 @@ pub enum DecodeError {
     /// An MCTS setting that [`MctsConfig::check`] refuses.
     #[error("bad setting: {0}")]
     Config(String),
+}
+
+impl From<LmError> for DecodeError {
+    fn from(error: LmError) -> Self {
+        DecodeError::Model(error)
+    }
+}
+
+impl From<token_constraint::LanguageError> for DecodeError {
+    fn from(error: token_constraint::LanguageError) -> Self {
+        DecodeError::Language(error)
+    }
+}
+
+impl From<token_constraint::PlanTokenError> for DecodeError {
+    fn from(error: token_constraint::PlanTokenError) -> Self {
+        DecodeError::Token(error)
+    }
 }
 
 /// The search's settings (paper Appendix A.4).
@@ -430,4 +451,19 @@ pub(crate) struct Run {
     pub stop: StopReason,
     pub text: Option<String>,
     pub tree: Option<TreeSummary>,
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A wrapped error is said once when the chain is printed whole: the wrapper's message
+    /// holds it, and it is no `source` (it was both, and anyhow's `{:#}` printed a server's
+    /// error twice).
+    #[test]
+    fn a_wrapped_error_is_said_once() {
+        let error = DecodeError::from(LmError::NoChatTemplate);
+        assert!(std::error::Error::source(&error).is_none());
+        assert_eq!(error.to_string(), format!("language model: {}", LmError::NoChatTemplate));
+    }
 }
