@@ -49,6 +49,9 @@ impl ModelSpec {
                     if !(url.starts_with("http://") || url.starts_with("https://")) {
                         return Err(format!("`{text}`: give the server as openai:http://HOST:PORT/v1"));
                     }
+                    // The whole URL, as the client will take it: a bad one is this option's
+                    // bad input, not a server that cannot be asked.
+                    vlm_client::transport::check_url(url).map_err(|e| e.to_string())?;
                     ModelSpec::OpenAi(url.to_string())
                 } else if text.ends_with(".gguf") {
                     ModelSpec::Gguf(PathBuf::from(text))
@@ -167,6 +170,10 @@ mod tests {
         assert_eq!(ModelSpec::parse("openai:http://h:1/v1").unwrap().short_name(), "openai");
         assert_eq!(ModelSpec::parse("/m/SmolLM2.Q4_1.gguf").unwrap().short_name(), "SmolLM2.Q4_1");
         assert!(ModelSpec::parse("openai:localhost:8080").is_err());
+        for bad in ["openai:http://:80/v1", "openai:http://", "openai:http://a b/v1", "openai:http://h/v1?x=1", "openai:http://h:99999/v1"]
+        {
+            assert!(ModelSpec::parse(bad).is_err(), "{bad}");
+        }
         assert!(ModelSpec::parse("gpt-9").is_err());
         assert!(language_model("systematic").is_err() && language_model("uniform").is_ok());
         assert!(explorer("uniform").is_err() && explorer("systematic").is_ok());

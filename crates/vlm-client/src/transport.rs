@@ -78,6 +78,15 @@ pub fn check_url(url: &str) -> Result<(), ChatErrorKind> {
         return Err(ChatErrorKind::BadUrl(format!("`{url}`: a query, fragment or space in a base URL")));
     }
     url.parse::<ureq::http::Uri>().map_err(|e| ChatErrorKind::BadUrl(format!("`{url}`: {e}")))?;
+    // A port past 65535 parses (the URI keeps no port then), then fails as a connection
+    // refused after every retry.
+    let host = authority.rsplit('@').next().unwrap_or(authority);
+    if !host.ends_with(']')
+        && let Some((_, port)) = host.rsplit_once(':')
+        && !port.parse::<u16>().is_ok_and(|p| p > 0)
+    {
+        return Err(ChatErrorKind::BadUrl(format!("`{url}`: port {port} is not one from 1 to 65535")));
+    }
     Ok(())
 }
 
@@ -263,7 +272,9 @@ mod tests {
         for good in ["http://127.0.0.1:8080/v1", "https://api.example.com/v1", "http://[::1]:9/x", "http://localhost"] {
             assert_eq!(check_url(good), Ok(()), "{good}");
         }
-        for bad in ["ftp://a", "127.0.0.1:8080", "http://", "http://:80/v1", "http://a/v1?x=1", "http://a b"] {
+        for bad in
+            ["ftp://a", "127.0.0.1:8080", "http://", "http://:80/v1", "http://a/v1?x=1", "http://a b", "http://a:99999/v1", "http://a:0"]
+        {
             assert!(matches!(check_url(bad), Err(ChatErrorKind::BadUrl(_))), "{bad}");
         }
     }
