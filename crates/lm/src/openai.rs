@@ -294,6 +294,15 @@ impl OpenAiModel {
         entries.sort_by(|a, b| a.0.cmp(&b.0).then(b.1.total_cmp(&a.1)));
         entries.dedup_by_key(|e| e.0);
         entries.sort_by(|a, b| b.1.total_cmp(&a.1).then(a.0.cmp(&b.0)));
+        // Each entry is a log-probability; together, the likeliest tokens of one distribution:
+        // their probabilities sum to at most 1 (past rounding), and not all of them to nothing.
+        let total: f64 = entries.iter().map(|e| f64::from(e.1).exp()).sum();
+        if total > 1.01 {
+            return Err(malformed(format!("the top logprobs' probabilities sum to {total:.3}: not one distribution")));
+        }
+        if total == 0.0 {
+            return Err(malformed("every top logprob is -inf: no token is possible".into()));
+        }
         let prompt_tokens = value.get("usage").and_then(|u| u.get("prompt_tokens")).and_then(Value::as_u64);
         Ok((Logprobs::Sparse { top: entries, vocabulary_size: self.tokenizer.vocabulary().len() }, prompt_tokens))
     }

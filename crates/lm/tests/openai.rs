@@ -302,6 +302,9 @@ fn malformed_answers_are_typed_errors_without_retries() {
         ("{\"choices\": [{\"logprobs\": {\"top_logprobs\": [{\"token_id:5\": \"high\"}]}}]}", "not a number"),
         ("{\"choices\": [{\"logprobs\": {\"top_logprobs\": [{\"token_id:5\": 3.5}]}}]}", "not a log-probability"),
         ("{\"choices\": [{\"logprobs\": {\"top_logprobs\": [{\"token_id:99999\": -0.1}]}}]}", "vocabulary"),
+        // Not one distribution: probabilities that sum past 1, or to nothing.
+        ("{\"choices\": [{\"logprobs\": {\"top_logprobs\": [{\"token_id:5\": 0.0, \"token_id:6\": 0.0}]}}]}", "sum to 2.000"),
+        ("{\"choices\": [{\"logprobs\": {\"top_logprobs\": [{\"token_id:5\": -1e39, \"token_id:6\": -1e39}]}}]}", "-inf"),
         ("<html>Bad gateway</html>", "expected value"),
     ];
     let count = bodies.len();
