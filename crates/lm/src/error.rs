@@ -164,7 +164,9 @@ pub enum HttpErrorKind {
     #[error("connection failed: {0}")]
     Io(String),
     /// The server answered with a non-2xx status; `retry_after` is its `Retry-After`.
-    #[error("HTTP status {status}: {body}")]
+    // The wait a `Retry-After` asked for is said: a request given up at once, since the wait
+    // was past what a retry waits, says why.
+    #[error("HTTP status {status}{}: {body}", retry_after.map(|wait| format!(" (Retry-After: {} s)", wait.as_secs())).unwrap_or_default())]
     Status {
         /// The HTTP status code.
         status: u16,
