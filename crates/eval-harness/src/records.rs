@@ -438,7 +438,8 @@ impl RecordFile {
     /// unsharded file of its run beside it holds records ([`RecordError::Merged`]: [`merge`]
     /// made it, or a run without shards wrote it): that file would then miss what the shard
     /// adds, while reports and replays read the shard through it. A shard with nothing left
-    /// to run, a shard beside an empty or absent unsharded file, and an unsharded file pass.
+    /// to run, a shard beside an empty or absent unsharded file, and an unsharded file holding
+    /// records pass.
     ///
     /// The other way round, an unsharded file that holds no record yet is refused beside shard
     /// files of its run that hold records ([`RecordError::Unmerged`]): they are to be merged
