@@ -25,10 +25,10 @@ use lm::{LanguageModel, LocalChat, LocalModel};
 use mcts::prompt::planning_prompt;
 use mcts::{DecodeError, Decoder};
 use serde_json::json;
-use vlm_client::{CachedChat, ChatClient, ChatModel, ClientConfig};
+use vlm_client::{CachedChat, ChatClient, ChatModel};
 
 use crate::input::InputError;
-use crate::model_spec::ModelSpec;
+use crate::model_spec::{ModelSpec, Request};
 use crate::phase2::{DecodeArgs, LmArgs, load_lm};
 
 #[derive(Debug, clap::Args)]
@@ -141,7 +141,7 @@ impl EpisodeArgs {
 
 /// Phase I's policy, named as `--explorer` names it: `systematic` or a chat model, behind the
 /// reply file `cache` when one is given.
-pub fn explorer(spec: &ModelSpec, served_model: &str, cache: Option<&std::path::Path>) -> anyhow::Result<Box<dyn Policy>> {
+pub fn explorer(spec: &ModelSpec, lm: &LmArgs, cache: Option<&std::path::Path>) -> anyhow::Result<Box<dyn Policy>> {
     if *spec == ModelSpec::Systematic {
         if let Some(file) = cache {
             return Err(InputError(format!(
@@ -154,14 +154,15 @@ pub fn explorer(spec: &ModelSpec, served_model: &str, cache: Option<&std::path::
     }
     // A damaged reply file is named before any model is loaded or server asked.
     cache.map(CachedChat::check).transpose().map_err(|e| InputError(e.to_string()))?;
-    let mut model = chat_model(spec, served_model)?;
+    let served_model = lm.served_model.as_str();
+    let mut model = chat_model(spec, lm, Request::Chat)?;
     if let Some(file) = cache {
         // What names the model's answers: the file's digest for a local model, the server and
         // the served model's name otherwise.
         let identity = match spec.url() {
             // With what the server lists: another model behind the same URL and name is
             // asked again, not answered with the first one's replies.
-            Some(url) => format!("{url} served-model:{served_model} serves:{}", crate::model_spec::served_identity(url, served_model)?),
+            Some(url) => format!("{url} served-model:{served_model} serves:{}", crate::model_spec::served_identity(url, served_model, &lm.server)?),
             None => {
                 let path = crate::lm::resolve_spec(spec)?;
                 format!("{spec} sha256:{}", crate::pypi::sha256_remembered(&path)?)
@@ -172,11 +173,13 @@ pub fn explorer(spec: &ModelSpec, served_model: &str, cache: Option<&std::path::
     Ok(Box::new(ChatPolicy::new(model, &spec.to_string())))
 }
 
-/// A chat model by name: `openai:URL` (a served model, `served_model` names it), `smollm2` (the
-/// local default model) or a GGUF path, through `LocalChat`. An unknown name is bad input.
-pub fn chat_model(spec: &ModelSpec, served_model: &str) -> anyhow::Result<Box<dyn ChatModel>> {
+/// A chat model by name: `openai:URL` (a served model, `lm.served_model` names it, asked for
+/// `request` as `lm.server` says), `smollm2` (the local default model) or a GGUF path, through
+/// `LocalChat`. An unknown name is bad input.
+pub fn chat_model(spec: &ModelSpec, lm: &LmArgs, request: Request) -> anyhow::Result<Box<dyn ChatModel>> {
     if let Some(url) = spec.url() {
-        return Ok(Box::new(ChatClient::new(ClientConfig::new(url, served_model)).map_err(|e| InputError(format!("{url}: {e}")))?));
+        let config = lm.server.chat_config(url, &lm.served_model, request);
+        return Ok(Box::new(ChatClient::new(config).map_err(|e| InputError(format!("{url}: {e}")))?));
     }
     let path = crate::lm::resolve_spec(spec)?;
     let model = LocalModel::load(&path).map_err(|e| InputError(format!("{}: {e}", path.display())))?;
@@ -236,7 +239,7 @@ impl PhaseTwoRunner {
         // A* decodes no plan: Phase II's model and decoding settings (but the clock) would be
         // passed over.
         if planner == "astar" {
-            let mut given = crate::input::given::<LmArgs>(&["served_model"]);
+            let mut given = crate::input::given::<LmArgs>(&crate::phase2::SHARED_WITH_PHASE_ONE);
             given.extend(crate::input::given::<DecodeArgs>(&["clock"]));
             if let Some(error) = crate::input::settings_of(&given, "--planner mcts, not --planner astar") {
                 return Err(error.into());
@@ -252,7 +255,8 @@ impl PhaseTwoRunner {
                 Some(Thinking::Recommended) => ChatPlannerConfig::thinking_recommended(decode.seed),
             };
             config.prompt = decode.prompt_options();
-            let chat = Some((chat_model(name, &lm.served_model)?, config));
+            let request = if chat.thinking.is_some() { Request::ThinkingChat } else { Request::Chat };
+            let chat = Some((chat_model(name, lm, request)?, config));
             return Ok(PhaseTwoRunner {
                 planner: "chat".into(),
                 chat,
@@ -474,7 +478,13 @@ pub fn run(args: AgentArgs) -> anyhow::Result<ExitCode> {
     for (path, option) in [(&args.commands_out, "--commands-out"), (&args.trace, "--trace")] {
         path.as_deref().map(|path| crate::input::file_to_write(path, option)).transpose()?;
     }
-    let mut policy = explorer(&args.episode.explorer, &args.episode.lm.served_model, args.episode.chat_cache.as_deref())?;
+    let phase_two = match (&args.episode.chat.chat_planner, args.planner.as_str()) {
+        (Some(planner), _) => Some(planner),
+        (None, "mcts") => Some(&args.episode.lm.lm),
+        (None, _) => None,
+    };
+    crate::model_spec::ServerArgs::check(&[Some(&args.episode.explorer), phase_two].into_iter().flatten().collect::<Vec<_>>())?;
+    let mut policy = explorer(&args.episode.explorer, &args.episode.lm, args.episode.chat_cache.as_deref())?;
     let mut phase2 = PhaseTwoRunner::new(&args.planner, &args.episode)?;
     let (ep, name) = if let Some(game) = &args.which.game {
         let (mut env, mut adapter, goal) = alfworld(game)?;

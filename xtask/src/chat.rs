@@ -10,13 +10,13 @@
 
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
-use std::time::{Duration, Instant};
+use std::time::Instant;
 
 use anyhow::Context;
 use lm::{LocalChat, LocalModel};
 use serde_json::{Value, json};
 use vlm_client::{
-    ChatClient, ChatError, ChatErrorKind, ChatModel, ChatRequest, ClientConfig, Image, Message, RetryPolicy, Sampling, Usage, chat_json,
+    ChatClient, ChatError, ChatErrorKind, ChatModel, ChatRequest, Image, Message, Sampling, Usage, chat_json,
     check_schema, first_object,
 };
 
@@ -96,9 +96,13 @@ fn is_bad_input(error: &ChatError) -> bool {
 
 fn model_for(args: &ChatArgs) -> anyhow::Result<Box<dyn ChatModel>> {
     if let Some(url) = args.model.strip_prefix("openai:") {
-        let mut config = ClientConfig::new(url, &args.served_model);
-        config.api_key_env.clone_from(&args.api_key_env);
-        config.retry = RetryPolicy { timeout: Duration::from_secs_f64(args.timeout), max_retries: args.retries, ..RetryPolicy::default() };
+        // `chat`'s own names for the server options of the other commands.
+        let server = crate::model_spec::ServerArgs {
+            api_key_env: args.api_key_env.clone(),
+            server_timeout: Some(args.timeout),
+            server_retries: Some(args.retries),
+        };
+        let config = server.chat_config(url, &args.served_model, crate::model_spec::Request::Chat);
         return Ok(Box::new(ChatClient::new(config).map_err(|e| InputError(e.to_string()))?));
     }
     let path = crate::lm::resolve_model(&args.model)?;

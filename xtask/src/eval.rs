@@ -305,6 +305,18 @@ enum Runner<'a> {
     Direct(Direct<'a>),
 }
 
+/// The models the agent asks: Phase I's (the direct agent's) and Phase II's, the expert none.
+fn models_asked(args: &EvalArgs) -> Vec<&crate::model_spec::ModelSpec> {
+    let mut asked = Vec::new();
+    if args.agent != AgentName::Expert {
+        asked.push(&args.episode.explorer);
+    }
+    if args.agent == AgentName::Ours {
+        asked.push(args.episode.chat.chat_planner.as_ref().unwrap_or(&args.episode.lm.lm));
+    }
+    asked
+}
+
 /// The served model's name where `model` is `openai:URL` (it changes what the run finds).
 fn served_model(args: &EvalArgs) -> Option<&str> {
     args.episode.explorer.url().map(|_| args.episode.lm.served_model.as_str())
@@ -407,18 +419,9 @@ fn config(args: &EvalArgs, suite: Suite, tasks: &[EvalTask]) -> anyhow::Result<V
     // What each server the agent asks serves (a request's model name does not say: llama.cpp's
     // server answers to any name), so that another model behind the same URL and name is
     // another run. Only the models this agent asks, as for `files_sha256`.
-    let mut asked: Vec<(&crate::model_spec::ModelSpec, &str)> = Vec::new();
     let served_name = args.episode.lm.served_model.as_str();
-    if args.agent != AgentName::Expert {
-        asked.push((&args.episode.explorer, served_name));
-    }
-    if args.agent == AgentName::Ours {
-        match &args.episode.chat.chat_planner {
-            Some(planner) => asked.push((planner, served_name)),
-            None => asked.push((&args.episode.lm.lm, served_name)),
-        }
-    }
-    if let Some(served) = crate::model_spec::served_entry(&asked)? {
+    let asked: Vec<_> = models_asked(args).into_iter().map(|spec| (spec, served_name)).collect();
+    if let Some(served) = crate::model_spec::served_entry(&asked, &args.episode.lm.server)? {
         config.as_object_mut().expect("object").insert("served".into(), served);
     }
     // Every agent but the expert replay runs the exploration harness: its behaviour's version;
@@ -514,8 +517,9 @@ pub fn run(args: EvalArgs) -> anyhow::Result<ExitCode> {
     }
     // Phase II's model and decoding settings are `ours`'s: the other agents decode no plan
     // (the planner's A* takes only the clock), and would pass them over.
+    crate::model_spec::ServerArgs::check(&models_asked(&args))?;
     if args.agent != AgentName::Ours {
-        let mut given = crate::input::given::<crate::phase2::LmArgs>(&["served_model"]);
+        let mut given = crate::input::given::<crate::phase2::LmArgs>(&crate::phase2::SHARED_WITH_PHASE_ONE);
         let except: &[&str] = if args.agent == AgentName::Planner { &["clock"] } else { &[] };
         given.extend(crate::input::given::<crate::phase2::DecodeArgs>(except));
         let agent = serde_json::to_value(args.agent)?;
@@ -779,10 +783,10 @@ fn plan(args: &EvalArgs) -> anyhow::Result<Vec<Planned>> {
 fn run_once(args: &EvalArgs, planned: &[Planned]) -> anyhow::Result<(serde_json::Map<String, Value>, Vec<PathBuf>)> {
     let mut runner = match args.agent {
         AgentName::Expert => Runner::Expert,
-        AgentName::Direct => Runner::Direct(Direct { args, model: chat_model(&args.episode.explorer, &args.episode.lm.served_model)? }),
+        AgentName::Direct => Runner::Direct(Direct { args, model: chat_model(&args.episode.explorer, &args.episode.lm, crate::model_spec::Request::Chat)? }),
         agent => {
             let planner = if agent == AgentName::Ours { "mcts" } else { "astar" };
-            let policy = explorer(&args.episode.explorer, &args.episode.lm.served_model, args.episode.chat_cache.as_deref())?;
+            let policy = explorer(&args.episode.explorer, &args.episode.lm, args.episode.chat_cache.as_deref())?;
             let phase2 = PhaseTwoRunner::new(planner, &args.episode)?;
             Runner::Embodied(Box::new(Embodied { args, policy, phase2 }))
         }

@@ -101,13 +101,97 @@ pub fn chat_model(text: &str) -> Result<ModelSpec, String> {
     taking(text, &[|s| !matches!(s, ModelSpec::Uniform | ModelSpec::Systematic)], "a chat model (smollm2, openai:URL, a .gguf path)")
 }
 
+/// How a run talks to its served models (`openai:URL`, whichever options name them): the API
+/// key's variable, how long one request may take, how often a failed one is tried again. Not
+/// part of a run's configuration, and not serialised: a request that still fails past them
+/// stops the run (exit 3) and records nothing, so they change when a run gives up, never what
+/// it records.
+#[derive(Debug, Clone, Default, clap::Args)]
+pub struct ServerArgs {
+    /// The environment variable holding the served models' API key, sent as a bearer token
+    /// (`vllm serve --api-key`, a hosted endpoint) [default: no key].
+    #[arg(long, value_name = "VARIABLE")]
+    pub api_key_env: Option<String>,
+    /// Seconds one request to a served model may take: connect, send and the whole reply
+    /// [default: 60 for `--lm`'s one-token completions, 120 for a chat reply, 1800 for a thinking
+    /// `--chat-planner`'s (up to 32,768 tokens), 30 for the model list].
+    #[arg(long, value_name = "SECONDS", value_parser = crate::input::positive_seconds)]
+    pub server_timeout: Option<f64>,
+    /// Further attempts after a transient failure (no connection, a timeout, 408, 429, 5xx)
+    /// [default: 2 for `--lm`'s completions, 3 otherwise].
+    #[arg(long, value_name = "N")]
+    pub server_retries: Option<u32>,
+}
+
+/// The kinds of request a run makes of a server, each with its own default deadline.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Request {
+    /// `/completions`, one token with its top logprobs (Phase II's `--lm`).
+    Completion,
+    /// `/chat/completions`: a Phase I decision, a direct agent's turn, a greedy chat plan.
+    Chat,
+    /// `/chat/completions` with thinking on: up to 32,768 tokens in one reply.
+    ThinkingChat,
+    /// `/models`, asked once per server for the run's configuration.
+    ModelList,
+}
+
+impl ServerArgs {
+    /// The options given, `--server-timeout` style, for a check that they are not passed over.
+    pub fn given() -> Vec<String> {
+        crate::input::given::<ServerArgs>(&[])
+    }
+
+    /// Refuses these options where no model of the run is served (they would be passed over).
+    pub fn check(models: &[&ModelSpec]) -> Result<(), crate::input::InputError> {
+        if models.iter().any(|m| m.url().is_some()) {
+            return Ok(());
+        }
+        crate::input::settings_of(&Self::given(), "a served model (openai:URL), and the run names none").map_or(Ok(()), Err)
+    }
+
+    /// The deadline and retries of `request`: the defaults above where not given.
+    pub fn policy(&self, request: Request) -> vlm_client::RetryPolicy {
+        let (seconds, retries) = match request {
+            Request::Completion => (60.0, 2),
+            Request::Chat => (120.0, 3),
+            Request::ThinkingChat => (1800.0, 3),
+            Request::ModelList => (30.0, 3),
+        };
+        vlm_client::RetryPolicy {
+            timeout: std::time::Duration::from_secs_f64(self.server_timeout.unwrap_or(seconds)),
+            max_retries: self.server_retries.unwrap_or(retries),
+            ..vlm_client::RetryPolicy::default()
+        }
+    }
+
+    /// The API key, read from `--api-key-env`'s variable; bad input where it is not set.
+    pub fn api_key(&self) -> Result<Option<String>, crate::input::InputError> {
+        self.api_key_env
+            .as_ref()
+            .map(|name| {
+                std::env::var(name)
+                    .map_err(|_| crate::input::InputError(format!("--api-key-env {name}: the variable is not set (or not UTF-8)")))
+            })
+            .transpose()
+    }
+
+    /// A chat client's settings for `model` at `url`, for `request`.
+    pub fn chat_config(&self, url: &str, model: &str, request: Request) -> vlm_client::ClientConfig {
+        let mut config = vlm_client::ClientConfig::new(url, model);
+        config.api_key_env.clone_from(&self.api_key_env);
+        config.retry = self.policy(request);
+        config
+    }
+}
+
 /// What the server at `url` serves when asked for `name`, by its model list
 /// ([`vlm_client::served_models`]): the entry named `name`; the only entry, where the server
 /// lists one and `name` is not it (llama.cpp's server answers to any name with the file it
 /// loaded); else every id listed (`{"listed": [...]}`); `"unlisted"` where the server has no
 /// list. A server that cannot be reached is an error: the run cannot say what it would record.
 /// Asked once per process for each URL and name.
-pub fn served_identity(url: &str, name: &str) -> anyhow::Result<serde_json::Value> {
+pub fn served_identity(url: &str, name: &str, server: &ServerArgs) -> anyhow::Result<serde_json::Value> {
     use serde_json::json;
     use std::collections::BTreeMap;
     use std::sync::{Mutex, OnceLock};
@@ -116,9 +200,9 @@ pub fn served_identity(url: &str, name: &str) -> anyhow::Result<serde_json::Valu
     if let Some(known) = ASKED.get_or_init(Default::default).lock().expect("not poisoned").get(&key) {
         return Ok(known.clone());
     }
-    let policy = vlm_client::RetryPolicy { timeout: std::time::Duration::from_secs(30), ..vlm_client::RetryPolicy::default() };
+    let key_text = server.api_key()?;
     let listed =
-        vlm_client::served_models(url, None, &policy).map_err(|e| anyhow::anyhow!("cannot ask {url} which model it serves: {e}"))?;
+        vlm_client::served_models(url, key_text.as_deref(), &server.policy(Request::ModelList)).map_err(|e| anyhow::anyhow!("cannot ask {url} which model it serves: {e}"))?;
     let entry = |m: &vlm_client::ServedModel| {
         let mut entry = json!({ "id": m.id });
         for (key, value) in [("root", &m.root), ("owned_by", &m.owned_by)] {
@@ -148,11 +232,11 @@ pub fn served_identity(url: &str, name: &str) -> anyhow::Result<serde_json::Valu
 /// and the name it is asked by), what its server serves ([`served_identity`]), keyed
 /// `URL served-model:NAME` (the chat cache's identity of a served model); `None`
 /// where the run asks no server, so that the hashes of other runs stay as they were.
-pub fn served_entry(models: &[(&ModelSpec, &str)]) -> anyhow::Result<Option<serde_json::Value>> {
+pub fn served_entry(models: &[(&ModelSpec, &str)], server: &ServerArgs) -> anyhow::Result<Option<serde_json::Value>> {
     let mut served = serde_json::Map::new();
     for (spec, name) in models {
         if let Some(url) = spec.url() {
-            served.insert(format!("{url} served-model:{name}"), served_identity(url, name)?);
+            served.insert(format!("{url} served-model:{name}"), served_identity(url, name, server)?);
         }
     }
     Ok((!served.is_empty()).then_some(serde_json::Value::Object(served)))
@@ -161,6 +245,22 @@ pub fn served_entry(models: &[(&ModelSpec, &str)]) -> anyhow::Result<Option<serd
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Each kind of request waits its own default; the options, where given, set every kind's.
+    #[test]
+    fn server_deadlines_default_per_request_and_are_set_for_all() {
+        let defaults = ServerArgs::default();
+        let seconds = |args: &ServerArgs, r| (args.policy(r).timeout.as_secs_f64(), args.policy(r).max_retries);
+        assert_eq!(seconds(&defaults, Request::Completion), (60.0, 2));
+        assert_eq!(seconds(&defaults, Request::Chat), (120.0, 3));
+        assert_eq!(seconds(&defaults, Request::ThinkingChat), (1800.0, 3), "32,768 tokens of thinking in one reply");
+        assert_eq!(seconds(&defaults, Request::ModelList), (30.0, 3));
+        let given = ServerArgs { server_timeout: Some(7.5), server_retries: Some(0), api_key_env: None };
+        for request in [Request::Completion, Request::Chat, Request::ThinkingChat, Request::ModelList] {
+            assert_eq!(seconds(&given, request), (7.5, 0));
+        }
+        assert_eq!(given.api_key().expect("no key asked for"), None);
+    }
 
     #[test]
     fn specs_parse_print_back_and_are_checked_per_option() {

@@ -24,6 +24,11 @@ use eval_harness::records::RecordFile;
 use crate::input::{self, InputError};
 use crate::model_spec::ModelSpec;
 
+/// The options of [`LmArgs`] that serve Phase I's model too (`--served-model` names a served
+/// explorer, and the server options apply to every served model): not Phase II's alone, so not
+/// passed over by an agent that decodes no plan.
+pub const SHARED_WITH_PHASE_ONE: [&str; 4] = ["served_model", "api_key_env", "server_timeout", "server_retries"];
+
 /// Which language model writes the plan.
 #[derive(Debug, Clone, clap::Args, Serialize)]
 pub struct LmArgs {
@@ -45,6 +50,11 @@ pub struct LmArgs {
     #[arg(long, default_value = "vllm", value_parser = input::choice::<ServerDialect>())]
     #[serde(serialize_with = "input::serialize_name")]
     pub server_dialect: ServerDialect,
+    /// How every served model of the run is asked (this one, and a served `--explorer` or
+    /// `--chat-planner`); not part of the configuration.
+    #[command(flatten)]
+    #[serde(skip)]
+    pub server: crate::model_spec::ServerArgs,
 }
 
 /// How the plan is decoded (defaults: the paper's, Appendix A.4 and Table 6).
@@ -269,6 +279,9 @@ pub fn load_lm(args: &LmArgs) -> anyhow::Result<Box<dyn LanguageModel>> {
         let tokenizer = Arc::new(tokenizer_at(&tokenizer_path)?);
         let mut config = OpenAiConfig::new(url, &args.served_model);
         config.dialect = args.server_dialect;
+        let policy = args.server.policy(crate::model_spec::Request::Completion);
+        (config.timeout, config.max_retries) = (policy.timeout, policy.max_retries);
+        config.api_key = args.server.api_key()?;
         let model = OpenAiModel::new(config, tokenizer).map_err(|e| InputError(format!("{url}: {e}")))?;
         return Ok(Box::new(model));
     }
@@ -366,7 +379,7 @@ impl<'a> RunConfig<'a> {
     /// The configuration of a run of `decode` with `lm` on `set` of `benchmark`, asking an
     /// `openai:` server what it serves.
     pub fn new(benchmark: &'a str, set: &'a str, lm: &'a LmArgs, decode: &'a DecodeArgs, time_limit: f64) -> anyhow::Result<Self> {
-        let served = crate::model_spec::served_entry(&[(&lm.lm, &lm.served_model)])?;
+        let served = crate::model_spec::served_entry(&[(&lm.lm, &lm.served_model)], &lm.server)?;
         let mut loaded: Vec<PathBuf> = lm.tokenizer.iter().cloned().collect();
         if let ModelSpec::Gguf(path) = &lm.lm {
             loaded.insert(0, path.clone());
@@ -454,6 +467,7 @@ pub fn plan_one(
     // The settings that make this plan, hashed as a run's records are (the task is the set),
     // asked of a server before the search, so that a server that cannot say loses no search.
     // The model's files (a tokenizer, a GGUF) are checked before a server is asked.
+    crate::model_spec::ServerArgs::check(&[&lm_args.lm])?;
     let mut lm = load_lm(lm_args)?;
     let config = RunConfig::new(files.benchmark.name(), &files.id, lm_args, args, time_limit)?;
     let vocab = Arc::new(mcts::constraint_vocabulary(lm.vocabulary()).context("the model's vocabulary")?);
@@ -530,6 +544,7 @@ fn file_safe(name: &str) -> String {
 /// `cargo xtask phase2`.
 pub fn run(args: Phase2Args) -> anyhow::Result<ExitCode> {
     crate::input::folder_to_write(&args.out, "--out")?;
+    crate::model_spec::ServerArgs::check(&[&args.lm.lm])?;
     let benchmark = args.benchmark;
     let all = match &args.subset {
         Some(subset) => benchmark_data::load_subset(benchmark, subset),

@@ -84,23 +84,37 @@ fn a_reply_cache_inside_the_records_folder_is_refused() {
     assert!(!dir.exists(), "no records, no reply file");
 }
 
+/// How the loopback server behaves beyond answering.
+#[derive(Clone, Default)]
+struct Manner {
+    /// Answer only requests bearing this key (`Authorization: Bearer KEY`); 401 otherwise.
+    key: Option<&'static str>,
+    /// Wait this long before answering a chat request.
+    chat_delay: std::time::Duration,
+}
+
 /// A model server on loopback: `GET /v1/models` lists `listed`'s one id, and every chat request
 /// is answered DONE (the direct agent ends its episode). Counts the chat requests.
 fn done_server(listed: Arc<Mutex<String>>, chats: Arc<AtomicUsize>) -> String {
+    server_in_manner(listed, chats, Manner::default())
+}
+
+/// [`done_server`], behaving as `manner` says.
+fn server_in_manner(listed: Arc<Mutex<String>>, chats: Arc<AtomicUsize>, manner: Manner) -> String {
     let listener = TcpListener::bind("127.0.0.1:0").expect("bind");
     let address = listener.local_addr().expect("address");
     std::thread::spawn(move || {
         for stream in listener.incoming() {
             let Ok(stream) = stream else { return };
-            let (listed, chats) = (listed.clone(), chats.clone());
-            std::thread::spawn(move || serve_connection(stream, &listed, &chats));
+            let (listed, chats, manner) = (listed.clone(), chats.clone(), manner.clone());
+            std::thread::spawn(move || serve_connection(stream, &listed, &chats, &manner));
         }
     });
     format!("http://{address}/v1")
 }
 
 /// Requests on one kept-alive connection until the client closes it.
-fn serve_connection(mut stream: TcpStream, listed: &Mutex<String>, chats: &AtomicUsize) {
+fn serve_connection(mut stream: TcpStream, listed: &Mutex<String>, chats: &AtomicUsize, manner: &Manner) {
     let mut buffer = Vec::new();
     let mut chunk = [0u8; 65536];
     loop {
@@ -120,11 +134,22 @@ fn serve_connection(mut stream: TcpStream, listed: &Mutex<String>, chats: &Atomi
             }
         }
         buffer.drain(..end + 4 + length);
+        if let Some(key) = manner.key
+            && !head.lines().any(|l| l.trim() == format!("authorization: bearer {key}"))
+        {
+            let body = r#"{"error": {"message": "Unauthorized", "type": "invalid_request_error"}}"#;
+            let reply = format!("HTTP/1.1 401 Unauthorized\r\nContent-Type: application/json\r\nContent-Length: {}\r\n\r\n{body}", body.len());
+            if stream.write_all(reply.as_bytes()).is_err() {
+                return;
+            }
+            continue;
+        }
         let body = if head.starts_with("get /v1/models ") {
             serde_json::json!({ "object": "list", "data": [{ "id": *listed.lock().unwrap(), "object": "model", "created": 1, "owned_by": "test" }] })
         } else {
             assert!(head.starts_with("post /v1/chat/completions "), "{head}");
             chats.fetch_add(1, Ordering::SeqCst);
+            std::thread::sleep(manner.chat_delay);
             serde_json::json!({
                 "choices": [{ "message": { "role": "assistant", "content": "{\"action\": \"DONE\", \"done\": true}" }, "finish_reason": "stop" }],
                 "usage": { "prompt_tokens": 300, "completion_tokens": 12 }
@@ -176,6 +201,71 @@ fn a_served_model_is_named_by_what_its_server_lists() {
     assert_eq!(served(&second)["id"], "/models/second.gguf");
     assert_eq!(chats.load(Ordering::SeqCst), 2);
     assert_eq!(std::fs::read_to_string(&first).expect("records").lines().count(), 1, "the first run's records untouched");
+}
+
+/// `--api-key-env`, `--server-timeout` and `--server-retries` reach every request of the run:
+/// the model list and the chat. A server that wants a key answers with the key's variable
+/// given, and refuses without it (exit 3: nothing recorded); an unset variable is bad input; a
+/// reply slower than the deadline stops the run after the retries asked for, recording
+/// nothing; and the options where no model is served would be passed over, so are refused.
+#[test]
+fn the_server_options_reach_every_request_of_the_run() {
+    let (_tmp_dir, dir) = out("server");
+    let chats = Arc::new(AtomicUsize::new(0));
+    let listed = Arc::new(Mutex::new("/models/keyed.gguf".to_string()));
+    let manner = Manner { key: Some("sekrit"), ..Manner::default() };
+    let explorer = format!("openai:{}", server_in_manner(listed.clone(), chats.clone(), manner));
+    let run = |extra: &[&str], key: Option<&str>| {
+        let mut args = vec!["eval", "--agent", "direct", "--explorer", &explorer, "--benchmark", "alfworld-seen", "--limit", "1"];
+        args.extend_from_slice(&["--out", dir.to_str().unwrap()]);
+        args.extend_from_slice(extra);
+        let mut command = std::process::Command::new(env!("CARGO_BIN_EXE_xtask"));
+        command.args(&args).current_dir(std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join(".."));
+        command.env_remove("XTASK_TEST_SERVER_KEY");
+        if let Some(key) = key {
+            command.env("XTASK_TEST_SERVER_KEY", key);
+        }
+        let output = command.output().expect("xtask runs");
+        (output.status.code(), String::from_utf8_lossy(&output.stderr).into_owned())
+    };
+    let key = ["--api-key-env", "XTASK_TEST_SERVER_KEY"];
+    let (code, stderr) = run(&key, None);
+    assert_eq!(code, Some(2), "{stderr}");
+    assert!(stderr.contains("--api-key-env XTASK_TEST_SERVER_KEY: the variable is not set"), "{stderr}");
+    let (code, stderr) = run(&["--server-retries", "0"], None);
+    assert_eq!(code, Some(3), "{stderr}");
+    assert!(stderr.contains("401"), "{stderr}");
+    assert_eq!(chats.load(Ordering::SeqCst), 0, "refused at the model list");
+    let (code, stderr) = run(&key, Some("sekrit"));
+    assert_eq!(code, Some(0), "{stderr}");
+    assert_eq!(chats.load(Ordering::SeqCst), 1, "one turn: DONE");
+
+    // A server slower than the deadline: one attempt and one retry, then the run stops.
+    let (_slow_dir, slow) = out("slow");
+    let chats = Arc::new(AtomicUsize::new(0));
+    let manner = Manner { chat_delay: std::time::Duration::from_secs(5), ..Manner::default() };
+    let explorer = format!("openai:{}", server_in_manner(listed, chats.clone(), manner));
+    #[rustfmt::skip]
+    let output = xtask(&[
+        "eval", "--agent", "direct", "--explorer", &explorer, "--benchmark", "alfworld-seen", "--limit", "1",
+        "--server-timeout", "0.5", "--server-retries", "1", "--out", slow.to_str().unwrap(),
+    ]);
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert_eq!(output.status.code(), Some(3), "{stderr}");
+    assert!(stderr.contains("no complete reply within 500ms (after 2 attempt(s)"), "{stderr}");
+    assert_eq!(chats.load(Ordering::SeqCst), 2);
+    let records: usize = std::fs::read_dir(&slow)
+        .expect("the records folder")
+        .filter_map(Result::ok)
+        .filter(|e| e.path().extension().is_some_and(|x| x == "jsonl"))
+        .map(|e| std::fs::read_to_string(e.path()).expect("records").lines().count())
+        .sum();
+    assert_eq!(records, 0, "a run stopped by its server records nothing");
+
+    // No served model: the options would be passed over.
+    let (_none_dir, none) = out("none");
+    let stderr = refused(&["--agent", "planner", "--explorer", "systematic", "--server-timeout", "5", "--api-key-env", "HOME"], &none);
+    assert!(stderr.contains("--api-key-env, --server-timeout are settings of a served model (openai:URL), and the run names none"), "{stderr}");
 }
 
 /// Input that leaves nothing to run, or runs a benchmark twice, is refused before any file is
