@@ -162,7 +162,9 @@ pub fn explorer(spec: &ModelSpec, lm: &LmArgs, cache: Option<&std::path::Path>) 
         let identity = match spec.url() {
             // With what the server lists: another model behind the same URL and name is
             // asked again, not answered with the first one's replies.
-            Some(url) => format!("{url} served-model:{served_model} serves:{}", crate::model_spec::served_identity(url, served_model, &lm.server)?),
+            Some(url) => {
+                format!("{url} served-model:{served_model} serves:{}", crate::model_spec::served_identity(url, served_model, &lm.server)?)
+            }
             None => {
                 let path = crate::lm::resolve_spec(spec)?;
                 format!("{spec} sha256:{}", crate::pypi::sha256_remembered(&path)?)

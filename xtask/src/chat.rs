@@ -16,8 +16,7 @@ use anyhow::Context;
 use lm::{LocalChat, LocalModel};
 use serde_json::{Value, json};
 use vlm_client::{
-    ChatClient, ChatError, ChatErrorKind, ChatModel, ChatRequest, Image, Message, Sampling, Usage, chat_json,
-    check_schema, first_object,
+    ChatClient, ChatError, ChatErrorKind, ChatModel, ChatRequest, Image, Message, Sampling, Usage, chat_json, check_schema, first_object,
 };
 
 use crate::input::InputError;

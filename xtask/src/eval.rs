@@ -783,7 +783,9 @@ fn plan(args: &EvalArgs) -> anyhow::Result<Vec<Planned>> {
 fn run_once(args: &EvalArgs, planned: &[Planned]) -> anyhow::Result<(serde_json::Map<String, Value>, Vec<PathBuf>)> {
     let mut runner = match args.agent {
         AgentName::Expert => Runner::Expert,
-        AgentName::Direct => Runner::Direct(Direct { args, model: chat_model(&args.episode.explorer, &args.episode.lm, crate::model_spec::Request::Chat)? }),
+        AgentName::Direct => {
+            Runner::Direct(Direct { args, model: chat_model(&args.episode.explorer, &args.episode.lm, crate::model_spec::Request::Chat)? })
+        }
         agent => {
             let planner = if agent == AgentName::Ours { "mcts" } else { "astar" };
             let policy = explorer(&args.episode.explorer, &args.episode.lm, args.episode.chat_cache.as_deref())?;

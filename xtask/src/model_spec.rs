@@ -201,8 +201,8 @@ pub fn served_identity(url: &str, name: &str, server: &ServerArgs) -> anyhow::Re
         return Ok(known.clone());
     }
     let key_text = server.api_key()?;
-    let listed =
-        vlm_client::served_models(url, key_text.as_deref(), &server.policy(Request::ModelList)).map_err(|e| anyhow::anyhow!("cannot ask {url} which model it serves: {e}"))?;
+    let listed = vlm_client::served_models(url, key_text.as_deref(), &server.policy(Request::ModelList))
+        .map_err(|e| anyhow::anyhow!("cannot ask {url} which model it serves: {e}"))?;
     let entry = |m: &vlm_client::ServedModel| {
         let mut entry = json!({ "id": m.id });
         for (key, value) in [("root", &m.root), ("owned_by", &m.owned_by)] {

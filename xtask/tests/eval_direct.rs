@@ -138,7 +138,8 @@ fn serve_connection(mut stream: TcpStream, listed: &Mutex<String>, chats: &Atomi
             && !head.lines().any(|l| l.trim() == format!("authorization: bearer {key}"))
         {
             let body = r#"{"error": {"message": "Unauthorized", "type": "invalid_request_error"}}"#;
-            let reply = format!("HTTP/1.1 401 Unauthorized\r\nContent-Type: application/json\r\nContent-Length: {}\r\n\r\n{body}", body.len());
+            let reply =
+                format!("HTTP/1.1 401 Unauthorized\r\nContent-Type: application/json\r\nContent-Length: {}\r\n\r\n{body}", body.len());
             if stream.write_all(reply.as_bytes()).is_err() {
                 return;
             }
@@ -265,7 +266,10 @@ fn the_server_options_reach_every_request_of_the_run() {
     // No served model: the options would be passed over.
     let (_none_dir, none) = out("none");
     let stderr = refused(&["--agent", "planner", "--explorer", "systematic", "--server-timeout", "5", "--api-key-env", "HOME"], &none);
-    assert!(stderr.contains("--api-key-env, --server-timeout are settings of a served model (openai:URL), and the run names none"), "{stderr}");
+    assert!(
+        stderr.contains("--api-key-env, --server-timeout are settings of a served model (openai:URL), and the run names none"),
+        "{stderr}"
+    );
 }
 
 /// Input that leaves nothing to run, or runs a benchmark twice, is refused before any file is

@@ -81,15 +81,16 @@ impl ChatErrorKind {
     /// Errors of the run rather than of the model's answer: the model could not be asked, or
     /// what came back is no model's answer. Transient errors that outlived the retries, a bad
     /// URL, a missing key; a body that is not a chat completion (an HTML error page, an
-    /// `error` object, no `choices`: [`ChatErrorKind::MalformedReply`]); and any 4xx but one
-    /// that says the request is longer than the model's context ([`context_overflow`]): a
-    /// server that refuses the credentials, does not serve the model, or rejects the request's
-    /// form (a field it does not know) would otherwise pass for a model that loses every task.
-    /// A harness stops on these instead of counting them against the model.
+    /// `error` object, no `choices`: [`ChatErrorKind::MalformedReply`]); and any status but a
+    /// 4xx that says the request is longer than the model's context ([`context_overflow`]): a
+    /// server that refuses the credentials, does not serve the model, rejects the request's
+    /// form (a field it does not know) or redirects it elsewhere (a 3xx, not followed) would
+    /// otherwise pass for a model that loses every task. A harness stops on these instead of
+    /// counting them against the model.
     pub fn is_unavailable(&self) -> bool {
         self.is_transient()
             || matches!(self, ChatErrorKind::BadUrl(_) | ChatErrorKind::MissingApiKey(_) | ChatErrorKind::MalformedReply(_))
-            || matches!(self, ChatErrorKind::Status { status: status @ 400..=499, body, .. } if !context_overflow(*status, body))
+            || matches!(self, ChatErrorKind::Status { status, body, .. } if !context_overflow(*status, body))
     }
 }
 
@@ -115,13 +116,14 @@ pub fn context_overflow(status: u16, body: &str) -> bool {
 mod tests {
     use super::*;
 
-    /// What the run stops on, and what is the model's: a 4xx is the run's unless it says the
+    /// What the run stops on, and what is the model's: a status (a 3xx, a 4xx) is the run's unless it says the
     /// request is past the model's context, and a body that is no chat completion is the run's.
     #[test]
     fn only_the_models_answers_are_counted_against_it() {
         let status = |status, body: &str| ChatErrorKind::Status { status, body: body.into(), retry_after: None };
         for run in [
             status(400, "Unrecognized request argument supplied: allowed_token_ids"),
+            status(302, "redirected to https://elsewhere.test/v1/chat/completions"),
             status(401, ""),
             status(422, "unknown field `chat_template_kwargs`"),
             status(503, ""),

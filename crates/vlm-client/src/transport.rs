@@ -49,7 +49,10 @@ pub struct Delivered {
     pub elapsed: Duration,
 }
 
-/// An agent for `timeout`-bounded attempts. Statuses are returned, not raised. Connections
+/// An agent for `timeout`-bounded attempts. Statuses are returned, not raised, and redirects
+/// are not followed: a client following a 301, 302 or 303 sends the POST again as a GET, with
+/// no body, whose failure would then be reported under the first URL; the 3xx comes back as
+/// a status naming where the server points ([`ChatErrorKind::Status`]). Connections
 /// are kept alive and reused unless the environment sets `NSEA_HTTP_KEEPALIVE=0`, which opens
 /// one connection per request (for servers that mishandle keep-alive, and to measure what
 /// keep-alive saves).
@@ -57,6 +60,7 @@ pub fn agent(timeout: Duration) -> ureq::Agent {
     let mut config = ureq::Agent::config_builder()
         .timeout_global(Some(timeout))
         .http_status_as_error(false)
+        .max_redirects(0)
         .user_agent(concat!("nsea-vlm-client/", env!("CARGO_PKG_VERSION")));
     if std::env::var("NSEA_HTTP_KEEPALIVE").is_ok_and(|v| v == "0") {
         config = config.max_idle_connections(0).max_idle_connections_per_host(0);
@@ -163,12 +167,18 @@ fn attempt(agent: &ureq::Agent, url: &str, body: Option<&[u8]>, bearer: Option<&
     let mut response = sent.map_err(|e| classify(e, timeout))?;
     let status = response.status().as_u16();
     let retry_after = response.headers().get("retry-after").and_then(|v| v.to_str().ok()).and_then(parse_retry_after);
+    let location = response.headers().get("location").map(|v| String::from_utf8_lossy(v.as_bytes()).chars().take(500).collect::<String>());
     let bytes = response.body_mut().with_config().limit(MAX_BODY_BYTES).read_to_vec().map_err(|e| classify(e, timeout))?;
     if (200..300).contains(&status) {
         Ok(bytes)
     } else {
         let text = String::from_utf8_lossy(&bytes);
-        Err(ChatErrorKind::Status { status, body: text.chars().take(500).collect(), retry_after })
+        let body = match location {
+            // What to do about it, in place of a redirect page's HTML.
+            Some(to) if (300..400).contains(&status) => format!("redirected to {to}; requests follow no redirect: name that URL"),
+            _ => text.chars().take(500).collect(),
+        };
+        Err(ChatErrorKind::Status { status, body, retry_after })
     }
 }
 

@@ -351,6 +351,23 @@ fn server_errors_are_retried_then_reported() {
     assert!(error.to_string().contains("after 3 attempt(s)"), "{error}");
 }
 
+/// A redirect is not followed (a client following a 302 sends the POST again as a GET): the
+/// status comes back, naming where the server points, after one attempt, and stops a harness.
+#[test]
+fn a_redirect_is_reported_with_its_location_not_followed() {
+    for code in [301, 302, 307, 308] {
+        let (address, seen) =
+            serve(vec![status(code, vec![("Location", "https://elsewhere.test/v1/chat/completions".to_string())], "<html>moved</html>")]);
+        let error = client(address).chat(&skill_request()).expect_err("redirected");
+        let expected = "redirected to https://elsewhere.test/v1/chat/completions; requests follow no redirect: name that URL";
+        assert_eq!(error.kind, ChatErrorKind::Status { status: code, body: expected.into(), retry_after: None }, "{code}");
+        assert_eq!(error.attempts, 1);
+        assert!(error.kind.is_unavailable() && !error.kind.is_transient(), "{code}");
+        let seen = seen.all();
+        assert_eq!(seen.len(), 1, "one request, the POST, and no second one anywhere");
+    }
+}
+
 #[test]
 fn retry_after_is_honoured_on_429_and_503() {
     let busy = |code| status(code, vec![("Retry-After", "1".to_string())], "busy");
