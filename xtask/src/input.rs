@@ -64,12 +64,34 @@ pub fn typed(id: &str) -> bool {
     })
 }
 
+/// The environment the commands read, checked once before any command runs: bad input (exit
+/// 2) naming the variable, not a failure hours into a run.
+pub fn check_environment() -> Result<(), InputError> {
+    check_thread_counts()?;
+    check_cache_folders()
+}
+
+/// The caches (`NSEA_MODEL_DIR`, `NSEA_DATA_DIR`, or their folders under `XDG_CACHE_HOME` or
+/// `~/.cache`) must be folders where they exist: a file there failed late, as an error of the
+/// run (exit 3) when a model or the task files were first fetched or read.
+fn check_cache_folders() -> Result<(), InputError> {
+    for (name, folder) in [("NSEA_MODEL_DIR", lm::model_dir()), ("NSEA_DATA_DIR", crate::fetch_data::data_dir())] {
+        if folder.exists() && !folder.is_dir() {
+            let set = std::env::var_os(name).is_some_and(|value| !value.is_empty());
+            let which =
+                if set { format!("{name}={}", folder.display()) } else { format!("{} (the cache {name} would name)", folder.display()) };
+            return Err(InputError(format!("{which}: not a folder")));
+        }
+    }
+    Ok(())
+}
+
 /// The worker counts the environment asks of candle's pool (`CANDLE_NUM_THREADS`,
 /// `RAYON_NUM_THREADS`): empty or `0` for the default (one per processor, as candle and rayon
 /// read them), else a whole number up to the larger of 1,024 and four per processor; anything
 /// else is bad input naming the variable. Unchecked, `abc` was taken as unset, and 99999 made
 /// the pool abort the process (no stack left for its threads).
-pub fn check_thread_counts() -> Result<(), InputError> {
+fn check_thread_counts() -> Result<(), InputError> {
     let most = std::thread::available_parallelism().map_or(1, usize::from).saturating_mul(4).max(1024);
     for name in ["CANDLE_NUM_THREADS", "RAYON_NUM_THREADS"] {
         let Some(value) = std::env::var_os(name) else { continue };

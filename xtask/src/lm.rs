@@ -263,6 +263,8 @@ fn argmax(logprobs: &Logprobs) -> anyhow::Result<u32> {
 
 pub fn bench(args: BenchLmArgs) -> anyhow::Result<ExitCode> {
     let path = resolve_model(&args.model)?;
+    // The reference's program is checked before the runs, not after them.
+    let llama_binary = if args.no_llamacpp { None } else { llama_bench_binary(args.llama_bench.as_deref())? };
     let runs = args.runs;
     let mut model = load(&path)?;
     // The prompt, the decoded tokens and the longest sibling suffix (64) in the context.
@@ -364,23 +366,19 @@ pub fn bench(args: BenchLmArgs) -> anyhow::Result<ExitCode> {
     .into_iter()
     .filter_map(|(name, on)| on.then_some(name))
     .collect();
-    let llamacpp = if args.no_llamacpp {
-        None
-    } else {
-        llama_bench_binary(args.llama_bench.as_deref())?
-            .map(|binary| {
-                run_llama_bench(
-                    &binary,
-                    &path,
-                    candle_threads(),
-                    prefix.len(),
-                    args.decode,
-                    runs,
-                    &suffix_lengths[..suffix_lengths.len().min(3)],
-                )
-            })
-            .transpose()?
-    };
+    let llamacpp = llama_binary
+        .map(|binary| {
+            run_llama_bench(
+                &binary,
+                &path,
+                candle_threads(),
+                prefix.len(),
+                args.decode,
+                runs,
+                &suffix_lengths[..suffix_lengths.len().min(3)],
+            )
+        })
+        .transpose()?;
     let report = json!({
         "model": path.display().to_string(),
         "prefix_tokens": prefix.len(),
@@ -423,16 +421,22 @@ struct LlamaCppFigures {
 /// The `llama-bench` to run: the one named, else `$NSEA_LLAMA_BENCH`, else the anchors' build
 /// when it exists; `None` when there is none (the figures are then left out, not guessed).
 fn llama_bench_binary(named: Option<&Path>) -> Result<Option<PathBuf>, InputError> {
+    // A program to run: a file that may be executed (one that may not failed as the run's
+    // error, exit 3, once the model had loaded).
+    let runnable = |path: &Path, named_by: String| {
+        use std::os::unix::fs::PermissionsExt;
+        match std::fs::metadata(path) {
+            Ok(meta) if meta.is_file() && meta.permissions().mode() & 0o111 != 0 => Ok(Some(path.to_path_buf())),
+            Ok(meta) if meta.is_file() => Err(InputError(format!("{named_by}: not executable"))),
+            _ => Err(InputError(format!("{named_by}: no such file"))),
+        }
+    };
     if let Some(path) = named {
-        return if path.is_file() {
-            Ok(Some(path.to_path_buf()))
-        } else {
-            Err(InputError(format!("--llama-bench {}: no such file", path.display())))
-        };
+        return runnable(path, format!("--llama-bench {}", path.display()));
     }
-    if let Some(path) = std::env::var_os("NSEA_LLAMA_BENCH") {
+    if let Some(path) = std::env::var_os("NSEA_LLAMA_BENCH").filter(|value| !value.is_empty()) {
         let path = PathBuf::from(path);
-        return if path.is_file() { Ok(Some(path)) } else { Err(InputError(format!("NSEA_LLAMA_BENCH={}: no such file", path.display()))) };
+        return runnable(&path, format!("NSEA_LLAMA_BENCH={}", path.display()));
     }
     let built =
         std::env::var_os("HOME").map(|home| PathBuf::from(home).join(".cache/nsea-anchors/llama.cpp/src/llama.cpp/build/bin/llama-bench"));

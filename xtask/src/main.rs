@@ -135,7 +135,7 @@ fn main() -> ExitCode {
         Ok(cli) => cli,
         Err(error) => error.exit(),
     };
-    if let Err(error) = input::check_thread_counts() {
+    if let Err(error) = input::check_environment() {
         eprintln!("error: {error}");
         return ExitCode::from(2);
     }

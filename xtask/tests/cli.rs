@@ -921,6 +921,40 @@ fn thread_counts_in_the_environment_are_checked() {
     }
 }
 
+/// A cache folder that is a file, and a `llama-bench` that cannot be run, are bad input naming
+/// the variable, before any work: they failed late, as errors of the run (exit 3).
+#[test]
+fn cache_folders_and_programs_in_the_environment_are_checked() {
+    let tmp = scratch_dir("xtask-env-");
+    let file = tmp.path().join("a-file");
+    std::fs::write(&file, "not a folder\n").expect("writes");
+    let run = |args: &[&str], name: &str, value: &std::path::Path| {
+        let output = Command::new(env!("CARGO_BIN_EXE_xtask"))
+            .args(args)
+            .current_dir(Path::new(env!("CARGO_MANIFEST_DIR")).join(".."))
+            .env(name, value)
+            .output()
+            .expect("xtask runs");
+        (output.status.code(), String::from_utf8_lossy(&output.stderr).into_owned())
+    };
+    let ground = ["ground", "--domain", "fixtures/ipc/blocks/domain.pddl", "--problem", "fixtures/ipc/blocks/instance-1.pddl"];
+    for name in ["NSEA_MODEL_DIR", "NSEA_DATA_DIR"] {
+        let (code, stderr) = run(&ground, name, &file);
+        assert_eq!(code, Some(2), "{stderr}");
+        assert!(stderr.contains(&format!("{name}={}: not a folder", file.display())), "{stderr}");
+    }
+    // Under XDG_CACHE_HOME: the cache folder the variable would name.
+    let (code, stderr) = run(&ground, "XDG_CACHE_HOME", tmp.path());
+    assert_eq!(code, Some(0), "no cache there yet: {stderr}");
+    // A program that may not be executed, named before any model is loaded.
+    let tiny = tmp.path().join("tiny.gguf");
+    lm::tiny::write_tiny_gguf(&tiny, &lm::tiny::TinySpec::default()).expect("tiny model");
+    let bench = ["bench", "lm", "--model", tiny.to_str().unwrap(), "--runs", "1"];
+    let (code, stderr) = run(&bench, "NSEA_LLAMA_BENCH", &file);
+    assert_eq!(code, Some(2), "{stderr}");
+    assert!(stderr.contains(&format!("NSEA_LLAMA_BENCH={}: not executable", file.display())), "{stderr}");
+}
+
 /// A count of zero (runs, tasks, tokens) is bad input naming the option: `bench` used to take
 /// `--runs 0` and `--limit 0` as 1 and report a median nobody asked for.
 #[test]

@@ -12,13 +12,16 @@ pub fn model_dir() -> PathBuf {
     cache_dir("NSEA_MODEL_DIR", "models")
 }
 
-/// One of the project's caches: `$VAR` when set, else `$XDG_CACHE_HOME/nsea/SUB`, else
+/// One of the project's caches: `$VAR` when set and not empty, else `$XDG_CACHE_HOME/nsea/SUB`, else
 /// `~/.cache/nsea/SUB` (models here; `cargo xtask fetch-data`'s task files under `data`).
 pub fn cache_dir(var: &str, sub: &str) -> PathBuf {
-    if let Some(dir) = std::env::var_os(var) {
+    // Empty is unset, as the XDG base directory specification has it for its variables (an
+    // empty path would be the working folder).
+    let set = |name: &str| std::env::var_os(name).filter(|value| !value.is_empty());
+    if let Some(dir) = set(var) {
         return PathBuf::from(dir);
     }
-    let cache = std::env::var_os("XDG_CACHE_HOME")
+    let cache = set("XDG_CACHE_HOME")
         .map(PathBuf::from)
         .unwrap_or_else(|| PathBuf::from(std::env::var_os("HOME").unwrap_or_default()).join(".cache"));
     cache.join("nsea").join(sub)
