@@ -101,12 +101,13 @@ pub fn run(args: SoundnessArgs) -> anyhow::Result<ExitCode> {
 
     // The run's configuration names its records: the task list (every task of the folder, so
     // a `--limit` run's records are a longer run's), EAI's files by content, the domain, the
-    // search's limit and its clock (named only where it is `cpu`, as in `eval`). Contents are
-    // named by the records' own short digest (`config_hash`, of their canonical JSON).
+    // search's limit and its clock (named only where it is `cpu`, as in `eval`). The task list
+    // is named as every run's is (`task_list_digest`, which `merge` checks); other contents by
+    // the records' own short digest (`config_hash`, of their canonical JSON).
     let mut config = json!({
         "command": "soundness",
         "version": SOUNDNESS_VERSION,
-        "tasks": {"count": ids.len(), "ids_sha256": config_hash(&ids)},
+        "tasks": {"count": ids.len(), "ids_sha256": eval_harness::records::task_list_digest(ids.iter().map(String::as_str))},
         "gold_sha256": config_hash(&gold),
         "problem_classes_sha256": config_hash(&classes),
         "domain_sha256": config_hash(&SOUND_DOMAIN),

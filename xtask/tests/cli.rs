@@ -781,6 +781,16 @@ fn soundness_plans_fixture_tasks_and_they_reach_their_goals() {
     };
     let (records, rows) = soundness(&["--limit", "2"]);
     assert_eq!(rows.len(), 2);
+    // The task list is named as every run's is: the folder's ids, sorted, by the one digest.
+    let mut ids: Vec<String> = std::fs::read_dir(Path::new(env!("CARGO_MANIFEST_DIR")).join("../fixtures/virtualhome-eai/graphs"))
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .filter_map(|name| name.strip_suffix(".json.gz").or(name.strip_suffix(".json")).map(str::to_string))
+        .collect();
+    ids.sort();
+    let config: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(records.with_extension("config.json")).unwrap()).unwrap();
+    assert_eq!(config["tasks"]["count"], ids.len());
+    assert_eq!(config["tasks"]["ids_sha256"], eval_harness::records::task_list_digest(ids.iter().map(String::as_str)));
     for row in &rows {
         assert_eq!(row["status"], "solved", "{row}");
         assert_eq!(row["ours_goal"], true, "{row}");
