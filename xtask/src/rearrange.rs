@@ -102,21 +102,28 @@ const ROOMS: &[&str] = &["dining_room", "home_office"];
 
 #[derive(Debug, clap::Args)]
 pub struct RearrangeArgs {
-    /// Folder of the base scenes (task files).
-    #[arg(long, default_value = "fixtures/virtualhome-eai/graphs")]
-    scenes: PathBuf,
-    /// Output folder: `<family>-<k>.json.gz` task files and `MANIFEST.tsv`.
-    #[arg(long, default_value = "fixtures/virtualhome-rearrange")]
-    out: PathBuf,
+    /// Folder of the base scenes (task files) [default: the fixtures' virtualhome-eai/graphs,
+    /// whatever the working folder].
+    #[arg(long)]
+    scenes: Option<PathBuf>,
+    /// Output folder: `<family>-<k>.json.gz` task files and `MANIFEST.tsv` [default: the
+    /// fixtures' virtualhome-rearrange].
+    #[arg(long)]
+    out: Option<PathBuf>,
     /// A* time limit per candidate, seconds.
     #[arg(long, default_value_t = 30, value_parser = crate::input::at_least_one::<u64>)]
     time_limit: u64,
 }
 
 pub fn run(args: RearrangeArgs) -> anyhow::Result<ExitCode> {
-    crate::input::folder_to_write(&args.out, "--out")?;
-    let mut files: Vec<PathBuf> = std::fs::read_dir(&args.scenes)
-        .map_err(|e| InputError(format!("{}: cannot read: {e}", args.scenes.display())))?
+    // The defaults are the fixtures' (`NSEA_FIXTURES`, else the checkout's), as `soundness`'s
+    // are: not folders of that name under wherever the command was run from.
+    let fixtures = benchmark_data::fixtures_dir();
+    let scene_dir = args.scenes.clone().unwrap_or_else(|| fixtures.join("virtualhome-eai/graphs"));
+    let out = args.out.clone().unwrap_or_else(|| fixtures.join("virtualhome-rearrange"));
+    crate::input::folder_to_write(&out, "--out")?;
+    let mut files: Vec<PathBuf> = std::fs::read_dir(&scene_dir)
+        .map_err(|e| InputError(format!("{}: cannot read: {e}", scene_dir.display())))?
         .flatten()
         .map(|e| e.path())
         .filter(|p| p.to_string_lossy().ends_with(".json.gz"))
@@ -134,21 +141,23 @@ pub fn run(args: RearrangeArgs) -> anyhow::Result<ExitCode> {
             }
         }
     }
-    std::fs::create_dir_all(&args.out).with_context(|| format!("cannot create {}", args.out.display()))?;
+    // Every family's appliance is in some scene, checked before anything is made.
+    if let Some(family) = FAMILIES.iter().find(|family| !scenes.iter().any(|s| node_of_class(s, family.appliance).is_some())) {
+        return Err(InputError(format!(
+            "--scenes {}: no scene has a {} (the {} family's appliance)",
+            scene_dir.display(),
+            family.appliance,
+            family.id
+        ))
+        .into());
+    }
+    std::fs::create_dir_all(&out).with_context(|| format!("cannot create {}", out.display()))?;
     let domain = pddl_syntax::parse_domain(SOUND_DOMAIN).map_err(|e| anyhow::anyhow!("sound domain: {e:?}"))?;
     let mut manifest = String::from("task\tfamily\tbase\tobjects\tplacements\treference_steps\n");
     for (f, family) in FAMILIES.iter().enumerate() {
         let classes: Vec<&str> = family.classes.iter().copied().filter(|c| templates.contains_key(*c)).collect();
+        // Not empty: checked above.
         let bases: Vec<&Value> = scenes.iter().filter(|s| node_of_class(s, family.appliance).is_some()).collect();
-        if bases.is_empty() {
-            return Err(InputError(format!(
-                "--scenes {}: no scene has a {} (the {} family's appliance)",
-                args.scenes.display(),
-                family.appliance,
-                family.id
-            ))
-            .into());
-        }
         let (mut kept, mut k) = (0, 0u64);
         while kept < PER_FAMILY {
             k += 1;
@@ -166,7 +175,7 @@ pub fn run(args: RearrangeArgs) -> anyhow::Result<ExitCode> {
             }
             let mut task = task;
             task["reference_program"] = json!(script);
-            let path = args.out.join(format!("{id}.json.gz"));
+            let path = out.join(format!("{id}.json.gz"));
             let mut gz = flate2::write::GzEncoder::new(std::fs::File::create(&path)?, flate2::Compression::best());
             gz.write_all(serde_json::to_string(&task)?.as_bytes())?;
             gz.finish()?;
@@ -175,7 +184,7 @@ pub fn run(args: RearrangeArgs) -> anyhow::Result<ExitCode> {
             eprintln!("{id}: {} steps (candidate {k})", script.len());
         }
     }
-    std::fs::write(args.out.join("MANIFEST.tsv"), manifest)?;
+    std::fs::write(out.join("MANIFEST.tsv"), manifest)?;
     Ok(ExitCode::SUCCESS)
 }
 

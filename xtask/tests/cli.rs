@@ -1034,6 +1034,22 @@ fn rearrange_from_bad_scenes_or_options_is_bad_input() {
     let stderr = String::from_utf8_lossy(&output.stderr);
     assert_eq!(output.status.code(), Some(2), "{stderr}");
     assert!(stderr.contains("--time-limit"), "{stderr}");
+
+    // The default folders are the fixtures', not ones under the working folder; a run refused
+    // for its scenes makes no output folder.
+    let fixtures = scratch_dir("rearrange-fixtures-");
+    std::fs::create_dir_all(fixtures.path().join("virtualhome-eai/graphs")).unwrap();
+    let output = Command::new(env!("CARGO_BIN_EXE_xtask"))
+        .arg("rearrange")
+        .current_dir(scenes.path())
+        .env("NSEA_FIXTURES", fixtures.path())
+        .output()
+        .expect("xtask runs");
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert_eq!(output.status.code(), Some(2), "{stderr}");
+    let named = format!("--scenes {}: no scene has a dishwasher", fixtures.path().join("virtualhome-eai/graphs").display());
+    assert!(stderr.contains(&named), "{stderr}");
+    assert!(!fixtures.path().join("virtualhome-rearrange").exists() && !out.path().join("MANIFEST.tsv").exists());
 }
 
 /// Phase II's A* over states up to interchangeable objects. EAI 783_1 puts five alike plates in
