@@ -358,6 +358,10 @@ pub struct RunConfig<'a> {
     pub lm: &'a LmArgs,
     pub decode: &'a DecodeArgs,
     pub time_limit: f64,
+    /// The decoder and its value as `exploration_harness::HARNESS_VERSION` has them (it is
+    /// raised where Phase II changes, as LM-cut did at 18): records of an older decoder are
+    /// another run's, never resumed into a newer one's.
+    pub harness: u32,
     /// What an `openai:` server serves ([`crate::model_spec::served_entry`]); absent otherwise.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub served: Option<serde_json::Value>,
@@ -385,7 +389,18 @@ impl<'a> RunConfig<'a> {
             loaded.insert(0, path.clone());
         }
         let files_sha256 = crate::eval::files_entry(&loaded)?;
-        Ok(RunConfig { benchmark, set, lm, decode, time_limit, served, tasks: None, fixtures: crate::eval::fixtures_entry(), files_sha256 })
+        Ok(RunConfig {
+            benchmark,
+            set,
+            lm,
+            decode,
+            time_limit,
+            harness: exploration_harness::HARNESS_VERSION,
+            served,
+            tasks: None,
+            fixtures: crate::eval::fixtures_entry(),
+            files_sha256,
+        })
     }
 
     /// The same, for a run over `ids`, its whole task list.
