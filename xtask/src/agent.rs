@@ -180,8 +180,11 @@ pub fn explorer(spec: &ModelSpec, lm: &LmArgs, cache: Option<&std::path::Path>) 
 /// `LocalChat`. An unknown name is bad input.
 pub fn chat_model(spec: &ModelSpec, lm: &LmArgs, request: Request) -> anyhow::Result<Box<dyn ChatModel>> {
     if let Some(url) = spec.url() {
+        // The key's variable is named as the other commands name it; the client's refusal
+        // (made before any request) says what, not after how many attempts.
+        lm.server.api_key()?;
         let config = lm.server.chat_config(url, &lm.served_model, request);
-        return Ok(Box::new(ChatClient::new(config).map_err(|e| InputError(format!("{url}: {e}")))?));
+        return Ok(Box::new(ChatClient::new(config).map_err(|e| InputError(format!("{url}: {}", e.kind)))?));
     }
     let path = crate::lm::resolve_spec(spec)?;
     let model = LocalModel::load(&path).map_err(|e| InputError(format!("{}: {e}", path.display())))?;

@@ -104,6 +104,12 @@ fn model_for(args: &ChatArgs) -> anyhow::Result<Box<dyn ChatModel>> {
         let config = server.chat_config(url, &args.served_model, crate::model_spec::Request::Chat);
         return Ok(Box::new(ChatClient::new(config).map_err(|e| InputError(e.to_string()))?));
     }
+    // A local model asks no server: these would be passed over.
+    let given: Vec<String> =
+        ["api_key_env", "timeout", "retries"].into_iter().filter(|id| crate::input::typed(id)).map(crate::input::option_name).collect();
+    if let Some(error) = crate::input::settings_of(&given, "a served model (--model openai:URL)") {
+        return Err(error.into());
+    }
     let path = crate::lm::resolve_model(&args.model)?;
     let model = LocalModel::load(&path).map_err(|e| InputError(format!("{}: {e}", path.display())))?;
     let name = path.file_name().map_or_else(|| args.model.clone(), |n| n.to_string_lossy().into_owned());

@@ -517,6 +517,15 @@ pub fn run(args: EvalArgs) -> anyhow::Result<ExitCode> {
     }
     // Phase II's model and decoding settings are `ours`'s: the other agents decode no plan
     // (the planner's A* takes only the clock), and would pass them over.
+    // The expert replays the benchmark's own plans: no episode setting reaches it.
+    if args.agent == AgentName::Expert {
+        let mut given = crate::input::given::<EpisodeArgs>(&[]);
+        given.extend(["failure_limit"].into_iter().filter(|id| crate::input::typed(id)).map(crate::input::option_name));
+        if let Some(error) = crate::input::settings_of(&given, "the agents that explore and plan; the expert replays the benchmark's plans")
+        {
+            return Err(error.into());
+        }
+    }
     crate::model_spec::ServerArgs::check(&models_asked(&args))?;
     if args.agent != AgentName::Ours {
         let mut given = crate::input::given::<crate::phase2::LmArgs>(&crate::phase2::SHARED_WITH_PHASE_ONE);

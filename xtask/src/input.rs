@@ -266,12 +266,13 @@ pub fn seconds(seconds: f64) -> Result<std::time::Duration, InputError> {
     positive_seconds(&seconds.to_string()).map(std::time::Duration::from_secs_f64).map_err(InputError)
 }
 
-/// A clap parser for durations in seconds: finite, positive and below a billion, so that
-/// `Duration::from_secs_f64` can never panic on what a user typed (`-1`, `inf`, `nan`).
+/// A clap parser for durations in seconds: finite, from a nanosecond and below a billion
+/// seconds, so that `Duration::from_secs_f64` can never panic on what a user typed (`-1`,
+/// `inf`, `nan`), nor round a positive number to no time at all (`1e-10`: a deadline of 0).
 pub fn positive_seconds(text: &str) -> Result<f64, String> {
     match text.parse::<f64>() {
-        Ok(s) if s.is_finite() && s > 0.0 && s < 1e9 => Ok(s),
-        _ => Err(format!("`{text}` is not a positive number of seconds")),
+        Ok(s) if s.is_finite() && s >= 1e-9 && s < 1e9 => Ok(s),
+        _ => Err(format!("`{text}` is not a positive number of seconds (from 1e-9 to below 1e9)")),
     }
 }
 

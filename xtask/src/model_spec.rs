@@ -165,13 +165,19 @@ impl ServerArgs {
         }
     }
 
-    /// The API key, read from `--api-key-env`'s variable; bad input where it is not set.
+    /// The API key, read from `--api-key-env`'s variable; bad input where it is not set, empty,
+    /// or holds what a header cannot carry ([`vlm_client::api_key_from_env`]).
     pub fn api_key(&self) -> Result<Option<String>, crate::input::InputError> {
         self.api_key_env
             .as_ref()
             .map(|name| {
-                std::env::var(name)
-                    .map_err(|_| crate::input::InputError(format!("--api-key-env {name}: the variable is not set (or not UTF-8)")))
+                vlm_client::api_key_from_env(name).map_err(|kind| {
+                    let why = match kind {
+                        vlm_client::ChatErrorKind::BadInput(why) => why,
+                        other => other.to_string(),
+                    };
+                    crate::input::InputError(format!("--api-key-env {name}: {why}"))
+                })
             })
             .transpose()
     }

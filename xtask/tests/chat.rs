@@ -158,6 +158,20 @@ fn bad_input_exits_2_and_a_failing_server_exits_3() {
     check(&["chat", "--model", url, "--prompt", "x", "--schema", &bad_type], 2, "unknown type \"dict\"");
     check(&["chat", "--model", "openai:ftp://host/v1", "--prompt", "x"], 2, "bad URL");
     check(&["chat", "--model", url, "--prompt", "x", "--api-key-env", "XTASK_CHAT_TEST_NO_SUCH_KEY"], 2, "XTASK_CHAT_TEST_NO_SUCH_KEY");
+    // A local model asks no server: its options would be passed over.
+    let model = tmp.path().join("tiny.gguf");
+    lm::tiny::write_tiny_gguf(&model, &lm::tiny::TinySpec::default()).expect("tiny model");
+    let local = model.display().to_string();
+    check(
+        &["chat", "--model", &local, "--prompt", "x", "--timeout", "5", "--retries", "1"],
+        2,
+        "--timeout, --retries are settings of a served model",
+    );
+    // Credentials in the URL would be printed and kept: refused, and not printed.
+    let output = xtask(&["chat", "--model", "openai:http://user:secret@127.0.0.1:9/v1", "--prompt", "x"]);
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert_eq!(output.status.code(), Some(2), "{stderr}");
+    assert!(stderr.contains("a URL with credentials") && !stderr.contains("secret"), "{stderr}");
     // Sampling options out of their range are refused before any request (NaN reached a local
     // model as garbage and a server as `null`, its own default).
     for (option, value) in [("--temperature", "NaN"), ("--temperature", "-1"), ("--temperature", "inf"), ("--top-p", "0"), ("--top-p", "2")]

@@ -833,7 +833,8 @@ fn soundness_plans_fixture_tasks_and_they_reach_their_goals() {
 #[test]
 fn time_limits_that_are_not_positive_seconds_are_bad_input() {
     let (domain, problem) = household();
-    for limit in ["-1", "inf", "nan", "0", "soon"] {
+    // 1e-10 is positive, but rounds to a deadline of no time at all.
+    for limit in ["-1", "inf", "nan", "0", "soon", "1e-10"] {
         let output = xtask(&["plan", "--domain", &domain, "--problem", &problem, "--time-limit", limit]);
         assert_eq!(output.status.code(), Some(2), "--time-limit {limit}: {}", String::from_utf8_lossy(&output.stderr));
         assert!(!String::from_utf8_lossy(&output.stderr).contains("panicked"), "--time-limit {limit}");
@@ -1068,10 +1069,14 @@ fn agent_plans_by_a_star_up_to_interchangeable_objects() {
     let mcts = xtask(&["agent", "--benchmark", "virtualhome-eai", "--task", "783_1", "--planner", "mcts", "--symmetries"]);
     assert_eq!(mcts.status.code(), Some(2), "{}", String::from_utf8_lossy(&mcts.stderr));
     assert!(String::from_utf8_lossy(&mcts.stderr).contains("--symmetries is a setting of --planner astar"));
-    for agent in ["ours", "direct", "expert"] {
+    for (agent, reason) in [
+        ("ours", "a setting of the planner agent's A*"),
+        ("direct", "a setting of the planner agent's A*"),
+        ("expert", "the expert replays"),
+    ] {
         let other = xtask(&["eval", "--agent", agent, "--benchmark", "alfworld-seen", "--limit", "1", "--symmetries"]);
         assert_eq!(other.status.code(), Some(2), "{agent}: {}", String::from_utf8_lossy(&other.stderr));
-        assert!(String::from_utf8_lossy(&other.stderr).contains("a setting of the planner agent's A*"), "{agent}");
+        assert!(String::from_utf8_lossy(&other.stderr).contains(reason), "{agent}");
     }
 }
 
@@ -1281,7 +1286,10 @@ fn options_that_would_be_ignored_or_cannot_be_written_are_bad_input() {
             vec!["eval", "--agent", "planner", "--clock", "cpu", "--mode", "sample", "--seed", "7", "--out", out.to_str().unwrap()],
             "--mode, --seed are settings of the agent `ours`'s Phase II; the planner agent decodes no plan",
         ),
-        (vec!["eval", "--agent", "expert", "--lm", "uniform", "--out", out.to_str().unwrap()], "--lm is a setting of the agent `ours`'s"),
+        (
+            vec!["eval", "--agent", "expert", "--lm", "uniform", "--out", out.to_str().unwrap()],
+            "--lm is a setting of the agents that explore and plan; the expert replays",
+        ),
         (
             vec!["agent", "--game", game, "--planner", "astar", "--mode", "sample"],
             "--mode is a setting of --planner mcts, not --planner astar",

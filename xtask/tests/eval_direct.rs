@@ -54,6 +54,20 @@ fn agents_with_phase_one_are_not_evaluated_on_the_set_f_str_comes_from() {
     assert_eq!(output.status.code(), Some(0), "{}", String::from_utf8_lossy(&output.stderr));
 }
 
+/// The expert replays the benchmark's own plans: an episode's setting given to it (a model, a
+/// budget, a search option) would be passed over, so it is refused, naming them.
+#[test]
+fn episode_settings_given_to_the_expert_are_refused() {
+    let (_tmp_dir, dir) = out("expert");
+    let stderr =
+        refused(&["--agent", "expert", "--explorer", "openai:http://127.0.0.1:9/v1", "--budget", "10", "--failure-limit", "2"], &dir);
+    assert!(
+        stderr.contains("--explorer, --budget, --failure-limit are settings of the agents that explore and plan; the expert replays"),
+        "{stderr}"
+    );
+    assert!(!dir.exists());
+}
+
 #[test]
 fn the_direct_agent_needs_a_chat_model() {
     let (_tmp_dir, dir) = out("systematic");
@@ -232,7 +246,17 @@ fn the_server_options_reach_every_request_of_the_run() {
     let key = ["--api-key-env", "XTASK_TEST_SERVER_KEY"];
     let (code, stderr) = run(&key, None);
     assert_eq!(code, Some(2), "{stderr}");
-    assert!(stderr.contains("--api-key-env XTASK_TEST_SERVER_KEY: the variable is not set"), "{stderr}");
+    assert!(stderr.contains("--api-key-env XTASK_TEST_SERVER_KEY: the API key variable `XTASK_TEST_SERVER_KEY` is not set"), "{stderr}");
+    // Empty, or holding what a header cannot carry: bad input naming the variable, before any
+    // request (a newline failed at the first request, retried as a broken connection).
+    for (value, why) in
+        [("", "is not set (or empty)"), ("sek\nrit", "the control character '\\n'"), ("sekrét", "the non-ASCII character 'é'")]
+    {
+        let (code, stderr) = run(&key, Some(value));
+        assert_eq!(code, Some(2), "{value:?}: {stderr}");
+        assert!(stderr.contains("--api-key-env XTASK_TEST_SERVER_KEY: ") && stderr.contains(why), "{value:?}: {stderr}");
+    }
+    assert_eq!(chats.load(Ordering::SeqCst), 0);
     let (code, stderr) = run(&["--server-retries", "0"], None);
     assert_eq!(code, Some(3), "{stderr}");
     assert!(stderr.contains("401"), "{stderr}");

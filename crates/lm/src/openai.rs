@@ -163,7 +163,7 @@ impl OpenAiModel {
         let base = config.base_url.trim_end_matches('/');
         transport::check_url(base).map_err(|kind| HttpError {
             kind: http_kind(kind),
-            url: config.base_url.clone(),
+            url: transport::redacted(&config.base_url),
             attempts: 0,
             elapsed: Duration::ZERO,
         })?;

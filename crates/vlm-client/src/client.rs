@@ -84,10 +84,10 @@ impl ChatClient {
     /// A client; the URL is checked and the API key read here, so that a bad setting fails
     /// before the first request.
     pub fn new(config: ClientConfig) -> Result<ChatClient, ChatError> {
-        let refuse = |kind| ChatError { kind, url: config.base_url.clone(), attempts: 0, elapsed: Duration::ZERO };
+        let refuse = |kind| ChatError { kind, url: transport::redacted(&config.base_url), attempts: 0, elapsed: Duration::ZERO };
         transport::check_url(&config.base_url).map_err(refuse)?;
         let api_key = match &config.api_key_env {
-            Some(name) => Some(std::env::var(name).map_err(|_| refuse(ChatErrorKind::MissingApiKey(name.clone())))?),
+            Some(name) => Some(transport::api_key_from_env(name).map_err(refuse)?),
             None => None,
         };
         Ok(ChatClient {

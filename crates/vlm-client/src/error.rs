@@ -24,8 +24,8 @@ pub enum ChatErrorKind {
     /// The base URL is not `http(s)://host[:port][/path]`.
     #[error("bad URL: {0}")]
     BadUrl(String),
-    /// The configured API-key variable is not set (or not Unicode).
-    #[error("the API key variable `{0}` is not set")]
+    /// The configured API-key variable is not set, empty or not Unicode.
+    #[error("the API key variable `{0}` is not set (or empty)")]
     MissingApiKey(String),
     /// An image that is neither PNG nor JPEG or does not decode, or a message the API cannot carry.
     #[error("bad input: {0}")]

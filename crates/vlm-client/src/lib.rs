@@ -52,4 +52,4 @@ pub use message::{Image, ImageFormat, Message, Part, Role};
 pub use models::{ServedModel, parse_models, served_models};
 pub use reply::{ChatReply, Usage, parse_reply};
 pub use request::{ChatRequest, JsonMode, Sampling};
-pub use transport::RetryPolicy;
+pub use transport::{RetryPolicy, api_key_from_env};

@@ -27,7 +27,7 @@ pub struct ServedModel {
 pub fn served_models(base_url: &str, api_key: Option<&str>, policy: &RetryPolicy) -> Result<Option<Vec<ServedModel>>, ChatError> {
     let base = base_url.trim_end_matches('/');
     let url = format!("{base}/models");
-    let refuse = |kind| ChatError { kind, url: url.clone(), attempts: 0, elapsed: std::time::Duration::ZERO };
+    let refuse = |kind| ChatError { kind, url: transport::redacted(&url), attempts: 0, elapsed: std::time::Duration::ZERO };
     transport::check_url(base).map_err(refuse)?;
     let agent = transport::agent(policy.timeout);
     let delivered = match transport::get_json(&agent, &url, api_key, policy) {

@@ -68,7 +68,36 @@ pub fn agent(timeout: Duration) -> ureq::Agent {
     config.build().into()
 }
 
-/// Checks that `url` is `http(s)://host[...]`.
+/// The API key in the environment variable `name`: set, not empty, and a value an HTTP header
+/// can carry (printable ASCII; a newline or a non-ASCII character failed at the first request,
+/// retried as a broken connection, naming no variable). Unset, empty or not Unicode:
+/// [`ChatErrorKind::MissingApiKey`]; otherwise unsendable: [`ChatErrorKind::BadInput`].
+pub fn api_key_from_env(name: &str) -> Result<String, ChatErrorKind> {
+    let value =
+        std::env::var(name).ok().filter(|value| !value.trim().is_empty()).ok_or_else(|| ChatErrorKind::MissingApiKey(name.to_string()))?;
+    if let Some(c) = value.chars().find(|c| !(' '..='~').contains(c)) {
+        return Err(ChatErrorKind::BadInput(format!(
+            "the API key variable `{name}` holds {}, which an HTTP header cannot carry",
+            if c.is_ascii() { format!("the control character {:?}", c) } else { format!("the non-ASCII character {c:?}") }
+        )));
+    }
+    Ok(value.trim().to_string())
+}
+
+/// `url` without the credentials it may hold (`http://user:pw@host/v1` → `http://…@host/v1`),
+/// for messages about a URL that [`check_url`] refuses.
+pub fn redacted(url: &str) -> String {
+    let Some((scheme, rest)) = url.split_once("://") else { return url.to_string() };
+    let (authority, path) = rest.split_at(rest.find('/').unwrap_or(rest.len()));
+    match authority.rsplit_once('@') {
+        Some((_, host)) => format!("{scheme}://…@{host}{path}"),
+        None => url.to_string(),
+    }
+}
+
+/// Checks that `url` is `http(s)://host[...]`, without credentials (a user and password in a
+/// URL would be written into a run's configuration and messages; a key goes in an environment
+/// variable).
 pub fn check_url(url: &str) -> Result<(), ChatErrorKind> {
     let rest = url
         .strip_prefix("http://")
@@ -77,6 +106,13 @@ pub fn check_url(url: &str) -> Result<(), ChatErrorKind> {
     let authority = rest.split('/').next().unwrap_or_default();
     if authority.is_empty() || authority.starts_with(':') {
         return Err(ChatErrorKind::BadUrl(format!("`{url}`: no host")));
+    }
+    if authority.contains('@') {
+        // Named without the credentials, which this message would print.
+        let host = authority.rsplit('@').next().unwrap_or_default();
+        return Err(ChatErrorKind::BadUrl(format!(
+            "a URL with credentials (…@{host}): they would be written into the run's configuration and messages; give a key by the variable holding it (--api-key-env)"
+        )));
     }
     if url.contains(['?', '#', ' ']) {
         return Err(ChatErrorKind::BadUrl(format!("`{url}`: a query, fragment or space in a base URL")));
@@ -173,11 +209,15 @@ fn attempt(agent: &ureq::Agent, url: &str, body: Option<&[u8]>, bearer: Option<&
         Ok(bytes)
     } else {
         let text = String::from_utf8_lossy(&bytes);
-        let body = match location {
+        let mut body = match location {
             // What to do about it, in place of a redirect page's HTML.
             Some(to) if (300..400).contains(&status) => format!("redirected to {to}; requests follow no redirect: name that URL"),
             _ => text.chars().take(500).collect(),
         };
+        // A server or proxy that echoes the request's header would have the key printed.
+        if let Some(key) = bearer.filter(|key| !key.is_empty()) {
+            body = body.replace(key, "[the API key]");
+        }
         Err(ChatErrorKind::Status { status, body, retry_after })
     }
 }
@@ -287,5 +327,10 @@ mod tests {
         {
             assert!(matches!(check_url(bad), Err(ChatErrorKind::BadUrl(_))), "{bad}");
         }
+        // Credentials: refused, and named without them.
+        let Err(ChatErrorKind::BadUrl(why)) = check_url("http://user:pw@h:8000/v1") else { panic!("credentials refused") };
+        assert!(why.contains("…@h:8000") && !why.contains("pw"), "{why}");
+        assert_eq!(redacted("http://user:pw@h:8000/v1/models"), "http://…@h:8000/v1/models");
+        assert_eq!(redacted("https://h/v1"), "https://h/v1");
     }
 }

@@ -436,11 +436,27 @@ fn the_api_key_comes_from_the_environment() {
 
 #[test]
 fn bad_urls_fail_before_any_request() {
-    for url in ["ftp://host/v1", "localhost:8080", "http://:1/v1"] {
+    for url in ["ftp://host/v1", "localhost:8080", "http://:1/v1", "http://user:secret@host:8000/v1"] {
         let error = ChatClient::new(ClientConfig::new(url, "m")).expect_err(url);
         assert!(matches!(error.kind, ChatErrorKind::BadUrl(_)), "{url}: {error}");
         assert_eq!(error.attempts, 0);
+        assert!(!error.to_string().contains("secret"), "credentials are not printed: {error}");
     }
+}
+
+/// A server (or a proxy) that echoes the request's `Authorization` header in an error body
+/// does not have the key printed.
+#[test]
+fn an_echoed_key_is_not_printed() {
+    let (address, _seen) = serve(vec![status(401, Vec::new(), r#"{"error": "bad header: Bearer vlm-client"}"#)]);
+    let mut config = ClientConfig::new(&format!("http://{address}/v1"), "m");
+    // Cargo sets `CARGO_PKG_NAME` (`vlm-client`) for the test process.
+    config.api_key_env = Some("CARGO_PKG_NAME".into());
+    let error = ChatClient::new(config).expect("client").chat(&ChatRequest::new(vec![Message::user("Hi")])).expect_err("401");
+    assert_eq!(
+        error.kind,
+        ChatErrorKind::Status { status: 401, body: r#"{"error": "bad header: Bearer [the API key]"}"#.into(), retry_after: None }
+    );
 }
 
 #[test]
