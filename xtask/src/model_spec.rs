@@ -207,8 +207,13 @@ pub fn served_identity(url: &str, name: &str, server: &ServerArgs) -> anyhow::Re
         return Ok(known.clone());
     }
     let key_text = server.api_key()?;
-    let listed = vlm_client::served_models(url, key_text.as_deref(), &server.policy(Request::ModelList))
-        .map_err(|e| anyhow::anyhow!("cannot ask {url} which model it serves: {e}"))?;
+    let listed = vlm_client::served_models(url, key_text.as_deref(), &server.policy(Request::ModelList)).map_err(|e| -> anyhow::Error {
+        // A URL or proxy setting the client refuses before any request is the command's input.
+        match e.kind {
+            vlm_client::ChatErrorKind::BadUrl(why) => crate::input::InputError(format!("{url}: bad URL: {why}")).into(),
+            _ => anyhow::anyhow!("cannot ask {url} which model it serves: {e}"),
+        }
+    })?;
     let entry = |m: &vlm_client::ServedModel| {
         let mut entry = json!({ "id": m.id });
         for (key, value) in [("root", &m.root), ("owned_by", &m.owned_by)] {

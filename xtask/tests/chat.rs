@@ -133,6 +133,62 @@ fn a_served_model_gets_the_image_and_its_reply_is_printed() {
     assert_eq!(request["response_format"]["json_schema"]["schema"]["required"], json!(["skill"]));
 }
 
+/// A server on loopback that answers one chat request with a plain reply, then stops.
+fn one_reply_server() -> String {
+    let listener = TcpListener::bind("127.0.0.1:0").expect("bind");
+    let address = listener.local_addr().expect("address");
+    std::thread::spawn(move || {
+        let Ok((mut stream, _)) = listener.accept() else { return };
+        let mut buffer = Vec::new();
+        let mut chunk = [0u8; 65536];
+        while !buffer.windows(4).any(|w| w == b"\r\n\r\n") {
+            match stream.read(&mut chunk) {
+                Ok(n) if n > 0 => buffer.extend_from_slice(&chunk[..n]),
+                _ => return,
+            }
+        }
+        let reply = json!({ "choices": [{ "message": { "role": "assistant", "content": "hello" }, "finish_reason": "stop" }] }).to_string();
+        let response = format!(
+            "HTTP/1.1 200 OK\r\nContent-Type: application/json\r\nContent-Length: {}\r\nConnection: close\r\n\r\n{reply}",
+            reply.len()
+        );
+        stream.write_all(response.as_bytes()).ok();
+    });
+    format!("openai:http://{address}/v1")
+}
+
+/// The proxy is chosen per scheme and host as curl chooses it: an HTTPS proxy does not carry a
+/// plain-HTTP server's requests (ureq sent them there), `NO_PROXY` takes address ranges, a
+/// failure through a proxy names it and its variable (it read as the server's), and a value
+/// that is no proxy URL is bad input naming the variable.
+#[test]
+fn proxies_are_chosen_per_scheme_and_named_in_failures() {
+    // A port nothing listens on any more: a proxy there refuses every connection.
+    let closed = TcpListener::bind("127.0.0.1:0").expect("bind").local_addr().expect("address").port();
+    let dead = format!("http://127.0.0.1:{closed}");
+    let chat = |url: &str, vars: &[(&str, &str)]| {
+        let mut command = std::process::Command::new(env!("CARGO_BIN_EXE_xtask"));
+        command.args(["chat", "--model", url, "--prompt", "x", "--retries", "0"]);
+        command.current_dir(std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join(".."));
+        for name in ["http_proxy", "HTTP_PROXY", "https_proxy", "HTTPS_PROXY", "all_proxy", "ALL_PROXY", "no_proxy", "NO_PROXY"] {
+            command.env_remove(name);
+        }
+        command.envs(vars.iter().copied());
+        let output = command.output().expect("xtask runs");
+        (output.status.code(), String::from_utf8_lossy(&output.stderr).into_owned())
+    };
+    let (code, stderr) = chat(&one_reply_server(), &[("HTTPS_PROXY", &dead)]);
+    assert_eq!(code, Some(0), "not through the HTTPS proxy: {stderr}");
+    let (code, stderr) = chat(&one_reply_server(), &[("HTTP_PROXY", &dead), ("NO_PROXY", "10.0.0.0/8,127.0.0.0/8")]);
+    assert_eq!(code, Some(0), "NO_PROXY's range holds the server: {stderr}");
+    let (code, stderr) = chat(&one_reply_server(), &[("HTTP_PROXY", &dead)]);
+    assert_eq!(code, Some(3), "{stderr}");
+    assert!(stderr.contains(&format!("(through the proxy {dead} from HTTP_PROXY)")), "{stderr}");
+    let (code, stderr) = chat(&one_reply_server(), &[("http_proxy", "::::")]);
+    assert_eq!(code, Some(2), "{stderr}");
+    assert!(stderr.contains("http_proxy=http://::::: not a proxy this client can use"), "{stderr}");
+}
+
 #[test]
 fn bad_input_exits_2_and_a_failing_server_exits_3() {
     let tmp = scratch_dir("xtask-chat-");

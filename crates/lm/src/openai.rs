@@ -161,15 +161,13 @@ impl OpenAiModel {
     /// A client; `tokenizer` must be the served model's (prompts are sent as its ids).
     pub fn new(config: OpenAiConfig, tokenizer: Arc<Tokenizer>) -> Result<Self, LmError> {
         let base = config.base_url.trim_end_matches('/');
-        transport::check_url(base).map_err(|kind| HttpError {
-            kind: http_kind(kind),
-            url: transport::redacted(&config.base_url),
-            attempts: 0,
-            elapsed: Duration::ZERO,
-        })?;
+        let refuse =
+            |kind| HttpError { kind: http_kind(kind), url: transport::redacted(&config.base_url), attempts: 0, elapsed: Duration::ZERO };
+        transport::check_url(base).map_err(refuse)?;
+        let agent = transport::agent(config.timeout, base).map_err(refuse)?;
         Ok(OpenAiModel {
             endpoint: format!("{base}/completions"),
-            agent: transport::agent(config.timeout),
+            agent,
             config,
             tokenizer,
             text_to_id: None,

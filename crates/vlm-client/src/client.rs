@@ -90,9 +90,10 @@ impl ChatClient {
             Some(name) => Some(transport::api_key_from_env(name).map_err(refuse)?),
             None => None,
         };
+        let agent = transport::agent(config.retry.timeout, &config.base_url).map_err(refuse)?;
         Ok(ChatClient {
             endpoint: format!("{}/chat/completions", config.base_url),
-            agent: transport::agent(config.retry.timeout),
+            agent,
             weakened: std::collections::BTreeMap::new(),
             schema_support: SchemaSupport::Unknown,
             no_template_kwargs: false,

@@ -40,6 +40,7 @@ mod error;
 mod json;
 mod message;
 mod models;
+pub mod proxy;
 mod reply;
 mod request;
 pub mod transport;

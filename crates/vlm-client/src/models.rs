@@ -29,7 +29,7 @@ pub fn served_models(base_url: &str, api_key: Option<&str>, policy: &RetryPolicy
     let url = format!("{base}/models");
     let refuse = |kind| ChatError { kind, url: transport::redacted(&url), attempts: 0, elapsed: std::time::Duration::ZERO };
     transport::check_url(base).map_err(refuse)?;
-    let agent = transport::agent(policy.timeout);
+    let agent = transport::agent(policy.timeout, base).map_err(refuse)?;
     let delivered = match transport::get_json(&agent, &url, api_key, policy) {
         Ok(delivered) => delivered,
         Err(ChatError { kind: ChatErrorKind::Status { status: 404 | 405 | 501, .. }, .. }) => return Ok(None),

@@ -49,23 +49,27 @@ pub struct Delivered {
     pub elapsed: Duration,
 }
 
-/// An agent for `timeout`-bounded attempts. Statuses are returned, not raised, and redirects
+/// An agent for `timeout`-bounded attempts to `url` (the base URL: its scheme and host choose
+/// the proxy, [`crate::proxy`]; a proxy variable that names no usable proxy is a bad URL). Statuses are returned, not raised, and redirects
 /// are not followed: a client following a 301, 302 or 303 sends the POST again as a GET, with
 /// no body, whose failure would then be reported under the first URL; the 3xx comes back as
 /// a status naming where the server points ([`ChatErrorKind::Status`]). Connections
 /// are kept alive and reused unless the environment sets `NSEA_HTTP_KEEPALIVE=0`, which opens
 /// one connection per request (for servers that mishandle keep-alive, and to measure what
 /// keep-alive saves).
-pub fn agent(timeout: Duration) -> ureq::Agent {
+pub fn agent(timeout: Duration, url: &str) -> Result<ureq::Agent, ChatErrorKind> {
+    // The proxy for this URL's scheme and host ([`crate::proxy`]), or none.
+    let proxy = crate::proxy::proxy_for(url).as_ref().map(crate::proxy::ureq_proxy).transpose()?;
     let mut config = ureq::Agent::config_builder()
         .timeout_global(Some(timeout))
         .http_status_as_error(false)
         .max_redirects(0)
+        .proxy(proxy)
         .user_agent(concat!("nsea-vlm-client/", env!("CARGO_PKG_VERSION")));
     if std::env::var("NSEA_HTTP_KEEPALIVE").is_ok_and(|v| v == "0") {
         config = config.max_idle_connections(0).max_idle_connections_per_host(0);
     }
-    config.build().into()
+    Ok(config.build().into())
 }
 
 /// The API key in the environment variable `name`: set, not empty, and a value an HTTP header
@@ -141,6 +145,20 @@ pub fn get_json(agent: &ureq::Agent, url: &str, bearer: Option<&str>, policy: &R
     send(agent, url, None, bearer, policy)
 }
 
+/// A connection failure through a proxy names it and its variable: it was reported as the
+/// model server's (`connection refused`, or a host name that did not resolve for an address).
+fn through_proxy(kind: ChatErrorKind, url: &str) -> ChatErrorKind {
+    match (kind, crate::proxy::proxy_for(url)) {
+        (ChatErrorKind::Connect(why), Some(proxy)) => {
+            ChatErrorKind::Connect(format!("{why} (through the proxy {} from {})", redacted(&proxy.url), proxy.variable))
+        }
+        (ChatErrorKind::Io(why), Some(proxy)) => {
+            ChatErrorKind::Io(format!("{why} (through the proxy {} from {})", redacted(&proxy.url), proxy.variable))
+        }
+        (kind, _) => kind,
+    }
+}
+
 /// One logical request, a POST of `body` or a GET, with the policy's retries.
 fn send(agent: &ureq::Agent, url: &str, body: Option<&[u8]>, bearer: Option<&str>, policy: &RetryPolicy) -> Result<Delivered, ChatError> {
     let start = Instant::now();
@@ -158,7 +176,7 @@ fn send(agent: &ureq::Agent, url: &str, body: Option<&[u8]>, bearer: Option<&str
                 std::thread::sleep(wait);
                 waited += wait;
             }
-            None => return Err(ChatError { kind, url: url.to_string(), attempts, elapsed: start.elapsed() }),
+            None => return Err(ChatError { kind: through_proxy(kind, url), url: url.to_string(), attempts, elapsed: start.elapsed() }),
         }
     }
 }
