@@ -172,6 +172,25 @@ pub fn write_output(path: &Path, option: &str, bytes: impl AsRef<[u8]>) -> anyho
     })
 }
 
+/// A PDDL plan line without the time stamp and duration of VAL's timed format
+/// (`0: (pick b1 left)`, `0.001: (pick b1 left) [1]`), which VAL reads in a sequential plan too.
+pub fn untimed(step: &str) -> &str {
+    let mut step = step.trim();
+    if let Some((stamp, rest)) = step.split_once(':')
+        && !stamp.trim().is_empty()
+        && stamp.trim().chars().all(|c| c.is_ascii_digit() || c == '.')
+    {
+        step = rest.trim();
+    }
+    if let Some(open) = step.rfind('[')
+        && step.ends_with(']')
+        && step[open + 1..step.len() - 1].trim().chars().all(|c| c.is_ascii_digit() || c == '.')
+    {
+        step = step[..open].trim();
+    }
+    step
+}
+
 /// Whether `step` is one PDDL action, `(name arg ...)` or without its parentheses (`name arg
 /// ...`, which `Spelling::pddl` reads too): one group, nothing nested, nothing before or after.
 pub fn one_action(step: &str) -> bool {
@@ -437,6 +456,20 @@ mod tests {
     use std::time::Duration;
 
     use super::ProgressLines;
+
+    #[test]
+    fn timed_plan_lines_lose_their_stamp_and_duration() {
+        for (line, step) in [
+            ("0: (pick b1 left)", "(pick b1 left)"),
+            ("0.001: (pick b1 left) [1]", "(pick b1 left)"),
+            ("  12 :  (drop b1)  [0.5] ", "(drop b1)"),
+            ("(pick b1 left)", "(pick b1 left)"),
+            ("pick: b1", "pick: b1"),
+            ("(x) [a]", "(x) [a]"),
+        ] {
+            assert_eq!(super::untimed(line), step, "{line}");
+        }
+    }
 
     /// A sink the test reads back.
     #[derive(Clone, Default)]

@@ -199,9 +199,12 @@ fn run(command: Command) -> anyhow::Result<ExitCode> {
             let mut lines = Vec::new();
             let mut steps = Vec::new();
             for (number, line) in text.lines().enumerate() {
-                let step = line.split(';').next().unwrap_or_default().trim();
+                let mut step = line.split(';').next().unwrap_or_default().trim();
                 if step.is_empty() || step.starts_with('#') {
                     continue;
+                }
+                if language == SurfaceLanguage::Pddl {
+                    step = input::untimed(step);
                 }
                 if language == SurfaceLanguage::Pddl && !input::one_action(step) {
                     let shown: String = step.chars().take(120).collect();

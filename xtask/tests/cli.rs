@@ -88,6 +88,16 @@ fn validate_reports_valid_invalid_and_bad_input_with_exit_codes() {
     assert_eq!(output.status.code(), Some(0));
     assert!(stdout(&output).starts_with("valid"), "{}", stdout(&output));
     assert!(stdout(&output).contains("cost 4"));
+    // VAL's timed lines (a time stamp, a duration) and space inside the parentheses, as VAL
+    // reads them (the spaced form was "not an action of this task").
+    let timed = scratch(
+        &tmp,
+        "timed.plan",
+        "0: ( grab wineglass kitchentable)\n1.000: (walk  kitchentable dishwasher ) [1]\n2: (putin wineglass dishwasher)\n",
+    );
+    let output = xtask(&["validate", "--domain", &domain, "--problem", &problem, "--plan", &timed.display().to_string()]);
+    assert_eq!(output.status.code(), Some(0), "{}", stdout(&output));
+    assert!(stdout(&output).starts_with("valid: 3 steps, cost 4"), "{}", stdout(&output));
 
     let swapped =
         scratch(&tmp, "swapped.plan", "(grab wineglass kitchentable)\n(putin wineglass dishwasher)\n(walk kitchentable dishwasher)\n");

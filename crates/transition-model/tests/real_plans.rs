@@ -123,6 +123,11 @@ fn unknown_and_malformed_plan_steps_are_named() {
     // The grounded action is named beside the text where the plan spelled it otherwise.
     let line = model.validate_text(&spelling, &["stack a b"]).unwrap_err().describe(model.task());
     assert!(line.starts_with("invalid: step 1: `stack a b` ((stack a b)) is not applicable"), "{line}");
+    // Space inside the parentheses is no part of the action, as for VAL (it was "not an action").
+    for text in ["( stack a b)", "(stack a b )", "(  STACK\ta   b  )"] {
+        let line = model.validate_text(&spelling, &[text]).unwrap_err().describe(model.task());
+        assert!(line.contains("((stack a b)) is not applicable: unmet (holding a)"), "{text}: {line}");
+    }
     // An action id past the task's (another task's plan) is an unknown action, not a panic.
     let pick_up = spelling.parse("(pick-up a)")[0];
     let foreign = transition_model::ActionId::from_index(model.task().actions.len());

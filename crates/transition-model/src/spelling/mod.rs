@@ -145,8 +145,13 @@ impl Spelling {
     /// parentheses). Empty if none.
     pub fn parse(&self, text: &str) -> &[ActionId] {
         let mut key = normalize(text);
-        if self.language == SurfaceLanguage::Pddl && !key.starts_with('(') {
-            key = format!("({key})");
+        if self.language == SurfaceLanguage::Pddl {
+            // Space inside the parentheses is no part of the action (`( pick b1 left )`), as
+            // for VAL.
+            key = key.replace("( ", "(").replace(" )", ")");
+            if !key.starts_with('(') {
+                key = format!("({key})");
+            }
         }
         self.by_text.get(key.as_str()).map_or(&[], Vec::as_slice)
     }
