@@ -339,10 +339,19 @@ impl<'a> Checker<'a> {
                 self.condition(condition);
                 self.effect(body);
             }
-            Effect::Increase(function, value, _) => {
+            Effect::Increase(function, value, span) => {
                 self.function_term(function);
                 if let NumericExpr::Function(term) = value {
                     self.function_term(term);
+                    // Read as a fixed cost it was the initial value, however far the plan had
+                    // come; the action-costs requirement forbids it (Fast Downward fails on it).
+                    if term.function.as_str() == "total-cost" {
+                        self.error(
+                            DiagnosticKind::Unsupported,
+                            *span,
+                            "an action's cost cannot be `(total-cost)` itself: give a number or a function of the problem's `:init`".to_string(),
+                        );
+                    }
                 }
             }
         }
@@ -376,18 +385,52 @@ impl<'a> Checker<'a> {
             }
         }
         self.ground = true;
+        // Each function value once: a second, different one was taken over the first in
+        // silence (Fast Downward refuses the task, "conflicting assignment").
+        let mut values: BTreeMap<(String, Vec<String>), f64> = BTreeMap::new();
         for element in &problem.init {
             match element {
                 InitElement::Atom(atom) => self.atom(atom),
-                InitElement::Assign(function, _, _) => self.function_term(function),
+                InitElement::Assign(function, value, span) => {
+                    self.function_term(function);
+                    let key = (function.function.as_str().to_string(), function.args.iter().map(|t| t.name().as_str().to_string()).collect());
+                    if let Some(previous) = values.insert(key, value.value) {
+                        let shown = format!(
+                            "({}{})",
+                            function.function,
+                            function.args.iter().map(|t| format!(" {}", t.name())).collect::<String>()
+                        );
+                        if previous == value.value {
+                            self.out.push(Diagnostic::warning(DiagnosticKind::Duplicate, *span, format!("`{shown}` is given its value twice")));
+                        } else {
+                            self.error(
+                                DiagnosticKind::InvalidInit,
+                                *span,
+                                format!("`{shown}` is given two values, {previous} and then {}", value.value),
+                            );
+                        }
+                    }
+                }
             }
         }
         if let Some(goal) = &problem.goal {
             self.condition(goal);
         }
         self.ground = false;
-        if let Some(Metric { expr: NumericExpr::Function(term), .. }) = &problem.metric {
-            self.function_term(term);
+        if let Some(Metric { optimization, expr, span }) = &problem.metric {
+            if let NumericExpr::Function(term) = expr {
+                self.function_term(term);
+            }
+            // Plans are searched for the least total cost: another metric was minimised as if
+            // it were that one.
+            let total_cost = matches!(expr, NumericExpr::Function(term) if term.function.as_str() == "total-cost" && term.args.is_empty());
+            if *optimization == Optimization::Maximize || !total_cost {
+                self.error(
+                    DiagnosticKind::Unsupported,
+                    *span,
+                    "the supported metric is `(:metric minimize (total-cost))`: plans are searched for the least total cost".to_string(),
+                );
+            }
         }
     }
 

@@ -139,3 +139,40 @@ fn a_second_precondition_effect_or_goal_is_an_error_not_a_replacement() {
     let rendered: Vec<String> = diagnostics.iter().map(|d| d.render("p.pddl", problem)).collect();
     assert_eq!(rendered, ["p.pddl:2:13: error[duplicate]: the problem has a second `(:goal` section"], "{rendered:#?}");
 }
+
+/// Numeric input the planners would misread is an error at its place: a metric other than
+/// minimising `(total-cost)` (a `maximize` was minimised), a cost of `(total-cost)` itself
+/// (read as its initial value), and a function given two values in `:init` (the last one was
+/// taken); the same value twice is a warning. Fast Downward refuses all three.
+#[test]
+fn numeric_input_the_planners_would_misread_is_an_error() {
+    let domain = "(define (domain d) (:requirements :strips :action-costs)\n\
+        (:predicates (p) (q ?x))\n\
+        (:functions (total-cost) - number (dist ?x ?y) - number)\n\
+        (:action a :parameters () :precondition () :effect (and (p) (increase (total-cost) (total-cost)))))\n";
+    let (domain, diagnostics) = parse_domain_recovering(domain);
+    assert!(diagnostics.is_empty(), "{diagnostics:?}");
+    let domain = domain.expect("parses");
+    let found = check(&domain, None).domain;
+    assert_eq!(found.len(), 1, "{found:?}");
+    assert!(found[0].is_error() && found[0].message.contains("cannot be `(total-cost)` itself"), "{found:?}");
+
+    let problem = |init: &str, metric: &str| format!("(define (problem p) (:domain d) (:objects a b) (:init {init}) (:goal (p)) {metric})");
+    let findings = |text: &str| {
+        let (problem, diagnostics) = parse_problem_recovering(text);
+        assert!(diagnostics.is_empty(), "{diagnostics:?}");
+        let report = check(&domain, Some(&problem.expect("parses"))).problem;
+        report.iter().map(|d| (d.is_error(), d.message.clone(), text[d.span.start as usize..d.span.end as usize].to_string())).collect::<Vec<_>>()
+    };
+    let found = findings(&problem("(= (total-cost) 0)", "(:metric maximize (total-cost))"));
+    assert_eq!(found.len(), 1, "{found:?}");
+    assert!(found[0].0 && found[0].1.contains("the supported metric is `(:metric minimize (total-cost))`"), "{found:?}");
+    assert_eq!(found[0].2, "(:metric maximize (total-cost))");
+    assert!(findings(&problem("(= (dist a b) 2)", "(:metric minimize (dist a b))"))[0].1.contains("the supported metric"));
+    assert!(findings(&problem("(= (total-cost) 0)", "(:metric minimize (total-cost))")).is_empty());
+
+    let found = findings(&problem("(= (dist a b) 1) (= (dist a b) 5) (= (dist b a) 2) (= (dist b a) 2)", ""));
+    assert_eq!(found.len(), 2, "{found:?}");
+    assert_eq!(found[0], (true, "`(dist a b)` is given two values, 1 and then 5".to_string(), "(= (dist a b) 5)".to_string()));
+    assert_eq!(found[1], (false, "`(dist b a)` is given its value twice".to_string(), "(= (dist b a) 2)".to_string()));
+}
