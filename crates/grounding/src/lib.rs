@@ -111,7 +111,7 @@ pub enum GroundingError {
     },
     /// At `span` in `file`: the first term that makes the cost invalid (a value in the
     /// problem's `:init`, or a number in the domain).
-    #[error("{action}: cost {value} is not a non-negative integer")]
+    #[error("{action}: cost {value} is not a whole number from 0 to 4294967295")]
     InvalidCost {
         /// The action instance, as `action (name a b)` with the problem's object names.
         action: String,

@@ -44,7 +44,7 @@ fn a_negative_cost_points_at_the_init_entry_that_gives_it() {
         (:goal (at y)) (:metric minimize (total-cost)))\n";
     let error = ground(ROADS, problem);
     assert_eq!(error.location().map(|(file, _)| file), Some(PddlFile::Problem), "{error:?}");
-    assert_eq!(render(&error, ROADS, problem), "p.pddl:3:22: action (drive y x): cost -2 is not a non-negative integer");
+    assert_eq!(render(&error, ROADS, problem), "p.pddl:3:22: action (drive y x): cost -2 is not a whole number from 0 to 4294967295");
 }
 
 #[test]
@@ -55,7 +55,11 @@ fn a_fractional_number_cost_points_at_the_number_in_the_domain() {
     let error = ground(&domain, problem);
     let rendered = render(&error, &domain, problem);
     assert!(rendered.starts_with("d.pddl:7:59: action (drive "), "{rendered}");
-    assert!(rendered.ends_with("cost 2.5 is not a non-negative integer"), "{rendered}");
+    assert!(rendered.ends_with("cost 2.5 is not a whole number from 0 to 4294967295"), "{rendered}");
+    // A whole number past the limit is named as such (it read "not a non-negative integer").
+    let domain = ROADS.replace("(distance ?a ?b)))))", "4294967296))))");
+    let rendered = render(&ground(&domain, problem), &domain, problem);
+    assert!(rendered.ends_with("cost 4294967296 is not a whole number from 0 to 4294967295"), "{rendered}");
 }
 
 #[test]

@@ -234,7 +234,11 @@ impl<'a> Checker<'a> {
                     self.error(
                         DiagnosticKind::UnknownVariable,
                         name.span,
-                        format!("variable `?{name}` is not a parameter of the action nor bound by an enclosing quantifier"),
+                        if self.ground {
+                            format!("variable `?{name}` is not bound by an enclosing `forall` or `exists` (the goal names objects)")
+                        } else {
+                            format!("variable `?{name}` is not a parameter of the action nor bound by an enclosing quantifier")
+                        },
                     );
                 }
             }
@@ -349,7 +353,8 @@ impl<'a> Checker<'a> {
                         self.error(
                             DiagnosticKind::Unsupported,
                             *span,
-                            "an action's cost cannot be `(total-cost)` itself: give a number or a function of the problem's `:init`".to_string(),
+                            "an action's cost cannot be `(total-cost)` itself: give a number or a function of the problem's `:init`"
+                                .to_string(),
                         );
                     }
                 }
@@ -393,7 +398,8 @@ impl<'a> Checker<'a> {
                 InitElement::Atom(atom) => self.atom(atom),
                 InitElement::Assign(function, value, span) => {
                     self.function_term(function);
-                    let key = (function.function.as_str().to_string(), function.args.iter().map(|t| t.name().as_str().to_string()).collect());
+                    let key =
+                        (function.function.as_str().to_string(), function.args.iter().map(|t| t.name().as_str().to_string()).collect());
                     if let Some(previous) = values.insert(key, value.value) {
                         let shown = format!(
                             "({}{})",
@@ -401,7 +407,11 @@ impl<'a> Checker<'a> {
                             function.args.iter().map(|t| format!(" {}", t.name())).collect::<String>()
                         );
                         if previous == value.value {
-                            self.out.push(Diagnostic::warning(DiagnosticKind::Duplicate, *span, format!("`{shown}` is given its value twice")));
+                            self.out.push(Diagnostic::warning(
+                                DiagnosticKind::Duplicate,
+                                *span,
+                                format!("`{shown}` is given its value twice"),
+                            ));
                         } else {
                             self.error(
                                 DiagnosticKind::InvalidInit,

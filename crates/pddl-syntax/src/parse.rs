@@ -504,6 +504,14 @@ impl Reader {
                 self.error(DiagnosticKind::Unsupported, span, format!("numeric comparison `{op}` is outside the supported fragment"));
                 None
             }
+            Some(effect @ ("when" | "increase" | "decrease" | "assign" | "scale-up" | "scale-down")) => {
+                self.error(
+                    DiagnosticKind::UnexpectedForm,
+                    span,
+                    format!("`({effect} ...)` is an effect, not a condition: it goes in the action's `:effect`"),
+                );
+                None
+            }
             Some(word) if word.starts_with(':') || word.starts_with('?') || word == "-" => {
                 self.unexpected(form, "a condition");
                 None
@@ -609,7 +617,15 @@ impl Reader {
                 );
                 None
             }
-            Some(word) if word.starts_with(':') || word.starts_with('?') || word == "-" || word == "or" || word == "exists" => {
+            Some(condition @ ("or" | "exists" | "imply")) => {
+                self.error(
+                    DiagnosticKind::UnexpectedForm,
+                    span,
+                    format!("`({condition} ...)` is a condition, not an effect: an effect that depends on a condition is `(when CONDITION EFFECT)`"),
+                );
+                None
+            }
+            Some(word) if word.starts_with(':') || word.starts_with('?') || word == "-" => {
                 self.unexpected(form, "an effect");
                 None
             }

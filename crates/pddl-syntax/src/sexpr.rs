@@ -43,9 +43,10 @@ impl SExpr {
     /// A short description for messages: the word, or `(head ...)`.
     pub(crate) fn describe(&self) -> String {
         match self {
-            SExpr::Word(word, _) => format!("`{word}`"),
+            // Control characters (a NUL byte read as "found ``") are shown escaped.
+            SExpr::Word(word, _) => format!("`{}`", word.escape_debug()),
             SExpr::List(items, _) => match items.first() {
-                Some(SExpr::Word(head, _)) => format!("`({head} ...)`"),
+                Some(SExpr::Word(head, _)) => format!("`({} ...)`", head.escape_debug()),
                 Some(SExpr::List(..)) => "a list of lists".to_string(),
                 None => "`()`".to_string(),
             },

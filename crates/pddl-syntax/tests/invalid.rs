@@ -162,7 +162,10 @@ fn numeric_input_the_planners_would_misread_is_an_error() {
         let (problem, diagnostics) = parse_problem_recovering(text);
         assert!(diagnostics.is_empty(), "{diagnostics:?}");
         let report = check(&domain, Some(&problem.expect("parses"))).problem;
-        report.iter().map(|d| (d.is_error(), d.message.clone(), text[d.span.start as usize..d.span.end as usize].to_string())).collect::<Vec<_>>()
+        report
+            .iter()
+            .map(|d| (d.is_error(), d.message.clone(), text[d.span.start as usize..d.span.end as usize].to_string()))
+            .collect::<Vec<_>>()
     };
     let found = findings(&problem("(= (total-cost) 0)", "(:metric maximize (total-cost))"));
     assert_eq!(found.len(), 1, "{found:?}");
@@ -175,4 +178,32 @@ fn numeric_input_the_planners_would_misread_is_an_error() {
     assert_eq!(found.len(), 2, "{found:?}");
     assert_eq!(found[0], (true, "`(dist a b)` is given two values, 1 and then 5".to_string(), "(= (dist a b) 5)".to_string()));
     assert_eq!(found[1], (false, "`(dist b a)` is given its value twice".to_string(), "(= (dist b a) 2)".to_string()));
+}
+
+/// Forms in the wrong place say what they are and where they go: an effect in a condition, a
+/// condition in an effect (both read "expected a variable or constant, found `(free ...)`"),
+/// a variable the goal does not bind (it read "not a parameter of the action"), and a control
+/// character (a NUL byte read "found ``").
+#[test]
+fn forms_in_the_wrong_place_say_what_they_are() {
+    let domain = |pre: &str, effect: &str| {
+        format!("(define (domain d) (:predicates (p) (q ?x)) (:action a :parameters (?x) :precondition {pre} :effect {effect}))")
+    };
+    let first = |text: &str| parse_domain_recovering(text).1.first().map(|d| d.message.clone()).unwrap_or_default();
+    assert_eq!(first(&domain("(when (p) (q ?x))", "(p)")), "`(when ...)` is an effect, not a condition: it goes in the action's `:effect`");
+    assert!(first(&domain("(and (p) (increase (total-cost) 1))", "(p)")).starts_with("`(increase ...)` is an effect, not a condition"));
+    assert!(first(&domain("(p)", "(imply (p) (q ?x))")).starts_with("`(imply ...)` is a condition, not an effect: an effect that depends"));
+    assert!(first(&domain("(p)", "(or (p) (q ?x))")).starts_with("`(or ...)` is a condition, not an effect"));
+    let nul = "(define (domain d) (:predicates (p)) \u{0} (:action a :parameters () :precondition (p) :effect (p)))";
+    assert_eq!(first(nul), "expected a section such as `(:predicates ...)`, found `\\0`");
+
+    let household = std::fs::read_to_string(fixtures().join("pddl-valid/household/domain.pddl")).expect("household domain");
+    let household = parse_domain(&household).expect("household domain parses");
+    let (problem, diagnostics) = parse_problem_recovering("(define (problem e) (:domain household) (:init) (:goal (holding ?x)))");
+    assert!(diagnostics.is_empty(), "{diagnostics:?}");
+    let found = check(&household, Some(&problem.expect("parses"))).problem;
+    assert!(
+        found.iter().any(|d| d.message == "variable `?x` is not bound by an enclosing `forall` or `exists` (the goal names objects)"),
+        "{found:?}"
+    );
 }
