@@ -157,6 +157,18 @@ fn naive_relaxed(model: &TransitionModel, state: &State, add: bool) -> Option<u6
     task.goal.disjuncts.iter().filter_map(|d| condition(d, &cost)).min()
 }
 
+/// The task's transition model and its optimal plan (A* with the blind heuristic).
+fn model_and_optimum(task: &RandomTask) -> (TransitionModel, heuristics::search::SearchResult) {
+    let (domain, problem) = pddl(task);
+    let domain = pddl_syntax::parse_domain(&domain).expect("generated domain parses");
+    let problem = pddl_syntax::parse_problem(&problem).expect("generated problem parses");
+    // Over declared nullary predicates a generated task always grounds.
+    let grounded = grounding::ground(&domain, &problem).unwrap_or_else(|e| panic!("a generated task grounds: {e}"));
+    let model = TransitionModel::new(grounded);
+    let optimal = search(&model, &mut Blind::new(&model), &SearchConfig::new(Algorithm::AStar), None);
+    (model, optimal)
+}
+
 /// Whether the delete relaxation reaches the goal from `state`.
 fn relaxed_solvable(model: &TransitionModel, state: &State) -> bool {
     naive_relaxed(model, state, false).is_some()
@@ -172,13 +184,7 @@ proptest! {
 
     #[test]
     fn heuristic_laws_hold(task in random_task()) {
-        let (domain, problem) = pddl(&task);
-        let domain = pddl_syntax::parse_domain(&domain).expect("generated domain parses");
-        let problem = pddl_syntax::parse_problem(&problem).expect("generated problem parses");
-        // STRIPS over declared nullary predicates always grounds.
-        let grounded = grounding::ground(&domain, &problem).unwrap_or_else(|e| panic!("a generated task grounds: {e}"));
-        let model = TransitionModel::new(grounded);
-        let optimal = search(&model, &mut Blind::new(&model), &SearchConfig::new(Algorithm::AStar), None);
+        let (model, optimal) = model_and_optimum(&task);
         let mut states = vec![model.initial_state()];
         if optimal.status == SearchStatus::Solved {
             let valid = model.validate(&optimal.plan).expect("A* plans validate");
@@ -274,15 +280,6 @@ proptest! {
         prop_assert_eq!(lmcut_astar.status, optimal.status);
         prop_assert_eq!(lmcut_astar.cost, optimal.cost, "A* with LM-cut is optimal");
     }
-}
-
-proptest! {
-    #![proptest_config(ProptestConfig {
-        cases: 300,
-        rng_seed: proptest::test_runner::RngSeed::Fixed(0x636f_6e64_6974),
-        failure_persistence: Some(Box::new(proptest::test_runner::FileFailurePersistence::WithSource("proptest-regressions"))),
-        ..ProptestConfig::default()
-    })]
 
     /// With conditional effects (which Fast Downward's LM-cut refuses), LM-cut stays
     /// admissible: h_max ≤ LM-cut ≤ h* on every state of an optimal plan, incremental or
@@ -292,12 +289,7 @@ proptest! {
     /// `a` adds `p` and, where `p` holds, `g`; h* = h_max = LM-cut = 2, h_FF = 1.)
     #[test]
     fn lmcut_is_admissible_with_conditional_effects(task in random_conditional_task()) {
-        let (domain, problem) = pddl(&task);
-        let domain = pddl_syntax::parse_domain(&domain).expect("generated domain parses");
-        let problem = pddl_syntax::parse_problem(&problem).expect("generated problem parses");
-        let grounded = grounding::ground(&domain, &problem).unwrap_or_else(|e| panic!("a generated task grounds: {e}"));
-        let model = TransitionModel::new(grounded);
-        let optimal = search(&model, &mut Blind::new(&model), &SearchConfig::new(Algorithm::AStar), None);
+        let (model, optimal) = model_and_optimum(&task);
         let mut states = vec![model.initial_state()];
         for &action in &optimal.plan {
             let next = model.apply(states.last().expect("a state"), action);
