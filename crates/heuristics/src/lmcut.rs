@@ -388,21 +388,28 @@ impl Heuristic for LmCut {
             h = h.saturating_add(cheapest);
             // Each cut operator's cost falls, and with it its action's other operators', once
             // per action (they share the action's cost; all of them cost the same throughout).
+            // A sibling this state cannot reach (a conditional effect whose condition it cannot
+            // make true) gets the lower cost but no part in the update: the update would take
+            // it for one without preconditions and lend its effects a reach they do not have.
             self.lowered.clear();
             for &op in &self.cut {
                 let start = self.shared_start[op as usize];
                 if start == NONE {
+                    self.costs[op as usize] -= cheapest;
                     self.lowered.push(op);
                 } else if self.lowered_round[op as usize] != round {
                     let end = self.shared_end[op as usize];
+                    let relaxed = &self.exploration.relaxed;
                     for &sibling in &self.sharing[start as usize..end as usize] {
                         self.lowered_round[sibling as usize] = round;
-                        self.lowered.push(sibling);
+                        self.costs[sibling as usize] -= cheapest;
+                        if self.exploration.op_supporter[sibling as usize] != NONE || relaxed.ops[sibling as usize].has_no_pre() {
+                            self.lowered.push(sibling);
+                        }
                     }
                 }
             }
             for &op in &self.lowered {
-                self.costs[op as usize] -= cheapest;
                 if self.costs[op as usize] == 0 {
                     let relaxed = &self.exploration.relaxed;
                     for &added in relaxed.ops[op as usize].add(relaxed) {

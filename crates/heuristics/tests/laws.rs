@@ -381,3 +381,31 @@ fn a_condition_that_repeats_the_precondition_counts_once() {
     assert_eq!(HFF::new(&model).evaluate(&init), Some(2));
     assert_eq!(LmCut::new(&model).evaluate(&init), Some(2));
 }
+
+/// A conditional effect that cannot fire in the evaluated state (its condition `r` needs `u`,
+/// which `drop-u` deleted and nothing adds back) shares its action's cost with the action's
+/// reachable part, but lends it no reach: lowering its cost once `a` is cut must not make `g`,
+/// and through `c` the goal's `s`, look reachable. h* from that state is 9 (`a`, then `e`).
+#[test]
+fn a_conditional_effect_out_of_reach_lends_no_reach() {
+    let domain = "(define (domain ce2) (:requirements :strips :conditional-effects :action-costs)\n\
+        (:predicates (p) (q) (r) (u) (g) (s))\n\
+        (:functions (total-cost) - number)\n\
+        (:action drop-u :parameters () :precondition (u) :effect (and (not (u)) (increase (total-cost) 0)))\n\
+        (:action make-r :parameters () :precondition (u) :effect (and (r) (increase (total-cost) 1)))\n\
+        (:action a :parameters () :precondition (p) :effect (and (q) (when (r) (g)) (increase (total-cost) 5)))\n\
+        (:action x :parameters () :precondition (p) :effect (and (q) (increase (total-cost) 6)))\n\
+        (:action e :parameters () :precondition (p) :effect (and (s) (increase (total-cost) 4)))\n\
+        (:action c :parameters () :precondition (g) :effect (and (s) (increase (total-cost) 0))))\n";
+    let problem =
+        "(define (problem ce2p) (:domain ce2) (:init (p) (u) (= (total-cost) 0)) (:goal (and (q) (s))) (:metric minimize (total-cost)))\n";
+    let task = grounding::ground(&pddl_syntax::parse_domain(domain).unwrap(), &pddl_syntax::parse_problem(problem).unwrap()).unwrap();
+    let model = TransitionModel::new(task);
+    let drop = (0..model.task().actions.len())
+        .map(grounding::ActionId::from_index)
+        .find(|&id| model.task().schemas[model.task().action(id).schema.index()].name == "drop-u")
+        .expect("drop-u");
+    let state = model.apply(&model.initial_state(), drop);
+    assert_eq!(LmCut::new(&model).evaluate(&state), Some(9));
+    assert_eq!(LmCut::full(&model).evaluate(&state), Some(9));
+}
