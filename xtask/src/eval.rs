@@ -515,8 +515,6 @@ pub fn run(args: EvalArgs) -> anyhow::Result<ExitCode> {
         ))
         .into());
     }
-    // Phase II's model and decoding settings are `ours`'s: the other agents decode no plan
-    // (the planner's A* takes only the clock), and would pass them over.
     // The expert replays the benchmark's own plans: no episode setting reaches it.
     if args.agent == AgentName::Expert {
         let mut given = crate::input::given::<EpisodeArgs>(&[]);
@@ -527,6 +525,8 @@ pub fn run(args: EvalArgs) -> anyhow::Result<ExitCode> {
         }
     }
     crate::model_spec::ServerArgs::check(&models_asked(&args))?;
+    // Phase II's model and decoding settings are `ours`'s: the other agents decode no plan
+    // (the planner's A* takes only the clock), and would pass them over.
     if args.agent != AgentName::Ours {
         let mut given = crate::input::given::<crate::phase2::LmArgs>(&crate::phase2::SHARED_WITH_PHASE_ONE);
         let except: &[&str] = if args.agent == AgentName::Planner { &["clock"] } else { &[] };

@@ -290,7 +290,7 @@ pub fn seconds(seconds: f64) -> Result<std::time::Duration, InputError> {
 /// `inf`, `nan`), nor round a positive number to no time at all (`1e-10`: a deadline of 0).
 pub fn positive_seconds(text: &str) -> Result<f64, String> {
     match text.parse::<f64>() {
-        Ok(s) if s.is_finite() && s >= 1e-9 && s < 1e9 => Ok(s),
+        Ok(s) if (1e-9..1e9).contains(&s) => Ok(s),
         _ => Err(format!("`{text}` is not a positive number of seconds (from 1e-9 to below 1e9)")),
     }
 }
