@@ -359,8 +359,8 @@ pub struct RunConfig<'a> {
     pub decode: &'a DecodeArgs,
     pub time_limit: f64,
     /// The decoder and its value as `exploration_harness::HARNESS_VERSION` has them (it is
-    /// raised where Phase II changes, as LM-cut did at 18): records of an older decoder are
-    /// another run's, never resumed into a newer one's.
+    /// raised where Phase II changes): records of an older decoder are another run's, never
+    /// resumed into a newer one's.
     pub harness: u32,
     /// What an `openai:` server serves ([`crate::model_spec::served_entry`]); absent otherwise.
     #[serde(skip_serializing_if = "Option::is_none")]

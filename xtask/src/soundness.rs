@@ -58,9 +58,8 @@ pub struct SoundnessArgs {
 /// (`vh_pddl::problem`), the executor (`VirtualhomeEnv`), the gold plans' rewriting or the
 /// spelling of script lines changes a row, so that a resumed run never takes the old rows as
 /// the new code's; and where the search changes what it finds (A* with LM-cut). 1: the first
-/// with records; 2: LM-cut charges an action's conditional effects once (it overestimated, so
-/// A* could return a longer plan or none within its bound).
-pub const SOUNDNESS_VERSION: u32 = 2;
+/// with records.
+pub const SOUNDNESS_VERSION: u32 = 1;
 
 /// A task file's id: its name without `.json.gz` or `.json` (`VirtualhomeTask::load` checks
 /// that the task inside has it).

@@ -23,15 +23,13 @@
 //!
 //! Conditional effects, which Fast Downward's LM-cut refuses: the relaxation has one operator
 //! for an action's unconditional part and one per conditional effect, each priced at the
-//! action's cost. Charged apart, they made LM-cut overestimate (an action whose three
-//! conditional effects the goal needs was charged three times where one application pays
-//! once). So the operators of one action share its cost: a cut holding any of them lowers
-//! them all, once. Every cut is still a landmark of the relaxed task, and an action's charges
-//! across cuts sum to at most its cost, so the sum is admissible (Röger, Pommerening and
-//! Helmert 2014 extend LM-cut to conditional effects the same way, before their context
-//! splitting). Sharing can lower h_max by more than the cut's cost in one round, so the value
-//! is at least h_max, which is admissible too. Tasks without conditional effects are
-//! untouched.
+//! action's cost, and a cut charges each apart. Where a goal needs several effects of one
+//! application this overestimates (`act` adds `q` and, where `p` holds, `r1` and `r2`; `fin`
+//! needs all three: LM-cut 4 where h* is 3), so on such tasks LM-cut is not admissible and A*
+//! with it may return a costlier plan. Sharing the action's cost among its operators is
+//! admissible, but on VirtualHome's walks (a conditional effect per object carried) it was so
+//! much weaker that A* on three of the 33 EAI fixture tasks ran out of its million expansions
+//! where it had solved them in seconds; it is not done.
 //!
 //! On the IPC fixtures the per-domain means are within 4.1% of Fast Downward's 26.6 (1.041
 //! on driverlog, 0.987 on elevators, within 0.6% elsewhere; `tests/fast_downward.rs`).
@@ -44,7 +42,8 @@ use crate::relaxation::{Combine, Exploration};
 use crate::relaxed::{NO_ADD, RelaxedTask, TWO_ADDS};
 use crate::{Heuristic, INFINITE};
 
-/// The LM-cut heuristic (Helmert and Domshlak 2009): admissible, the sum of the costs of
+/// The LM-cut heuristic (Helmert and Domshlak 2009): admissible without conditional effects
+/// (see the module docs), the sum of the costs of
 /// disjunctive action landmarks found by repeated h_max cuts; its values are Fast Downward's
 /// on every state compared. Evaluate it through [`crate::Heuristic`].
 #[derive(Debug, Clone)]
@@ -72,19 +71,6 @@ pub struct LmCut {
     audit: Option<Audit>,
     /// Update h_max incrementally between rounds (the default) instead of recomputing it.
     incremental: bool,
-    /// Per operator: the first of its action's operators in `sharing` where the action has
-    /// several (an unconditional part and conditional effects), else `NONE`.
-    shared_start: Vec<u32>,
-    /// The operators of each action with several, one action's after another; each list
-    /// ends where the next action's starts (`shared_end`).
-    sharing: Vec<u32>,
-    /// Per operator with siblings: the end of its action's list in `sharing`.
-    shared_end: Vec<u32>,
-    /// Per operator, the round in which its action's cost was last lowered (so a cut holding
-    /// two of an action's operators lowers it once).
-    lowered_round: Vec<u32>,
-    /// Operators whose cost a round lowered: the cut's and their siblings.
-    lowered: Vec<u32>,
 }
 
 const NONE: u32 = u32::MAX;
@@ -104,30 +90,7 @@ impl LmCut {
                 base_zero_achievers[added as usize] += 1;
             }
         }
-        // The operators of each action that has several, grouped.
-        let mut by_action: rustc_hash::FxHashMap<u32, Vec<u32>> = rustc_hash::FxHashMap::default();
-        for (id, op) in relaxed.ops.iter().enumerate() {
-            if op.action != crate::relaxed::NO_ACTION {
-                by_action.entry(op.action).or_default().push(id as u32);
-            }
-        }
-        let (mut shared_start, mut shared_end) = (vec![NONE; relaxed.ops.len()], vec![NONE; relaxed.ops.len()]);
-        let mut sharing = Vec::new();
-        let mut groups: Vec<Vec<u32>> = by_action.into_values().filter(|ops| ops.len() > 1).collect();
-        groups.sort_unstable();
-        for ops in groups {
-            let (start, end) = (sharing.len() as u32, (sharing.len() + ops.len()) as u32);
-            for &op in &ops {
-                (shared_start[op as usize], shared_end[op as usize]) = (start, end);
-            }
-            sharing.extend(ops);
-        }
         LmCut {
-            shared_start,
-            shared_end,
-            sharing,
-            lowered_round: vec![0; relaxed.ops.len()],
-            lowered: Vec::new(),
             costs: relaxed.ops.iter().map(|o| o.cost).collect(),
             zero_achievers: base_zero_achievers.clone(),
             base_zero_achievers,
@@ -177,12 +140,9 @@ impl Heuristic for LmCut {
         if goal_cost == INFINITE {
             return None;
         }
-        // At least h_max where operators share their action's cost (see the module docs);
-        // elsewhere LM-cut is at least h_max already.
-        let h_max = goal_cost;
         loop {
             if goal_cost == 0 {
-                return Some(h.max(h_max));
+                return Some(h);
             }
             // Split borrows, so the loops below keep each buffer's pointer in a register.
             let Exploration { relaxed, fact_cost, op_supporter, supported, .. } = &mut self.exploration;
@@ -247,7 +207,6 @@ impl Heuristic for LmCut {
             self.round = self.round.wrapping_add(1);
             if self.round == 0 {
                 self.candidate_round.fill(0);
-                self.lowered_round.fill(0);
                 self.beyond.proved.fill(0);
                 self.round = 1;
             }
@@ -383,33 +342,11 @@ impl Heuristic for LmCut {
             // holds every fact that reaches the goal at zero cost); stop rather than loop if not.
             let cheapest = self.cut.iter().map(|&op| self.costs[op as usize]).min().unwrap_or(0);
             if cheapest == 0 {
-                return Some(h.max(h_max));
+                return Some(h);
             }
             h = h.saturating_add(cheapest);
-            // Each cut operator's cost falls, and with it its action's other operators', once
-            // per action (they share the action's cost; all of them cost the same throughout).
-            // A sibling this state cannot reach (a conditional effect whose condition it cannot
-            // make true) gets the lower cost but no part in the update: the update would take
-            // it for one without preconditions and lend its effects a reach they do not have.
-            self.lowered.clear();
             for &op in &self.cut {
-                let start = self.shared_start[op as usize];
-                if start == NONE {
-                    self.costs[op as usize] -= cheapest;
-                    self.lowered.push(op);
-                } else if self.lowered_round[op as usize] != round {
-                    let end = self.shared_end[op as usize];
-                    let relaxed = &self.exploration.relaxed;
-                    for &sibling in &self.sharing[start as usize..end as usize] {
-                        self.lowered_round[sibling as usize] = round;
-                        self.costs[sibling as usize] -= cheapest;
-                        if self.exploration.op_supporter[sibling as usize] != NONE || relaxed.ops[sibling as usize].has_no_pre() {
-                            self.lowered.push(sibling);
-                        }
-                    }
-                }
-            }
-            for &op in &self.lowered {
+                self.costs[op as usize] -= cheapest;
                 if self.costs[op as usize] == 0 {
                     let relaxed = &self.exploration.relaxed;
                     for &added in relaxed.ops[op as usize].add(relaxed) {
@@ -418,7 +355,7 @@ impl Heuristic for LmCut {
                 }
             }
             goal_cost = if self.incremental {
-                self.exploration.lower(&self.lowered, &self.costs)
+                self.exploration.lower(&self.cut, &self.costs)
             } else {
                 self.exploration.run(state, Combine::Max, Some(&self.costs))
             };
