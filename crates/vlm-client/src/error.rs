@@ -116,8 +116,9 @@ pub fn context_overflow(status: u16, body: &str) -> bool {
 mod tests {
     use super::*;
 
-    /// What the run stops on, and what is the model's: a status (a 3xx, a 4xx) is the run's unless it says the
-    /// request is past the model's context, and a body that is no chat completion is the run's.
+    /// What the run stops on, and what is the model's: a status (3xx, 4xx) is the run's unless
+    /// it says the request is past the model's context, and a body that is no chat completion
+    /// is the run's.
     #[test]
     fn only_the_models_answers_are_counted_against_it() {
         let status = |status, body: &str| ChatErrorKind::Status { status, body: body.into(), retry_after: None };

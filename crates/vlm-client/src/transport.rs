@@ -50,10 +50,11 @@ pub struct Delivered {
 }
 
 /// An agent for `timeout`-bounded attempts to `url` (the base URL: its scheme and host choose
-/// the proxy, [`crate::proxy`]; a proxy variable that names no usable proxy is a bad URL). Statuses are returned, not raised, and redirects
-/// are not followed: a client following a 301, 302 or 303 sends the POST again as a GET, with
-/// no body, whose failure would then be reported under the first URL; the 3xx comes back as
-/// a status naming where the server points ([`ChatErrorKind::Status`]). Connections
+/// the proxy, [`crate::proxy`]; a proxy variable that names no usable proxy is a bad URL).
+/// Statuses are returned, not raised, and redirects are not followed: a client following a
+/// 301, 302 or 303 sends the POST again as a GET, with no body, whose failure would then be
+/// reported under the first URL; the 3xx comes back as a status naming where the server points
+/// ([`ChatErrorKind::Status`]). Connections
 /// are kept alive and reused unless the environment sets `NSEA_HTTP_KEEPALIVE=0`, which opens
 /// one connection per request (for servers that mishandle keep-alive, and to measure what
 /// keep-alive saves).
@@ -77,15 +78,16 @@ pub fn agent(timeout: Duration, url: &str) -> Result<ureq::Agent, ChatErrorKind>
 /// retried as a broken connection, naming no variable). Unset, empty or not Unicode:
 /// [`ChatErrorKind::MissingApiKey`]; otherwise unsendable: [`ChatErrorKind::BadInput`].
 pub fn api_key_from_env(name: &str) -> Result<String, ChatErrorKind> {
-    let value =
-        std::env::var(name).ok().filter(|value| !value.trim().is_empty()).ok_or_else(|| ChatErrorKind::MissingApiKey(name.to_string()))?;
+    // White space around the key (a file's last newline) is no part of it.
+    let value = std::env::var(name).ok().map(|value| value.trim().to_string()).filter(|value| !value.is_empty());
+    let value = value.ok_or_else(|| ChatErrorKind::MissingApiKey(name.to_string()))?;
     if let Some(c) = value.chars().find(|c| !(' '..='~').contains(c)) {
         return Err(ChatErrorKind::BadInput(format!(
             "the API key variable `{name}` holds {}, which an HTTP header cannot carry",
             if c.is_ascii() { format!("the control character {:?}", c) } else { format!("the non-ASCII character {c:?}") }
         )));
     }
-    Ok(value.trim().to_string())
+    Ok(value)
 }
 
 /// `url` without the credentials it may hold (`http://user:pw@host/v1` → `http://…@host/v1`),
