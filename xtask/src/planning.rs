@@ -33,6 +33,11 @@ pub struct PlanArgs {
     /// Stop after this many expansions.
     #[arg(long)]
     max_expansions: Option<u64>,
+    /// A*: plans costing more are not searched for, and a search that finds none within it
+    /// ends `over-bound` (Fast Downward's `bound`, but inclusive). A proof that no plan fits
+    /// needs an admissible heuristic: with conditional effects, `lmcut-admissible`, not `lmcut`.
+    #[arg(long)]
+    max_cost: Option<u64>,
     /// Stop after this many seconds of search (on `--clock`).
     #[arg(long, value_parser = crate::input::positive_seconds)]
     time_limit: Option<f64>,
@@ -85,12 +90,15 @@ pub fn plan(args: PlanArgs) -> anyhow::Result<ExitCode> {
     if args.symmetries && args.planner != Planner::Astar {
         return Err(crate::input::InputError("--symmetries is a setting of --planner astar".to_string()).into());
     }
+    if args.max_cost.is_some() && args.planner != Planner::Astar {
+        return Err(crate::input::InputError("--max-cost is a setting of --planner astar".to_string()).into());
+    }
     // A setting of one planner given to another would be passed over in silence.
     if args.preferred && !matches!(args.planner, Planner::Gbfs | Planner::LazyGbfs) {
         return Err(crate::input::InputError("--preferred is a setting of --planner gbfs or lazy-gbfs".to_string()).into());
     }
     let passed_over = if args.planner == Planner::Mcts {
-        ["heuristic", "max_expansions"].into_iter().filter(|id| input::typed(id)).map(input::option_name).collect()
+        ["heuristic", "max_expansions", "max_cost"].into_iter().filter(|id| input::typed(id)).map(input::option_name).collect()
     } else {
         let mut options = input::given::<crate::phase2::LmArgs>(&[]);
         options.extend(input::given::<crate::phase2::DecodeArgs>(&["clock"]));
@@ -107,8 +115,18 @@ pub fn plan(args: PlanArgs) -> anyhow::Result<ExitCode> {
         return crate::phase2::plan_one(&files, &args.lm, &args.decode, limit, args.out.as_deref(), args.json);
     };
     let model = TransitionModel::new(input::ground(&files)?);
+    if algorithm == Algorithm::AStar
+        && args.heuristic == HeuristicName::Lmcut
+        && model.task().actions.iter().any(|a| !a.conditional.is_empty())
+    {
+        eprintln!(
+            "note: this task has conditional effects, where `lmcut` charges each apart and may overestimate: \
+             the plan may not be optimal (`--heuristic lmcut-admissible` is admissible, and weaker)"
+        );
+    }
     let mut heuristic = args.heuristic.build(&model);
     let mut config = SearchConfig::new(algorithm);
+    config.max_cost = args.max_cost;
     config.preferred_operators = args.preferred;
     config.symmetries = args.symmetries;
     config.max_expansions = args.max_expansions;
@@ -172,7 +190,7 @@ pub fn heuristic(args: HeuristicArgs) -> anyhow::Result<ExitCode> {
         println!("{}", serde_json::Value::Object(values));
     } else {
         for (name, value) in values {
-            println!("{name:<10} {}", if value.is_null() { "dead end".to_string() } else { value.to_string() });
+            println!("{name:<16} {}", if value.is_null() { "dead end".to_string() } else { value.to_string() });
         }
     }
     Ok(ExitCode::SUCCESS)

@@ -246,6 +246,53 @@ fn plan_with_symmetries_finds_the_optimal_gripper_plan_in_a_fraction_of_the_expa
     }
 }
 
+/// `act` adds `q` and, where `p` holds, `r1` and `r2`; `fin` needs all three: h* is 3 (`setp`,
+/// `act`, `fin`), where LM-cut charging the conditional effects apart says 4.
+const CONDITIONAL_DOMAIN: &str = "(define (domain ce) (:requirements :strips :conditional-effects)
+    (:predicates (p) (q) (r1) (r2) (done))
+    (:action setp :parameters () :precondition () :effect (p))
+    (:action act :parameters () :precondition () :effect (and (q) (when (p) (r1)) (when (p) (r2))))
+    (:action fin :parameters () :precondition (and (q) (r1) (r2)) :effect (done)))";
+
+#[test]
+fn plan_bounds_a_star_by_max_cost_and_says_when_lm_cut_may_overestimate() {
+    let tmp = scratch_dir("xtask-cli-");
+    let domain = scratch(&tmp, "domain.pddl", CONDITIONAL_DOMAIN).display().to_string();
+    let problem = scratch(&tmp, "p.pddl", "(define (problem cep) (:domain ce) (:init) (:goal (done)))").display().to_string();
+    let run = |heuristic: &str, bound: &str| {
+        let args = [
+            "plan",
+            "--domain",
+            &domain,
+            "--problem",
+            &problem,
+            "--planner",
+            "astar",
+            "--heuristic",
+            heuristic,
+            "--max-cost",
+            bound,
+            "--json",
+        ];
+        let output = xtask(&args);
+        let value: serde_json::Value = serde_json::from_str(stdout(&output).trim()).expect("one JSON object");
+        (output.status.code(), value["status"].as_str().map(str::to_string), String::from_utf8_lossy(&output.stderr).into_owned())
+    };
+    // Admissible LM-cut finds the optimal plan within the bound of its cost, and none below it.
+    let (code, status, stderr) = run("lmcut-admissible", "3");
+    assert_eq!((code, status.as_deref()), (Some(0), Some("solved")), "{stderr}");
+    assert!(!stderr.contains("note:"), "{stderr}");
+    assert_eq!(run("lmcut-admissible", "2").1.as_deref(), Some("over-bound"));
+    // LM-cut charged apart overestimates here and cuts off the plan of cost 3; it says it may.
+    let (code, status, stderr) = run("lmcut", "3");
+    assert_eq!((code, status.as_deref()), (Some(1), Some("over-bound")));
+    assert!(stderr.contains("note: this task has conditional effects") && stderr.contains("lmcut-admissible"), "{stderr}");
+    // Only A* takes a bound.
+    let output = xtask(&["plan", "--domain", &domain, "--problem", &problem, "--planner", "gbfs", "--max-cost", "3"]);
+    assert_eq!(output.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&output.stderr).contains("--max-cost is a setting of --planner astar"));
+}
+
 #[test]
 fn plan_reports_unsolvable_tasks() {
     let tmp = scratch_dir("xtask-cli-");

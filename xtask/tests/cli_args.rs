@@ -64,7 +64,7 @@ fn valid(option: &str, value: &str) -> bool {
     let whole = |text: &str| text.parse::<u64>().is_ok();
     match option {
         "--time-limit" => number(value).is_some_and(|v| v > 0.0 && v < 1e9),
-        "--heuristic" => ["blind", "goalcount", "hmax", "hadd", "ff", "lmcut"].contains(&value),
+        "--heuristic" => ["blind", "goalcount", "hmax", "hadd", "ff", "lmcut", "lmcut-admissible"].contains(&value),
         "--planner" => ["astar", "gbfs", "lazy-gbfs", "mcts"].contains(&value),
         "--mode" => {
             ["constrained-mcts", "constrained-greedy", "unconstrained-mcts", "unconstrained-greedy", "sample", "constrained-sample"]

@@ -16,8 +16,8 @@
 //!   class is false in the hidden state (precision < 1), or some goal object has no correctly
 //!   located instance in F_τ (recall < 1); or exploration left fewer steps of the budget than
 //!   the first plan needs: none at all, fewer than a plan Phase II returned though told the
-//!   steps left (A*'s optimal plan), or Phase II found no plan and A* with LM-cut proves that
-//!   every plan of ŝ0 is longer than the steps left (`no_plan_fits`); or no hand-over could
+//!   steps left (A*'s plan), or Phase II found no plan and A* proves that no plan of ŝ0 fits
+//!   in the steps left (`no_plan_fits`, with LM-cut checked by its admissible form); or no hand-over could
 //!   be made from F_τ (a goal symbol with no instance to bind: Phase I spent the budget, or
 //!   ended early, or re-exploration set the only one seen aside);
 //! - `search`: the state is right but Phase II returned no plan within its budget;
@@ -514,20 +514,23 @@ pub fn unreachable_goal_instances(grounded: &Grounded) -> BTreeSet<String> {
 /// proves the bound on ALFWorld's hand-overs in a few thousand), and a cap on the check's time.
 const FIT_EXPANSIONS: u64 = 200_000;
 
-/// What A* with LM-cut, bounded by a number of actions, says of the plans of ŝ0.
+/// What A* with LM-cut, bounded by a number of actions, proves of the plans of ŝ0
+/// ([`heuristics::search::bounded_plan`]: the household domains have conditional effects, where
+/// LM-cut may overestimate, so its `OverBound` is checked with admissible LM-cut).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum PlanFit {
-    /// An optimal plan of this many actions, within the bound.
+    /// A plan of this many actions, within the bound (optimal where LM-cut is admissible).
     Fits(usize),
-    /// Plans exist, but every one is longer than the bound: the space within it was searched.
+    /// No plan within the bound: the space within it was searched, and states beyond it were
+    /// cut off (plans may exist beyond the bound, or none at all).
     NoneFits,
     /// Nothing proved: the expansions ran out, ŝ0 has no plan at all, or the costs are not
     /// unit (a cost then says nothing of a length).
     Unknown,
 }
 
-/// A* with LM-cut (admissible) on ŝ0 for plans of at most `steps` actions, within
-/// `max_expansions` and, where given, `time_limit` read on `clock` (without one, the same
+/// A* with LM-cut, its proof checked ([`PlanFit`]), on ŝ0 for plans of at most `steps`
+/// actions, within `max_expansions` and, where given, `time_limit` read on `clock` (without one, the same
 /// answer on any machine, however loaded). Phase II's planner asks it before a search
 /// ([`PlanFit::NoneFits`]: no search can find a plan that finishes), the episode after a
 /// failed one (the attribution).
@@ -546,16 +549,17 @@ pub fn plan_fit(
     config.max_expansions = Some(max_expansions);
     config.time_limit = time_limit;
     config.clock = clock;
-    match heuristics::search::optimal_plan_with(model, &config) {
+    match heuristics::search::bounded_plan(model, &config) {
         Ok(plan) => PlanFit::Fits(plan.len()),
-        // `OverBound`: plans exist only beyond the bound. (`Unsolvable`, none at all, is not
-        // the steps' fault.)
+        // `OverBound`: no plan within the bound, and states beyond it. (`Unsolvable`, none
+        // even there, is not the steps' fault.)
         Err(heuristics::search::SearchStatus::OverBound) => PlanFit::NoneFits,
         Err(_) => PlanFit::Unknown,
     }
 }
 
-/// Whether A* with LM-cut proves that ŝ0 has plans, but none of at most `steps` actions.
+/// Whether A* with LM-cut, its proof checked ([`PlanFit`]), shows that ŝ0 has no plan of at
+/// most `steps` actions.
 fn no_plan_fits(model: &transition_model::TransitionModel, steps: usize) -> bool {
     plan_fit(model, steps, FIT_EXPANSIONS, None, heuristics::search::Clock::Wall) == PlanFit::NoneFits
 }

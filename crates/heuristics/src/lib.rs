@@ -1,7 +1,8 @@
 //! Planning heuristics and classical search on [`transition_model`] states.
 //!
 //! Heuristics: [`Blind`], [`GoalCount`], [`HMax`], [`HAdd`], [`HFF`] (with its relaxed plan
-//! and preferred operators), [`LmCut`], [`RemainingPlanCost`], and a [`WeightedMix`] of any of
+//! and preferred operators), [`LmCut`] (charging conditional effects apart, or admissibly:
+//! [`LmCut::admissible`]), [`RemainingPlanCost`], and a [`WeightedMix`] of any of
 //! them, as the paper's MCTS value uses. All take every goal the grounder produces, and all but
 //! [`GoalCount`] (unmet goal literals, costs aside) honour action costs: the delete relaxation
 //! ([`relaxed`]) compiles the goal — a disjunction of conditions — into one auxiliary goal
@@ -78,8 +79,9 @@ impl<H: Heuristic + ?Sized> Heuristic for Box<H> {
     }
 }
 
-/// The heuristics by command-line name (`blind`, `goalcount`, `hmax`, `hadd`, `ff`,
-/// `lmcut`): the names are the variants' (`FromStr`, `Into<&str>`, [`strum::VariantNames`]).
+/// The heuristics by command-line name (`blind`, `goalcount`, `hmax`, `hadd`, `ff`, `lmcut`,
+/// `lmcut-admissible`): the names are the variants' (`FromStr`, `Into<&str>`,
+/// [`strum::VariantNames`]).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, strum::EnumString, strum::IntoStaticStr, strum::VariantNames, strum::VariantArray)]
 #[strum(serialize_all = "lowercase", parse_err_ty = UnknownName, parse_err_fn = HeuristicName::unknown)]
 pub enum HeuristicName {
@@ -93,8 +95,13 @@ pub enum HeuristicName {
     Hadd,
     /// [`HFF`], `ff`.
     Ff,
-    /// [`LmCut`], `lmcut`.
+    /// [`LmCut::new`], `lmcut`: not admissible with conditional effects (they are charged
+    /// apart; see [`LmCut`]).
     Lmcut,
+    /// [`LmCut::admissible`], `lmcut-admissible`: conditional effects of one action share its
+    /// cost; the same as `lmcut` without them.
+    #[strum(serialize = "lmcut-admissible")]
+    LmcutAdmissible,
 }
 
 impl HeuristicName {
@@ -102,8 +109,9 @@ impl HeuristicName {
         UnknownName::of::<HeuristicName>("heuristic", given)
     }
 
-    /// The command-line name (`blind`, `goalcount`, `hmax`, `hadd`, `ff`, `lmcut`), which is also
-    /// what the built heuristic's [`Heuristic::name`] returns.
+    /// The command-line name (`blind`, `goalcount`, `hmax`, `hadd`, `ff`, `lmcut`,
+    /// `lmcut-admissible`), which is also what the built heuristic's [`Heuristic::name`]
+    /// returns.
     pub fn name(self) -> &'static str {
         self.into()
     }
@@ -117,6 +125,7 @@ impl HeuristicName {
             HeuristicName::Hadd => Box::new(HAdd::new(model)),
             HeuristicName::Ff => Box::new(HFF::new(model)),
             HeuristicName::Lmcut => Box::new(LmCut::new(model)),
+            HeuristicName::LmcutAdmissible => Box::new(LmCut::admissible(model)),
         }
     }
 }

@@ -23,13 +23,24 @@
 //!
 //! Conditional effects, which Fast Downward's LM-cut refuses: the relaxation has one operator
 //! for an action's unconditional part and one per conditional effect, each priced at the
-//! action's cost, and a cut charges each apart. Where a goal needs several effects of one
-//! application this overestimates (`act` adds `q` and, where `p` holds, `r1` and `r2`; `fin`
-//! needs all three: LM-cut 4 where h* is 3), so on such tasks LM-cut is not admissible and A*
-//! with it may return a costlier plan. Sharing the action's cost among its operators is
-//! admissible, but on VirtualHome's walks (a conditional effect per object carried) it was so
-//! much weaker that A* on three of the 33 EAI fixture tasks ran out of its million expansions
-//! where it had solved them in seconds; it is not done.
+//! action's cost. Two ways to charge them:
+//! - [`LmCut::new`] (`lmcut`) charges each apart. Where a goal needs several effects of one
+//!   application this overestimates (`act` adds `q` and, where `p` holds, `r1` and `r2`; `fin`
+//!   needs all three: LM-cut 4 where h* is 3), so on such tasks it is not admissible and A*
+//!   with it may return a costlier plan. It is the informative one, and what the agent's
+//!   search uses as a value and its symbolic control as A*'s heuristic.
+//! - [`LmCut::admissible`] (`lmcut-admissible`) lets the operators of one action share its
+//!   cost: a cut holding any of them lowers them all, once. Every cut is still a landmark of
+//!   the relaxed task, and an action's charges across cuts sum to at most its cost, so the sum
+//!   is admissible (Röger, Pommerening and Helmert 2014 extend LM-cut to conditional effects the
+//!   same way, before their context splitting, which is not done here). Sharing can lower
+//!   h_max by more than the cut's cost in one round, so the value is raised to h_max where it
+//!   falls below. It is what proves a bound (no plan of ŝ0 within the steps left). On
+//!   VirtualHome's walks (a conditional effect per object carried) it is much weaker: A* with
+//!   it ran out of a million expansions on three of the 33 EAI fixture tasks that A* with
+//!   `lmcut` solves in seconds.
+//!
+//! On tasks without conditional effects the two are the same heuristic, value for value.
 //!
 //! On the IPC fixtures the per-domain means are within 4.1% of Fast Downward's 26.6 (1.041
 //! on driverlog, 0.987 on elevators, within 0.6% elsewhere; `tests/fast_downward.rs`).
@@ -42,10 +53,11 @@ use crate::relaxation::{Combine, Exploration};
 use crate::relaxed::{NO_ADD, RelaxedTask, TWO_ADDS};
 use crate::{Heuristic, INFINITE};
 
-/// The LM-cut heuristic (Helmert and Domshlak 2009): admissible without conditional effects
-/// (see the module docs), the sum of the costs of
-/// disjunctive action landmarks found by repeated h_max cuts; its values are Fast Downward's
-/// on every state compared. Evaluate it through [`crate::Heuristic`].
+/// The LM-cut heuristic (Helmert and Domshlak 2009): the sum of the costs of disjunctive action
+/// landmarks found by repeated h_max cuts; its values are Fast Downward's on every state
+/// compared. Admissible without conditional effects; with them, admissible as
+/// [`LmCut::admissible`] builds it (see the module docs). Evaluate it through
+/// [`crate::Heuristic`].
 #[derive(Debug, Clone)]
 pub struct LmCut {
     exploration: Exploration,
@@ -71,6 +83,23 @@ pub struct LmCut {
     audit: Option<Audit>,
     /// Update h_max incrementally between rounds (the default) instead of recomputing it.
     incremental: bool,
+    /// Per operator: the first of its action's operators in `sharing` where they share the
+    /// action's cost ([`LmCut::admissible`], an action with several: an unconditional part and
+    /// conditional effects), else `NONE`.
+    shared_start: Vec<u32>,
+    /// The operators of each action that share its cost, one action's after another; each
+    /// list ends where the next action's starts (`shared_end`).
+    sharing: Vec<u32>,
+    /// Per operator that shares: the end of its action's list in `sharing`.
+    shared_end: Vec<u32>,
+    /// Per operator, the round in which its action's cost was last lowered (so a cut holding
+    /// two of an action's operators lowers it once).
+    lowered_round: Vec<u32>,
+    /// Operators whose cost a round lowered: the cut's and, where they share, their siblings'.
+    lowered: Vec<u32>,
+    /// Built by [`LmCut::admissible`] (its name is `lmcut-admissible`, with or without
+    /// conditional effects).
+    admissible_mode: bool,
 }
 
 const NONE: u32 = u32::MAX;
@@ -91,6 +120,12 @@ impl LmCut {
             }
         }
         LmCut {
+            shared_start: vec![NONE; relaxed.ops.len()],
+            sharing: Vec::new(),
+            shared_end: vec![NONE; relaxed.ops.len()],
+            lowered_round: vec![0; relaxed.ops.len()],
+            lowered: Vec::new(),
+            admissible_mode: false,
             costs: relaxed.ops.iter().map(|o| o.cost).collect(),
             zero_achievers: base_zero_achievers.clone(),
             base_zero_achievers,
@@ -121,13 +156,42 @@ impl LmCut {
     /// LM-cut that recomputes h_max from scratch after every cut (supporters re-chosen each
     /// round by the arrival rule).
     pub fn full(model: &TransitionModel) -> LmCut {
-        LmCut { incremental: false, ..LmCut::new(model) }
+        LmCut::new(model).recomputing()
+    }
+
+    /// This LM-cut, recomputing h_max from scratch after every cut (as [`LmCut::full`]).
+    pub fn recomputing(self) -> LmCut {
+        LmCut { incremental: false, ..self }
+    }
+
+    /// LM-cut whose operators of one action share the action's cost (see the module docs):
+    /// admissible with conditional effects too, and the same as [`LmCut::new`] without them.
+    pub fn admissible(model: &TransitionModel) -> LmCut {
+        let mut lmcut = LmCut { admissible_mode: true, ..LmCut::new(model) };
+        // The operators of each action that has several, grouped.
+        let relaxed = &lmcut.exploration.relaxed;
+        let mut by_action: rustc_hash::FxHashMap<u32, Vec<u32>> = rustc_hash::FxHashMap::default();
+        for (id, op) in relaxed.ops.iter().enumerate() {
+            if op.action != crate::relaxed::NO_ACTION {
+                by_action.entry(op.action).or_default().push(id as u32);
+            }
+        }
+        let mut groups: Vec<Vec<u32>> = by_action.into_values().filter(|ops| ops.len() > 1).collect();
+        groups.sort_unstable();
+        for ops in groups {
+            let (start, end) = (lmcut.sharing.len() as u32, (lmcut.sharing.len() + ops.len()) as u32);
+            for &op in &ops {
+                (lmcut.shared_start[op as usize], lmcut.shared_end[op as usize]) = (start, end);
+            }
+            lmcut.sharing.extend(ops);
+        }
+        lmcut
     }
 }
 
 impl Heuristic for LmCut {
     fn name(&self) -> &'static str {
-        "lmcut"
+        if self.admissible_mode { "lmcut-admissible" } else { "lmcut" }
     }
 
     fn evaluate(&mut self, state: &State) -> Option<u32> {
@@ -140,9 +204,12 @@ impl Heuristic for LmCut {
         if goal_cost == INFINITE {
             return None;
         }
+        // Where operators share their action's cost, at least h_max (see the module docs);
+        // elsewhere LM-cut is at least h_max already.
+        let h_max = goal_cost;
         loop {
             if goal_cost == 0 {
-                return Some(h);
+                return Some(h.max(h_max));
             }
             // Split borrows, so the loops below keep each buffer's pointer in a register.
             let Exploration { relaxed, fact_cost, op_supporter, supported, .. } = &mut self.exploration;
@@ -207,6 +274,7 @@ impl Heuristic for LmCut {
             self.round = self.round.wrapping_add(1);
             if self.round == 0 {
                 self.candidate_round.fill(0);
+                self.lowered_round.fill(0);
                 self.beyond.proved.fill(0);
                 self.round = 1;
             }
@@ -342,11 +410,41 @@ impl Heuristic for LmCut {
             // holds every fact that reaches the goal at zero cost); stop rather than loop if not.
             let cheapest = self.cut.iter().map(|&op| self.costs[op as usize]).min().unwrap_or(0);
             if cheapest == 0 {
-                return Some(h);
+                return Some(h.max(h_max));
             }
             h = h.saturating_add(cheapest);
-            for &op in &self.cut {
-                self.costs[op as usize] -= cheapest;
+            // Each cut operator's cost falls; where operators share their action's cost, so do
+            // its siblings', once per action (all of them cost the same throughout). A sibling
+            // this state cannot reach (a conditional effect whose condition it cannot make
+            // true) gets the lower cost but no part in the update: the update would take it for
+            // one without preconditions and lend its effects a reach they do not have.
+            let lowered = if self.sharing.is_empty() {
+                &self.cut
+            } else {
+                self.lowered.clear();
+                for &op in &self.cut {
+                    let start = self.shared_start[op as usize];
+                    if start == NONE {
+                        self.costs[op as usize] -= cheapest;
+                        self.lowered.push(op);
+                    } else if self.lowered_round[op as usize] != round {
+                        let end = self.shared_end[op as usize];
+                        let relaxed = &self.exploration.relaxed;
+                        for &sibling in &self.sharing[start as usize..end as usize] {
+                            self.lowered_round[sibling as usize] = round;
+                            self.costs[sibling as usize] -= cheapest;
+                            if self.exploration.op_supporter[sibling as usize] != NONE || relaxed.ops[sibling as usize].has_no_pre() {
+                                self.lowered.push(sibling);
+                            }
+                        }
+                    }
+                }
+                &self.lowered
+            };
+            for &op in lowered {
+                if self.sharing.is_empty() {
+                    self.costs[op as usize] -= cheapest;
+                }
                 if self.costs[op as usize] == 0 {
                     let relaxed = &self.exploration.relaxed;
                     for &added in relaxed.ops[op as usize].add(relaxed) {
@@ -355,7 +453,7 @@ impl Heuristic for LmCut {
                 }
             }
             goal_cost = if self.incremental {
-                self.exploration.lower(&self.cut, &self.costs)
+                self.exploration.lower(lowered, &self.costs)
             } else {
                 self.exploration.run(state, Combine::Max, Some(&self.costs))
             };

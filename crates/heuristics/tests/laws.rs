@@ -1,5 +1,6 @@
 //! Laws of the heuristics on small random STRIPS tasks with action costs and negative
-//! preconditions: h_max ≤ LM-cut ≤ h* (h* from A* with the blind heuristic) and
+//! preconditions, and on others with conditional effects too (admissible LM-cut there): h_max ≤
+//! LM-cut ≤ h* (h* from A* with the blind heuristic) and
 //! LM-cut ≤ h_FF, h_max ≤ h_add; h_max and h_add equal a naive fixpoint over the whole
 //! relaxation (negation facts included, no relevance pruning); every heuristic is 0 in goal
 //! states and ∞ exactly when the relaxation cannot reach the goal; every returned plan
@@ -18,6 +19,8 @@ struct RandomAction {
     add: Vec<usize>,
     del: Vec<usize>,
     cost: u32,
+    /// Conditional effects: their condition (facts that must hold), adds and deletes.
+    conditional: Vec<(Vec<usize>, Vec<usize>, Vec<usize>)>,
 }
 
 #[derive(Debug, Clone)]
@@ -32,15 +35,28 @@ fn random_task() -> impl Strategy<Value = RandomTask> {
     (3usize..8).prop_flat_map(|facts| {
         let subset = move |max: usize| prop::collection::vec(0..facts, 0..max);
         let action = (subset(3), subset(2), prop::collection::vec(0..facts, 1..3), subset(2), 0u32..4)
-            .prop_map(|(pre, neg, add, del, cost)| RandomAction { pre, neg, add, del, cost });
+            .prop_map(|(pre, neg, add, del, cost)| RandomAction { pre, neg, add, del, cost, conditional: Vec::new() });
         (Just(facts), subset(3), prop::collection::vec(0..facts, 1..4), prop::collection::vec(action, 1..9))
+            .prop_map(|(facts, init, goal, actions)| RandomTask { facts, init, goal, actions })
+    })
+}
+
+/// Tasks whose actions also have up to three conditional effects each, several of which one
+/// application can fire together (where charging each apart overestimates).
+fn random_conditional_task() -> impl Strategy<Value = RandomTask> {
+    (3usize..8).prop_flat_map(|facts| {
+        let subset = move |max: usize| prop::collection::vec(0..facts, 0..max);
+        let effect = (subset(3), prop::collection::vec(0..facts, 1..3), subset(2));
+        let action = (subset(3), subset(2), subset(3), subset(2), 0u32..4, prop::collection::vec(effect, 0..4))
+            .prop_map(|(pre, neg, add, del, cost, conditional)| RandomAction { pre, neg, add, del, cost, conditional });
+        (Just(facts), subset(3), prop::collection::vec(0..facts, 1..5), prop::collection::vec(action, 1..8))
             .prop_map(|(facts, init, goal, actions)| RandomTask { facts, init, goal, actions })
     })
 }
 
 fn pddl(task: &RandomTask) -> (String, String) {
     let atoms = |facts: &[usize]| facts.iter().map(|f| format!("(p{f})")).collect::<Vec<_>>().join(" ");
-    let mut domain = String::from("(define (domain random) (:requirements :strips :action-costs) (:predicates");
+    let mut domain = String::from("(define (domain random) (:requirements :strips :action-costs :conditional-effects) (:predicates");
     for f in 0..task.facts {
         domain.push_str(&format!(" (p{f})"));
     }
@@ -48,12 +64,18 @@ fn pddl(task: &RandomTask) -> (String, String) {
     for (i, action) in task.actions.iter().enumerate() {
         let not = |facts: &[usize]| facts.iter().map(|f| format!("(not (p{f}))")).collect::<Vec<_>>().join(" ");
         let dels = [not(&action.del)];
+        let when: Vec<String> = action
+            .conditional
+            .iter()
+            .map(|(condition, add, del)| format!("(when (and {}) (and {} {}))", atoms(condition), atoms(add), not(del)))
+            .collect();
         domain.push_str(&format!(
-            " (:action a{i} :parameters () :precondition (and {} {}) :effect (and {} {} (increase (total-cost) {})))",
+            " (:action a{i} :parameters () :precondition (and {} {}) :effect (and {} {} {} (increase (total-cost) {})))",
             atoms(&action.pre),
             not(&action.neg),
             atoms(&action.add),
             dels.join(" "),
+            when.join(" "),
             action.cost
         ));
     }
@@ -135,6 +157,18 @@ fn naive_relaxed(model: &TransitionModel, state: &State, add: bool) -> Option<u6
     task.goal.disjuncts.iter().filter_map(|d| condition(d, &cost)).min()
 }
 
+/// The task's transition model and its optimal plan (A* with the blind heuristic).
+fn model_and_optimum(task: &RandomTask) -> (TransitionModel, heuristics::search::SearchResult) {
+    let (domain, problem) = pddl(task);
+    let domain = pddl_syntax::parse_domain(&domain).expect("generated domain parses");
+    let problem = pddl_syntax::parse_problem(&problem).expect("generated problem parses");
+    // Over declared nullary predicates a generated task always grounds.
+    let grounded = grounding::ground(&domain, &problem).unwrap_or_else(|e| panic!("a generated task grounds: {e}"));
+    let model = TransitionModel::new(grounded);
+    let optimal = search(&model, &mut Blind::new(&model), &SearchConfig::new(Algorithm::AStar), None);
+    (model, optimal)
+}
+
 /// Whether the delete relaxation reaches the goal from `state`.
 fn relaxed_solvable(model: &TransitionModel, state: &State) -> bool {
     naive_relaxed(model, state, false).is_some()
@@ -150,13 +184,7 @@ proptest! {
 
     #[test]
     fn heuristic_laws_hold(task in random_task()) {
-        let (domain, problem) = pddl(&task);
-        let domain = pddl_syntax::parse_domain(&domain).expect("generated domain parses");
-        let problem = pddl_syntax::parse_problem(&problem).expect("generated problem parses");
-        // STRIPS over declared nullary predicates always grounds.
-        let grounded = grounding::ground(&domain, &problem).unwrap_or_else(|e| panic!("a generated task grounds: {e}"));
-        let model = TransitionModel::new(grounded);
-        let optimal = search(&model, &mut Blind::new(&model), &SearchConfig::new(Algorithm::AStar), None);
+        let (model, optimal) = model_and_optimum(&task);
         let mut states = vec![model.initial_state()];
         if optimal.status == SearchStatus::Solved {
             let valid = model.validate(&optimal.plan).expect("A* plans validate");
@@ -167,12 +195,15 @@ proptest! {
             }
         }
         let mut lmcut_full = LmCut::full(&model);
+        let mut lmcut_admissible = LmCut::admissible(&model);
         let (mut hmax, mut hadd, mut ff, mut lmcut, mut goalcount) =
             (HMax::new(&model), HAdd::new(&model), HFF::new(&model), LmCut::new(&model), GoalCount::new(&model));
         let mut remaining = optimal.cost;
         for (i, state) in states.iter().enumerate() {
             let values = [hmax.evaluate(state), hadd.evaluate(state), ff.evaluate(state), lmcut.evaluate(state)];
             let full = lmcut_full.evaluate(state);
+            // Without conditional effects, sharing has nothing to share: the same heuristic.
+            prop_assert_eq!(lmcut_admissible.evaluate(state), values[3], "admissible LM-cut without conditional effects");
             prop_assert_eq!(full.is_some(), values[3].is_some());
             if let (Some(value), Some(max)) = (full, values[0]) {
                 prop_assert!(max <= value, "full-recompute LM-cut {} < h_max {}", value, max);
@@ -252,6 +283,85 @@ proptest! {
         prop_assert_eq!(lmcut_astar.status, optimal.status);
         prop_assert_eq!(lmcut_astar.cost, optimal.cost, "A* with LM-cut is optimal");
     }
+
+    /// With conditional effects (which Fast Downward's LM-cut refuses), admissible LM-cut
+    /// (`LmCut::admissible`) is admissible: h_max ≤ LM-cut ≤ h* on every state of an optimal
+    /// plan, incremental or recomputed, and A* with it finds optimal plans; h_max and h_add equal the naive
+    /// fixpoint. (Not LM-cut ≤ h_FF: h_FF counts each action of its relaxed plan once, and a
+    /// conditional effect may need its action applied twice, once to make its condition true:
+    /// `a` adds `p` and, where `p` holds, `g`; h* = h_max = LM-cut = 2, h_FF = 1.)
+    #[test]
+    fn lmcut_is_admissible_with_conditional_effects(task in random_conditional_task()) {
+        let (model, optimal) = model_and_optimum(&task);
+        let mut states = vec![model.initial_state()];
+        for &action in &optimal.plan {
+            let next = model.apply(states.last().expect("a state"), action);
+            states.push(next);
+        }
+        let (mut hmax, mut hadd) = (HMax::new(&model), HAdd::new(&model));
+        let (mut lmcut, mut full) = (LmCut::admissible(&model), LmCut::admissible(&model).recomputing());
+        let mut remaining = optimal.cost;
+        for (i, state) in states.iter().enumerate() {
+            let max = hmax.evaluate(state);
+            prop_assert_eq!(max.map(u64::from), naive_relaxed(&model, state, false), "h_max against the naive fixpoint");
+            prop_assert_eq!(hadd.evaluate(state).map(u64::from), naive_relaxed(&model, state, true), "h_add against the naive fixpoint");
+            for (name, value) in [("incremental", lmcut.evaluate(state)), ("recomputed", full.evaluate(state))] {
+                prop_assert_eq!(value.is_some(), max.is_some(), "{}: dead end exactly when h_max's", name);
+                if let (Some(value), Some(max)) = (value, max) {
+                    prop_assert!(max <= value, "{} LM-cut {} < h_max {}", name, value, max);
+                    if optimal.status == SearchStatus::Solved {
+                        prop_assert!(u64::from(value) <= remaining, "{} LM-cut {} > h* {}", name, value, remaining);
+                    }
+                }
+            }
+            if let Some(&action) = optimal.plan.get(i) {
+                remaining -= u64::from(model.task().action(action).cost);
+            }
+        }
+        let lmcut_astar = search(&model, &mut LmCut::admissible(&model), &SearchConfig::new(Algorithm::AStar), None);
+        prop_assert_eq!(lmcut_astar.status, optimal.status);
+        prop_assert_eq!(lmcut_astar.cost, optimal.cost, "A* with admissible LM-cut is optimal");
+        // `bounded_plan` finds a plan within a bound of h*, and proves none within one less.
+        if optimal.status == SearchStatus::Solved {
+            let mut bounded = SearchConfig::new(Algorithm::AStar);
+            bounded.max_cost = Some(optimal.cost);
+            let plan = heuristics::search::bounded_plan(&model, &bounded);
+            prop_assert!(plan.as_ref().is_ok_and(|p| model.validate(p).is_ok_and(|v| v.cost <= optimal.cost)), "{:?}", plan);
+            if optimal.cost > 0 {
+                bounded.max_cost = Some(optimal.cost - 1);
+                let below = heuristics::search::bounded_plan(&model, &bounded);
+                prop_assert!(matches!(below, Err(SearchStatus::OverBound)), "{:?}", below);
+            }
+        }
+    }
+}
+
+/// The probe that found the overestimate: `act` adds `q` and, where `p` holds, `r1` and `r2`;
+/// `fin` needs all three. One `act` after `setp` serves: h* is 3 (`setp`, `act`, `fin`). With
+/// `act`'s conditional effects charged apart (`LmCut::new`), LM-cut is 4.
+#[test]
+fn an_action_whose_conditional_effects_the_goal_needs_is_charged_once() {
+    let domain = "(define (domain ce) (:requirements :strips :conditional-effects)\n\
+        (:predicates (p) (q) (r1) (r2) (done))\n\
+        (:action setp :parameters () :precondition () :effect (p))\n\
+        (:action act :parameters () :precondition () :effect (and (q) (when (p) (r1)) (when (p) (r2))))\n\
+        (:action fin :parameters () :precondition (and (q) (r1) (r2)) :effect (done)))\n";
+    let problem = "(define (problem cep) (:domain ce) (:init) (:goal (done)))\n";
+    let task = grounding::ground(&pddl_syntax::parse_domain(domain).unwrap(), &pddl_syntax::parse_problem(problem).unwrap()).unwrap();
+    let model = TransitionModel::new(task);
+    let init = model.initial_state();
+    assert_eq!(LmCut::admissible(&model).evaluate(&init), Some(3));
+    assert_eq!(LmCut::admissible(&model).recomputing().evaluate(&init), Some(3));
+    assert_eq!(HMax::new(&model).evaluate(&init), Some(3));
+    // Charged apart (`lmcut`, the informative one), it overestimates, as its docs say, and A*
+    // with it bounded by h* cuts off every plan; `bounded_plan` checks that and finds the plan.
+    assert_eq!(LmCut::new(&model).evaluate(&init), Some(4));
+    let mut bounded = SearchConfig::new(Algorithm::AStar);
+    bounded.max_cost = Some(3);
+    assert_eq!(search(&model, &mut LmCut::new(&model), &bounded, None).status, SearchStatus::OverBound);
+    assert_eq!(heuristics::search::bounded_plan(&model, &bounded).map(|p| p.len()), Ok(3));
+    bounded.max_cost = Some(2);
+    assert_eq!(heuristics::search::bounded_plan(&model, &bounded), Err(SearchStatus::OverBound));
 }
 
 /// On the household benchmarks, where negative preconditions matter (ALFWorld's empty hand,
@@ -295,4 +405,32 @@ fn a_condition_that_repeats_the_precondition_counts_once() {
     assert_eq!(HMax::new(&model).evaluate(&init), Some(2));
     assert_eq!(HFF::new(&model).evaluate(&init), Some(2));
     assert_eq!(LmCut::new(&model).evaluate(&init), Some(2));
+}
+
+/// A conditional effect that cannot fire in the evaluated state (its condition `r` needs `u`,
+/// which `drop-u` deleted and nothing adds back) shares its action's cost with the action's
+/// reachable part, but lends it no reach: lowering its cost once `a` is cut must not make `g`,
+/// and through `c` the goal's `s`, look reachable. h* from that state is 9 (`a`, then `e`).
+#[test]
+fn a_conditional_effect_out_of_reach_lends_no_reach() {
+    let domain = "(define (domain ce2) (:requirements :strips :conditional-effects :action-costs)\n\
+        (:predicates (p) (q) (r) (u) (g) (s))\n\
+        (:functions (total-cost) - number)\n\
+        (:action drop-u :parameters () :precondition (u) :effect (and (not (u)) (increase (total-cost) 0)))\n\
+        (:action make-r :parameters () :precondition (u) :effect (and (r) (increase (total-cost) 1)))\n\
+        (:action a :parameters () :precondition (p) :effect (and (q) (when (r) (g)) (increase (total-cost) 5)))\n\
+        (:action x :parameters () :precondition (p) :effect (and (q) (increase (total-cost) 6)))\n\
+        (:action e :parameters () :precondition (p) :effect (and (s) (increase (total-cost) 4)))\n\
+        (:action c :parameters () :precondition (g) :effect (and (s) (increase (total-cost) 0))))\n";
+    let problem =
+        "(define (problem ce2p) (:domain ce2) (:init (p) (u) (= (total-cost) 0)) (:goal (and (q) (s))) (:metric minimize (total-cost)))\n";
+    let task = grounding::ground(&pddl_syntax::parse_domain(domain).unwrap(), &pddl_syntax::parse_problem(problem).unwrap()).unwrap();
+    let model = TransitionModel::new(task);
+    let drop = (0..model.task().actions.len())
+        .map(grounding::ActionId::from_index)
+        .find(|&id| model.task().schemas[model.task().action(id).schema.index()].name == "drop-u")
+        .expect("drop-u");
+    let state = model.apply(&model.initial_state(), drop);
+    assert_eq!(LmCut::admissible(&model).evaluate(&state), Some(9));
+    assert_eq!(LmCut::admissible(&model).recomputing().evaluate(&state), Some(9));
 }

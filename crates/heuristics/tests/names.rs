@@ -21,7 +21,7 @@ fn every_name_parses_back_to_itself() {
     round_trips::<HeuristicName>();
     round_trips::<Algorithm>();
     round_trips::<Clock>();
-    assert_eq!(HeuristicName::VARIANTS, ["blind", "goalcount", "hmax", "hadd", "ff", "lmcut"]);
+    assert_eq!(HeuristicName::VARIANTS, ["blind", "goalcount", "hmax", "hadd", "ff", "lmcut", "lmcut-admissible"]);
     assert_eq!(Algorithm::VARIANTS, ["astar", "gbfs", "lazy-gbfs"]);
     assert_eq!(Clock::VARIANTS, ["wall", "cpu"]);
 }
@@ -29,7 +29,10 @@ fn every_name_parses_back_to_itself() {
 #[test]
 fn an_unknown_name_is_refused_with_the_names_there_are() {
     let error = "lm-cut".parse::<HeuristicName>().expect_err("not a heuristic");
-    assert_eq!(error.to_string(), "`lm-cut` is not a heuristic: the heuristics are blind, goalcount, hmax, hadd, ff, lmcut");
+    assert_eq!(
+        error.to_string(),
+        "`lm-cut` is not a heuristic: the heuristics are blind, goalcount, hmax, hadd, ff, lmcut, lmcut-admissible"
+    );
     assert_eq!((error.what, error.given.as_str(), error.valid), ("heuristic", "lm-cut", HeuristicName::VARIANTS));
 
     let error = "a-star".parse::<Algorithm>().expect_err("not a search");

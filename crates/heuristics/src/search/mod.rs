@@ -64,8 +64,9 @@ pub struct SearchConfig {
     /// What `time_limit` is read on (the wall clock by default).
     pub clock: Clock,
     /// A* only: plans costing more are not wanted. A node whose f = g + h exceeds it is pruned
-    /// (LM-cut is admissible, so no plan within the bound is lost), and a search that finds none
-    /// ends `OverBound`. An episode's planner sets it to the steps the episode has left: a plan
+    /// (with an admissible heuristic no plan within the bound is lost; [`crate::LmCut::new`]
+    /// on a task with conditional effects may lose one, [`crate::LmCut::admissible`] does not),
+    /// and a search that finds none ends `OverBound`. An episode's planner sets it to the steps the episode has left: a plan
     /// that cannot finish is not searched for. (Fast Downward's `bound` is the same cut,
     /// exclusive.)
     pub max_cost: Option<u64>,
@@ -107,7 +108,8 @@ pub enum SearchStatus {
     Unsolvable,
     /// A budget ran out.
     OutOfBudget,
-    /// No plan within `SearchConfig::max_cost` (A*): the space was searched up to the bound.
+    /// No plan within `SearchConfig::max_cost` (A*): the space was searched up to the bound
+    /// (whether plans exist beyond it is not known: a state pruned there may be a dead end).
     OverBound,
 }
 
@@ -201,8 +203,10 @@ impl Budget {
     }
 }
 
-/// An optimal plan from the initial state: A* with LM-cut within `time_limit`, or the status
-/// that stopped it.
+/// A plan from the initial state by A* with LM-cut ([`crate::LmCut::new`]) within
+/// `time_limit`, or the status that stopped it. Optimal where LM-cut is admissible, on tasks
+/// without conditional effects; with them it may be costlier (for a proof, search with
+/// [`crate::LmCut::admissible`]).
 pub fn optimal_plan(model: &TransitionModel, time_limit: Duration) -> Result<Vec<ActionId>, SearchStatus> {
     let mut config = SearchConfig::new(Algorithm::AStar);
     config.time_limit = Some(time_limit);
@@ -221,6 +225,34 @@ pub fn optimal_plan_expanding(model: &TransitionModel, max_expansions: u64) -> R
 /// expansions and time, and a bound on the plan's cost.
 pub fn optimal_plan_with(model: &TransitionModel, config: &SearchConfig) -> Result<Vec<ActionId>, SearchStatus> {
     astar_lmcut(model, &SearchConfig { algorithm: Algorithm::AStar, ..config.clone() })
+}
+
+/// A* with LM-cut within `config.max_cost` (and its budgets), whose `OverBound` is a proof: on
+/// a task with conditional effects, where [`crate::LmCut::new`] may overestimate and cut off a
+/// plan within the bound, an `OverBound` is checked by A* again with
+/// [`crate::LmCut::admissible`] on what is left of the budget (weaker, so slower; a plan it
+/// finds is returned, and a budget it runs out of is `OutOfBudget`). A plan returned is within
+/// the bound, optimal where LM-cut is admissible.
+pub fn bounded_plan(model: &TransitionModel, config: &SearchConfig) -> Result<Vec<ActionId>, SearchStatus> {
+    let config = SearchConfig { algorithm: Algorithm::AStar, ..config.clone() };
+    let stopwatch = Stopwatch::start(config.clock);
+    let first = search(model, &mut crate::LmCut::new(model), &config, None);
+    let conditional = || model.task().actions.iter().any(|a| !a.conditional.is_empty());
+    let result = if first.status == SearchStatus::OverBound && conditional() {
+        let mut left = config.clone();
+        left.max_expansions = config.max_expansions.map(|m| m.saturating_sub(first.expanded));
+        left.time_limit = config.time_limit.map(|t| t.saturating_sub(stopwatch.elapsed()));
+        if left.max_expansions == Some(0) || left.time_limit == Some(Duration::ZERO) {
+            return Err(SearchStatus::OutOfBudget);
+        }
+        search(model, &mut crate::LmCut::admissible(model), &left, None)
+    } else {
+        first
+    };
+    match result.status {
+        SearchStatus::Solved => Ok(result.plan),
+        other => Err(other),
+    }
 }
 
 fn astar_lmcut(model: &TransitionModel, config: &SearchConfig) -> Result<Vec<ActionId>, SearchStatus> {
