@@ -310,10 +310,12 @@ impl PhaseTwoRunner {
                 Ok(actions) => actions,
                 Err(status @ (SearchStatus::OverBound | SearchStatus::OutOfBudget | SearchStatus::Unsolvable)) => {
                     let why = match status {
-                        SearchStatus::Unsolvable => "Unsolvable: the hand-over has no plan".to_string(),
-                        _ => format!("{status:?}: no plan within {} steps", grounded.steps_left),
+                        SearchStatus::Unsolvable => "the hand-over has no plan".to_string(),
+                        SearchStatus::OverBound => format!("no plan within {} steps", grounded.steps_left),
+                        _ => status.to_string(),
                     };
-                    detail["stop"] = json!(format!("{status:?}"));
+                    let why = format!("{}: {why}", status.name());
+                    detail["stop"] = json!(status.name());
                     return Ok(PhaseTwo { no_plan: Some(why), detail, ..PhaseTwo::default() });
                 }
                 Err(status) => return Err(RunError(format!("A* returned {status:?} without a plan"))),
@@ -349,16 +351,16 @@ impl PhaseTwoRunner {
                 && bound as usize > max_actions
             {
                 return Ok(no_plan(
-                    format!("OverBound: no plan within {max_actions} actions (LM-cut: at least {bound})"),
-                    json!({"planner": "mcts", "mode": mode, "stop": "OverBound", "lower_bound": bound, "max_actions": max_actions}),
+                    format!("over-bound: no plan within {max_actions} actions (LM-cut: at least {bound})"),
+                    json!({"planner": "mcts", "mode": mode, "stop": "over-bound", "lower_bound": bound, "max_actions": max_actions}),
                 ));
             }
             let started = heuristics::search::Stopwatch::start(config.budget.clock);
             let check_time = Duration::from_secs_f64(self.time_limit / 20.0).min(FIT_PRECHECK_TIME);
             if plan_fit(model, max_actions, FIT_PRECHECK_EXPANSIONS, Some(check_time), config.budget.clock) == PlanFit::NoneFits {
                 return Ok(no_plan(
-                    format!("OverBound: no plan within {max_actions} actions (A* with LM-cut)"),
-                    json!({"planner": "mcts", "mode": mode, "stop": "OverBound", "proved_by": "astar", "max_actions": max_actions}),
+                    format!("over-bound: no plan within {max_actions} actions (A* with LM-cut)"),
+                    json!({"planner": "mcts", "mode": mode, "stop": "over-bound", "proved_by": "astar", "max_actions": max_actions}),
                 ));
             }
             // `--time-limit` is Phase II's in all: the check's time comes off the search's.
@@ -376,8 +378,8 @@ impl PhaseTwoRunner {
                 // context, or a server refused the request for itself: this model cannot plan
                 // this task, an outcome (the search's tree is lost). Anything else stops the run.
                 let stop = match &e {
-                    DecodeError::Model(lm::LmError::ContextOverflow { .. }) => "ContextOverflow",
-                    DecodeError::Model(lm::LmError::Http(http)) if http.kind.is_refusal() => "Refused",
+                    DecodeError::Model(lm::LmError::ContextOverflow { .. }) => "context-overflow",
+                    DecodeError::Model(lm::LmError::Http(http)) if http.kind.is_refusal() => "refused",
                     _ => return Err(RunError(format!("decoding: {e}"))),
                 };
                 return Ok(PhaseTwo {

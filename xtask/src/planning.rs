@@ -144,12 +144,7 @@ pub fn plan(args: PlanArgs) -> anyhow::Result<ExitCode> {
             crate::input::write_output(out, "--out", plan_text(&model, &result.plan, result.cost))?;
         }
     }
-    let status = match result.status {
-        SearchStatus::Solved => "solved",
-        SearchStatus::Unsolvable => "unsolvable",
-        SearchStatus::OutOfBudget => "out-of-budget",
-        SearchStatus::OverBound => "over-bound",
-    };
+    let status = result.status.name();
     if args.json {
         println!(
             "{}",

@@ -756,7 +756,7 @@ fn agent_reports_at_once_that_no_plan_fits_in_the_steps_left() {
     assert_eq!(episode["success"], false);
     assert_eq!(episode["no_plan"], true);
     let detail = &episode["phase2_detail"];
-    assert_eq!(detail["stop"], "OverBound", "{detail}");
+    assert_eq!(detail["stop"], "over-bound", "{detail}");
     let steps = episode["steps"].as_array().unwrap().len() as u64;
     assert_eq!(detail["max_actions"].as_u64(), Some(20 - steps), "{detail}");
     assert!(detail["lower_bound"].as_u64().unwrap() > 20 - steps, "{detail}");
@@ -798,10 +798,10 @@ fn agent_proves_by_a_star_that_no_plan_fits_where_lm_cut_cannot() {
     assert_eq!(code, Some(1), "{episode}");
     assert_eq!((episode["phase1_steps"].as_u64(), episode["no_plan"].as_bool()), (Some(5), Some(true)), "{episode}");
     let detail = &episode["phase2_detail"];
-    assert_eq!((detail["stop"].as_str(), detail["proved_by"].as_str()), (Some("OverBound"), Some("astar")), "{detail}");
+    assert_eq!((detail["stop"].as_str(), detail["proved_by"].as_str()), (Some("over-bound"), Some("astar")), "{detail}");
     assert_eq!(detail["max_actions"].as_u64(), Some(7), "{detail}");
     assert!(detail.get("simulations").is_none(), "no search ran: {detail}");
-    assert_eq!(episode["failure"], "no plan: OverBound: no plan within 7 actions (A* with LM-cut)");
+    assert_eq!(episode["failure"], "no plan: over-bound: no plan within 7 actions (A* with LM-cut)");
     assert_eq!(episode["attribution"], "representation");
     let (code, episode) = run("13");
     assert_eq!(code, Some(0), "{episode}");

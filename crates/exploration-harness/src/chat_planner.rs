@@ -118,10 +118,13 @@ pub fn plan_by_chat(chat: &mut dyn ChatModel, grounded: &Grounded, config: &Chat
         Ok(reply) => reply,
         Err(e) if e.kind.is_unavailable() => return Err(RunError(format!("the chat planner is unavailable: {e}"))),
         Err(e) => {
+            // What is left once the run's errors are out: a status that says the request is
+            // past the model's context, or an in-process model's failure.
+            let stop = if matches!(e.kind, vlm_client::ChatErrorKind::Status { .. }) { "context-overflow" } else { "request-failed" };
             return Ok(PhaseTwo {
                 model_calls: 1,
-                detail: json!({"planner": "chat", "thinking": config.thinking, "error": e.to_string()}),
-                no_plan: Some(format!("the chat planner's request failed: {e}")),
+                detail: json!({"planner": "chat", "thinking": config.thinking, "stop": stop, "error": e.to_string()}),
+                no_plan: Some(format!("{stop}: the chat planner's request failed: {e}")),
                 ..PhaseTwo::default()
             });
         }

@@ -38,7 +38,7 @@
 //! let mut planner = |grounded: &Grounded| {
 //!     Ok(match heuristics::search::optimal_plan_expanding(&grounded.model, 1_000_000) {
 //!         Ok(actions) => PhaseTwo { actions, ..PhaseTwo::default() },
-//!         Err(status) => PhaseTwo { no_plan: Some(format!("{status:?}")), ..PhaseTwo::default() },
+//!         Err(status) => PhaseTwo { no_plan: Some(status.name().to_string()), ..PhaseTwo::default() },
 //!     })
 //! };
 //! // ALFWorld's budget of 55 steps, the plan executed open-loop.
@@ -105,7 +105,11 @@
 /// checked with admissible LM-cut ([`heuristics::LmCut::admissible`]): both household domains
 /// have conditional effects, where LM-cut charged apart may overestimate, so a plan that fits
 /// could be cut off (on every proof of version 17's VirtualHome records, the admissible one
-/// proves the same).
+/// proves the same); a Phase II that ends without a plan names its stop in one spelling, the
+/// search's (`cpu-time`): `over-bound`, `out-of-budget`, `unsolvable`, `context-overflow`,
+/// `refused` (they were `OverBound`, `OutOfBudget`, ...), in the failure (`no plan: over-bound:
+/// no plan within 3 actions ...`) and the detail's `stop`; A* out of its budget says so (it said
+/// "no plan within N steps").
 pub const HARNESS_VERSION: u32 = 18;
 
 pub mod alfworld;

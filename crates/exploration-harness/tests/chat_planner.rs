@@ -144,7 +144,12 @@ fn an_unreachable_planner_stops_the_run_and_a_refused_request_is_no_plan() {
     let (ep, _) = attempt(&answer, &ChatPlannerConfig::greedy(), Some(too_long));
     let ep = ep.expect("an episode");
     assert!(!ep.success && ep.no_plan, "{:?}", ep.failure);
-    assert!(ep.failure.as_deref().is_some_and(|f| f.contains("too long")), "{:?}", ep.failure);
+    assert!(
+        ep.failure.as_deref().is_some_and(|f| f.starts_with("no plan: context-overflow: ") && f.contains("too long")),
+        "{:?}",
+        ep.failure
+    );
+    assert_eq!(ep.phase2_detail["stop"], "context-overflow");
     assert_eq!(ep.phase2_calls, 1);
     assert_eq!(ep.attribution, Some(Attribution::Search));
 }

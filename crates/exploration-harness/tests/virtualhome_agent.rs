@@ -419,7 +419,7 @@ fn phase_one_spending_the_budget_is_an_exploration_failure() {
     let optimal = std::cell::Cell::new(0);
     let mut planner = |g: &Grounded| {
         optimal.set(heuristics::search::optimal_plan_expanding(&g.model, EXPANSIONS).map_or(0, |p| p.len()));
-        Ok(PhaseTwo { no_plan: Some("Exhausted: no plan".into()), ..PhaseTwo::default() })
+        Ok(PhaseTwo { no_plan: Some("exhausted".into()), ..PhaseTwo::default() })
     };
     let episode = run_episode(&mut env, &mut adapter, &mut Systematic, &goal, EpisodeConfig::open_loop(k + 1), &mut planner)
         .expect("the run goes on");
@@ -472,8 +472,8 @@ fn a_phase_two_without_a_plan_keeps_its_usage_and_was_told_the_steps_left() {
         Ok(PhaseTwo {
             model_calls: 7,
             generated_tokens: 5,
-            detail: serde_json::json!({"stop": "WallClock"}),
-            no_plan: Some("WallClock: no plan".into()),
+            detail: serde_json::json!({"stop": "wall-clock"}),
+            no_plan: Some("wall-clock".into()),
             ..PhaseTwo::default()
         })
     };
@@ -481,8 +481,8 @@ fn a_phase_two_without_a_plan_keeps_its_usage_and_was_told_the_steps_left() {
         run_episode(&mut env, &mut adapter, &mut Systematic, &goal, EpisodeConfig::open_loop(20), &mut planner).expect("the run goes on");
     assert!(!episode.success);
     assert_eq!((episode.phase2_calls, episode.phase2_tokens), (7, 5));
-    assert_eq!(episode.phase2_detail["stop"], "WallClock");
-    assert_eq!(episode.failure.as_deref(), Some("no plan: WallClock: no plan"));
+    assert_eq!(episode.phase2_detail["stop"], "wall-clock");
+    assert_eq!(episode.failure.as_deref(), Some("no plan: wall-clock"));
     assert!(episode.plan.is_empty());
     assert_eq!(episode.attribution, Some(Attribution::Search), "{:?} {:?}", episode.precision, episode.recall);
     // N_plan = N − N_exp: the planner was told the steps Phase I left.

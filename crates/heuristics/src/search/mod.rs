@@ -100,7 +100,8 @@ impl SearchConfig {
 /// How a search ended. As the error of [`optimal_plan`] and its kin it is never `Solved`; it
 /// implements `std::error::Error`, so `optimal_plan(..)?` works in a function returning
 /// `Box<dyn Error>` or `anyhow::Result`.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, strum::IntoStaticStr)]
+#[strum(serialize_all = "kebab-case")]
 pub enum SearchStatus {
     /// A plan reaching the goal was found.
     Solved,
@@ -111,6 +112,14 @@ pub enum SearchStatus {
     /// No plan within `SearchConfig::max_cost` (A*): the space was searched up to the bound
     /// (whether plans exist beyond it is not known: a state pruned there may be a dead end).
     OverBound,
+}
+
+impl SearchStatus {
+    /// Its name in records and on the command line: `solved`, `unsolvable`, `out-of-budget`,
+    /// `over-bound` (the sentence is its `Display`).
+    pub fn name(self) -> &'static str {
+        self.into()
+    }
 }
 
 impl std::fmt::Display for SearchStatus {
