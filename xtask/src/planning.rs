@@ -98,7 +98,7 @@ pub fn plan(args: PlanArgs) -> anyhow::Result<ExitCode> {
         return Err(crate::input::InputError("--preferred is a setting of --planner gbfs or lazy-gbfs".to_string()).into());
     }
     let passed_over = if args.planner == Planner::Mcts {
-        ["heuristic", "max_expansions", "max_cost"].into_iter().filter(|id| input::typed(id)).map(input::option_name).collect()
+        ["heuristic", "max_expansions"].into_iter().filter(|id| input::typed(id)).map(input::option_name).collect()
     } else {
         let mut options = input::given::<crate::phase2::LmArgs>(&[]);
         options.extend(input::given::<crate::phase2::DecodeArgs>(&["clock"]));
@@ -121,7 +121,7 @@ pub fn plan(args: PlanArgs) -> anyhow::Result<ExitCode> {
     {
         eprintln!(
             "note: this task has conditional effects, where `lmcut` charges each apart and may overestimate: \
-             the plan may not be optimal (`--heuristic lmcut-admissible` is admissible, and weaker)"
+             the plan may not be optimal, nor an over-bound a proof (`--heuristic lmcut-admissible` is admissible, and mostly weaker)"
         );
     }
     let mut heuristic = args.heuristic.build(&model);

@@ -119,7 +119,8 @@ pub fn plan_by_chat(chat: &mut dyn ChatModel, grounded: &Grounded, config: &Chat
         Err(e) if e.kind.is_unavailable() => return Err(RunError(format!("the chat planner is unavailable: {e}"))),
         Err(e) => {
             // What is left once the run's errors are out: a status that says the request is
-            // past the model's context, or an in-process model's failure.
+            // past the model's context, or another failure of the request itself (an
+            // in-process model's, a request it cannot take).
             let stop = if matches!(e.kind, vlm_client::ChatErrorKind::Status { .. }) { "context-overflow" } else { "request-failed" };
             return Ok(PhaseTwo {
                 model_calls: 1,

@@ -524,8 +524,9 @@ pub enum PlanFit {
     /// No plan within the bound: the space within it was searched, and states beyond it were
     /// cut off (plans may exist beyond the bound, or none at all).
     NoneFits,
-    /// Nothing proved: the expansions ran out, ŝ0 has no plan at all, or the costs are not
-    /// unit (a cost then says nothing of a length).
+    /// Nothing proved: the expansions ran out, ŝ0 has no plan at all and the search met no
+    /// state beyond the bound (where it did, that is `NoneFits`), or the costs are not unit (a
+    /// cost then says nothing of a length).
     Unknown,
 }
 

@@ -107,7 +107,7 @@
 /// could be cut off (on every proof of version 17's VirtualHome records, the admissible one
 /// proves the same); a Phase II that ends without a plan names its stop in one spelling, the
 /// search's (`cpu-time`): `over-bound`, `out-of-budget`, `unsolvable`, `context-overflow`,
-/// `refused` (they were `OverBound`, `OutOfBudget`, ...), in the failure (`no plan: over-bound:
+/// `refused`, `request-failed` (they were `OverBound`, `OutOfBudget`, ...), in the failure (`no plan: over-bound:
 /// no plan within 3 actions ...`) and the detail's `stop`; A* out of its budget says so (it said
 /// "no plan within N steps").
 pub const HARNESS_VERSION: u32 = 18;

@@ -362,6 +362,9 @@ fn an_action_whose_conditional_effects_the_goal_needs_is_charged_once() {
     assert_eq!(heuristics::search::bounded_plan(&model, &bounded).map(|p| p.len()), Ok(3));
     bounded.max_cost = Some(2);
     assert_eq!(heuristics::search::bounded_plan(&model, &bounded), Err(SearchStatus::OverBound));
+    // With no expansion to spend, the initial state's admissible value (3) still proves it.
+    bounded.max_expansions = Some(0);
+    assert_eq!(heuristics::search::bounded_plan(&model, &bounded), Err(SearchStatus::OverBound));
 }
 
 /// On the household benchmarks, where negative preconditions matter (ALFWorld's empty hand,

@@ -31,8 +31,9 @@ pub use symmetry::ObjectSymmetries;
 #[derive(Debug, Clone, Copy, PartialEq, Eq, strum::EnumString, strum::IntoStaticStr, strum::VariantNames, strum::VariantArray)]
 #[strum(serialize_all = "kebab-case", parse_err_ty = crate::UnknownName, parse_err_fn = Algorithm::unknown)]
 pub enum Algorithm {
-    /// A* on f = g + h: with an admissible heuristic such as [`crate::LmCut`] its plans are
-    /// optimal; a cheaper path reopens a closed state.
+    /// A* on f = g + h: with an admissible heuristic (LM-cut without conditional effects,
+    /// [`crate::LmCut::admissible`] with them) its plans are optimal; a cheaper path reopens a
+    /// closed state.
     #[strum(serialize = "astar")]
     AStar,
     /// Eager greedy best-first search: successors are evaluated when generated.
@@ -239,8 +240,9 @@ pub fn optimal_plan_with(model: &TransitionModel, config: &SearchConfig) -> Resu
 /// A* with LM-cut within `config.max_cost` (and its budgets), whose `OverBound` is a proof: on
 /// a task with conditional effects, where [`crate::LmCut::new`] may overestimate and cut off a
 /// plan within the bound, an `OverBound` is checked by A* again with
-/// [`crate::LmCut::admissible`] on what is left of the budget (weaker, so slower; a plan it
-/// finds is returned, and a budget it runs out of is `OutOfBudget`). A plan returned is within
+/// [`crate::LmCut::admissible`] on what is left of the budget (mostly weaker, and slower per
+/// evaluation, so such a check may spend the rest of the budget before it ends `OutOfBudget`;
+/// a plan it finds is returned). A plan returned is within
 /// the bound, optimal where LM-cut is admissible.
 pub fn bounded_plan(model: &TransitionModel, config: &SearchConfig) -> Result<Vec<ActionId>, SearchStatus> {
     let config = SearchConfig { algorithm: Algorithm::AStar, ..config.clone() };
@@ -248,12 +250,11 @@ pub fn bounded_plan(model: &TransitionModel, config: &SearchConfig) -> Result<Ve
     let first = search(model, &mut crate::LmCut::new(model), &config, None);
     let conditional = || model.task().actions.iter().any(|a| !a.conditional.is_empty());
     let result = if first.status == SearchStatus::OverBound && conditional() {
+        // A budget used up still lets the initial state's value prove the bound (A* prunes it
+        // before it asks the budget).
         let mut left = config.clone();
         left.max_expansions = config.max_expansions.map(|m| m.saturating_sub(first.expanded));
         left.time_limit = config.time_limit.map(|t| t.saturating_sub(stopwatch.elapsed()));
-        if left.max_expansions == Some(0) || left.time_limit == Some(Duration::ZERO) {
-            return Err(SearchStatus::OutOfBudget);
-        }
         search(model, &mut crate::LmCut::admissible(model), &left, None)
     } else {
         first
@@ -371,7 +372,8 @@ fn astar(model: &TransitionModel, heuristic: &mut dyn Heuristic, budget: &Budget
                 pruned = true;
                 continue;
             }
-            // A cheaper path reopens a closed state (LM-cut is admissible, not consistent).
+            // A cheaper path reopens a closed state (an admissible heuristic need not be
+            // consistent, and LM-cut is not).
             child_node.g = g;
             child_node.parent = id;
             child_node.action = action.0;
