@@ -331,17 +331,17 @@ impl PhaseTwoRunner {
         // Constrained MCTS returns only plans the transition model accepts, of at most
         // `max_actions` actions. Where none reaches the goal, the search would spend its whole
         // budget to find that out: say so at once. First admissible LM-cut at ŝ0 (the household
-        // domains have conditional effects, where plain LM-cut may overestimate; with unit costs
-        // a cost bounds the length; one evaluation): a bound above `max_actions` proves it (EAI
+        // domains have conditional effects, where plain LM-cut may overestimate; with unit costs a
+        // cost bounds the length; one evaluation): a bound above `max_actions` proves it (EAI
         // 826_1: sixteen objects to put on the dishwasher, LM-cut 20 against the 17 steps the
-        // sweep's Phase I leaves). Then A* within `max_actions` (`plan_fit`, its proof checked
-        // with admissible LM-cut), on a budget of expansions (`FIT_PRECHECK_EXPANSIONS`) and a
-        // twentieth of the search's time (at most 3 s): it proves it where LM-cut underestimates (SmolLM2's Phase I on EAI 229_1 and 650_2 left 7
-        // and 9 steps for plans of 8 and 11, and each search spent its 60 s; the proof takes
-        // 0.04 and 0.02 s). A proof that needs more is not waited for (419_2: 17 steps left for
-        // a plan of 18 in a scene of many objects, about 9 s of A*), and the search runs. Where
-        // A* finds a plan, it is not used: Phase II is the search. Neither check changes a
-        // verdict: the search could not have found a plan that finishes.
+        // sweep's Phase I leaves). Then A* within `max_actions` (`plan_fit`, its proof checked with
+        // admissible LM-cut), on a budget of expansions (`FIT_PRECHECK_EXPANSIONS`) and a twentieth
+        // of the search's time (at most 3 s): it proves it where LM-cut underestimates (SmolLM2's
+        // Phase I on EAI 229_1 and 650_2 left 7 and 9 steps for plans of 8 and 11, and each search
+        // spent its 60 s; the proof takes 0.04 and 0.02 s). A proof that needs more is not waited
+        // for (419_2: 17 steps left for a plan of 18 in a scene of many objects, about 9 s of A*),
+        // and the search runs. Where A* finds a plan, it is not used: Phase II is the search.
+        // Neither check changes a verdict: the search could not have found a plan that finishes.
         if config.mode.constrained && matches!(config.mode.strategy, mcts::Strategy::Mcts(_)) && model.task().has_unit_costs() {
             use heuristics::Heuristic;
             let max_actions = config.budget.max_actions;

@@ -12,14 +12,14 @@
 //! The driver is the evaluation side: it takes an environment that is also a [`Judge`], hands
 //! the agent's parts only `&mut dyn Environment`, and after Phase I asks the judge for the
 //! hidden state to score F_τ (precision and recall) and attribute a failure (paper §5.3):
-//! - `representation`: Phase I's state is wrong or short: a positive fact of F_τ about a goal
-//!   class is false in the hidden state (precision < 1), or some goal object has no correctly
-//!   located instance in F_τ (recall < 1); or exploration left fewer steps of the budget than
-//!   the first plan needs: none at all, fewer than a plan Phase II returned though told the
-//!   steps left (A*'s plan), or Phase II found no plan and A* proves that no plan of ŝ0 fits
-//!   in the steps left (`no_plan_fits`, with LM-cut checked by its admissible form); or no hand-over could
-//!   be made from F_τ (a goal symbol with no instance to bind: Phase I spent the budget, or
-//!   ended early, or re-exploration set the only one seen aside);
+//! - `representation`: Phase I's state is wrong or short: a positive fact of F_τ about a goal class
+//!   is false in the hidden state (precision < 1), or some goal object has no correctly located
+//!   instance in F_τ (recall < 1); or exploration left fewer steps of the budget than the first
+//!   plan needs: none at all, fewer than a plan Phase II returned though told the steps left (A*'s
+//!   plan), or Phase II found no plan and A* proves that no plan of ŝ0 fits in the steps left
+//!   (`no_plan_fits`, with LM-cut checked by its admissible form); or no hand-over could be made
+//!   from F_τ (a goal symbol with no instance to bind: Phase I spent the budget, or ended early, or
+//!   re-exploration set the only one seen aside);
 //! - `search`: the state is right but Phase II returned no plan within its budget;
 //! - `grounding`: the state is right, yet a plan step was not executed by the environment
 //!   (binding or domain semantics) and the steps after it did not reach the goal;
@@ -530,11 +530,11 @@ pub enum PlanFit {
     Unknown,
 }
 
-/// A* with LM-cut, its proof checked ([`PlanFit`]), on ŝ0 for plans of at most `steps`
-/// actions, within `max_expansions` and, where given, `time_limit` read on `clock` (without one, the same
+/// A* with LM-cut, its proof checked ([`PlanFit`]), on ŝ0 for plans of at most `steps` actions,
+/// within `max_expansions` and, where given, `time_limit` read on `clock` (without one, the same
 /// answer on any machine, however loaded). Phase II's planner asks it before a search
-/// ([`PlanFit::NoneFits`]: no search can find a plan that finishes), the episode after a
-/// failed one (the attribution).
+/// ([`PlanFit::NoneFits`]: no search can find a plan that finishes), the episode after a failed one
+/// (the attribution).
 pub fn plan_fit(
     model: &transition_model::TransitionModel,
     steps: usize,

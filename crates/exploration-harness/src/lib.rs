@@ -101,15 +101,15 @@
 /// the budget's last step is the model's end, and a refused step before the budget ran out is
 /// grounding). A search without a plan is recorded as `no plan: cpu-time`, its stop as it is
 /// serialised, where it was `no plan: CpuTime: no plan`; 18: the proofs that no plan fits in the
-/// steps left (the bound at ŝ0 before constrained MCTS, [`plan_fit`], the planner's A*) are
-/// checked with admissible LM-cut ([`heuristics::LmCut::admissible`]): both household domains
-/// have conditional effects, where LM-cut charged apart may overestimate, so a plan that fits
-/// could be cut off (on every proof of version 17's VirtualHome records, the admissible one
-/// proves the same); a Phase II that ends without a plan names its stop in one spelling, the
-/// search's (`cpu-time`): `over-bound`, `out-of-budget`, `unsolvable`, `context-overflow`,
-/// `refused`, `request-failed` (they were `OverBound`, `OutOfBudget`, ...), in the failure (`no plan: over-bound:
-/// no plan within 3 actions ...`) and the detail's `stop`; A* out of its budget says so (it said
-/// "no plan within N steps").
+/// steps left (the bound at ŝ0 before constrained MCTS, [`plan_fit`], the planner's A*) are checked
+/// with admissible LM-cut ([`heuristics::LmCut::admissible`]): both household domains have
+/// conditional effects, where LM-cut charged apart may overestimate, so a plan that fits could be
+/// cut off (on every proof of version 17's VirtualHome records, the admissible one proves the
+/// same); a Phase II that ends without a plan names its stop in one spelling, the search's
+/// (`cpu-time`): `over-bound`, `out-of-budget`, `unsolvable`, `context-overflow`, `refused`,
+/// `request-failed` (they were `OverBound`, `OutOfBudget`, ...), in the failure (`no plan:
+/// over-bound: no plan within 3 actions ...`) and the detail's `stop`; A* out of its budget says so
+/// (it said "no plan within N steps").
 pub const HARNESS_VERSION: u32 = 18;
 
 pub mod alfworld;

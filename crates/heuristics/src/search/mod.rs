@@ -65,11 +65,11 @@ pub struct SearchConfig {
     /// What `time_limit` is read on (the wall clock by default).
     pub clock: Clock,
     /// A* only: plans costing more are not wanted. A node whose f = g + h exceeds it is pruned
-    /// (with an admissible heuristic no plan within the bound is lost; [`crate::LmCut::new`]
-    /// on a task with conditional effects may lose one, [`crate::LmCut::admissible`] does not),
-    /// and a search that finds none ends `OverBound`. An episode's planner sets it to the steps the episode has left: a plan
-    /// that cannot finish is not searched for. (Fast Downward's `bound` is the same cut,
-    /// exclusive.)
+    /// (with an admissible heuristic no plan within the bound is lost; [`crate::LmCut::new`] on a
+    /// task with conditional effects may lose one, [`crate::LmCut::admissible`] does not), and a
+    /// search that finds none ends `OverBound`. An episode's planner sets it to the steps the
+    /// episode has left: a plan that cannot finish is not searched for. (Fast Downward's `bound` is
+    /// the same cut, exclusive.)
     pub max_cost: Option<u64>,
     /// The goal-relevant facts states are projected onto ([`relevant_facts`]); computed by
     /// each search when `None`. Set it to share one analysis across many searches.
@@ -237,13 +237,12 @@ pub fn optimal_plan_with(model: &TransitionModel, config: &SearchConfig) -> Resu
     astar_lmcut(model, &SearchConfig { algorithm: Algorithm::AStar, ..config.clone() })
 }
 
-/// A* with LM-cut within `config.max_cost` (and its budgets), whose `OverBound` is a proof: on
-/// a task with conditional effects, where [`crate::LmCut::new`] may overestimate and cut off a
-/// plan within the bound, an `OverBound` is checked by A* again with
-/// [`crate::LmCut::admissible`] on what is left of the budget (mostly weaker, and slower per
-/// evaluation, so such a check may spend the rest of the budget before it ends `OutOfBudget`;
-/// a plan it finds is returned). A plan returned is within
-/// the bound, optimal where LM-cut is admissible.
+/// A* with LM-cut within `config.max_cost` (and its budgets), whose `OverBound` is a proof: on a
+/// task with conditional effects, where [`crate::LmCut::new`] may overestimate and cut off a plan
+/// within the bound, an `OverBound` is checked by A* again with [`crate::LmCut::admissible`] on
+/// what is left of the budget (mostly weaker, and slower per evaluation, so such a check may spend
+/// the rest of the budget before it ends `OutOfBudget`; a plan it finds is returned). A plan
+/// returned is within the bound, optimal where LM-cut is admissible.
 pub fn bounded_plan(model: &TransitionModel, config: &SearchConfig) -> Result<Vec<ActionId>, SearchStatus> {
     let config = SearchConfig { algorithm: Algorithm::AStar, ..config.clone() };
     let stopwatch = Stopwatch::start(config.clock);
