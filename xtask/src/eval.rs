@@ -379,13 +379,25 @@ pub fn files_entry(paths: &[PathBuf]) -> anyhow::Result<Option<Value>> {
     Ok((!files.is_empty()).then_some(Value::Object(files)))
 }
 
+/// The digest of EAI task files (`task_files` in a configuration): the first 12 hex digits of the
+/// sha256 of each task's id and its file's sha256, a line each, in the run's order.
+fn task_files_digest(dir: &Path, tasks: &[EvalTask]) -> anyhow::Result<String> {
+    let mut lines = Vec::with_capacity(tasks.len());
+    for task in tasks {
+        let path = dir.join(format!("{}.json.gz", task.id()));
+        let digest = crate::pypi::sha256_remembered(&path).map_err(|e| InputError(format!("{e:#}")))?;
+        lines.push(format!("{} {digest}", task.id()));
+    }
+    Ok(eval_harness::records::task_list_digest(lines.iter().map(String::as_str)))
+}
+
 /// The configuration that names a run's records: everything that changes what it finds.
 /// `tasks` is the suite's whole task list (before `--limit` and `--shard`, which choose among
 /// them: a shorter or sharded run resumes into the whole one).
 fn config(args: &EvalArgs, suite: Suite, tasks: &[EvalTask]) -> anyhow::Result<Value> {
     let mut config = json!({"agent": args.agent, "benchmark": suite.name(), "subset": suite_subset(&args.subset, suite, args.agent)?});
-    // The list itself, not only the subset's name: an edited subset file (or another task
-    // folder) is another run, whose records never mix with the old list's.
+    // The list itself, not only the subset's name: an edited subset file (or other task files,
+    // `task_files` below) is another run, whose records never mix with the old list's.
     let digest = eval_harness::records::task_list_digest(tasks.iter().map(|task| task.id()));
     config.as_object_mut().expect("object").insert("tasks".into(), json!({"count": tasks.len(), "ids_sha256": digest}));
     if let Some(root) = fixtures_entry() {
@@ -431,11 +443,18 @@ fn config(args: &EvalArgs, suite: Suite, tasks: &[EvalTask]) -> anyhow::Result<V
     } else {
         config.as_object_mut().expect("object").insert("harness".into(), json!(exploration_harness::HARNESS_VERSION));
     }
-    let task_dir = if suite == Suite::VirtualhomeEai { args.task_dir.as_ref().map(|p| p.display().to_string()) } else { None };
+    // EAI's tasks by their files' content, not by the folder they lie in: the same files
+    // anywhere are the same run (a machine's cache path no longer names it), edited ones another.
+    let task_files = if suite == Suite::VirtualhomeEai && args.agent != AgentName::Expert {
+        let dir = args.task_dir.clone().unwrap_or_else(|| benchmark_data::fixtures_dir().join("virtualhome-eai/graphs"));
+        Some(task_files_digest(&dir, tasks)?)
+    } else {
+        None
+    };
     if args.agent == AgentName::Direct {
         let more = json!({
             "model": args.episode.explorer, "served_model": served_model(args), "budget": args.episode.budget, "failure_limit": args.failure_limit,
-            "max_reply_tokens": MAX_REPLY_TOKENS, "task_dir": task_dir,
+            "max_reply_tokens": MAX_REPLY_TOKENS, "task_files": task_files,
         });
         config.as_object_mut().expect("object").extend(more.as_object().expect("object").clone());
         return Ok(config);
@@ -450,7 +469,7 @@ fn config(args: &EvalArgs, suite: Suite, tasks: &[EvalTask]) -> anyhow::Result<V
             "explorer": args.episode.explorer, "planner": planner,
             "budget": args.episode.budget, "time_limit": args.episode.time_limit, "closed_loop": args.episode.closed_loop,
             "reexplore": args.episode.reexplore,
-            "task_dir": task_dir,
+            "task_files": task_files,
         });
         config.as_object_mut().expect("object").extend(more.as_object().expect("object").clone());
         // Only where a model explores (the sweep takes the controller's first place whatever

@@ -1161,6 +1161,52 @@ fn eval_names_the_planner_agents_symmetries_in_its_configuration() {
     assert_eq!(orbit["symmetries"], true, "{orbit}");
 }
 
+/// An EAI run names its task files by their content, not by their folder: the same files in
+/// another folder resume the same run (a machine's cache path named the run before), and an
+/// edited file starts another.
+#[test]
+fn eval_names_eai_tasks_by_their_files_content() {
+    let tmp = scratch_dir("xtask-cli-");
+    let graphs = fixtures().join("virtualhome-eai/graphs");
+    let copy = |name: &str| {
+        let dir = tmp.path().join(name);
+        std::fs::create_dir(&dir).expect("a folder");
+        for entry in std::fs::read_dir(&graphs).expect("the fixture graphs") {
+            let entry = entry.expect("an entry");
+            std::fs::copy(entry.path(), dir.join(entry.file_name())).expect("copied");
+        }
+        dir
+    };
+    let (first, second, edited) = (copy("a"), copy("b"), copy("c"));
+    let mut names: Vec<String> =
+        std::fs::read_dir(&edited).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into_owned()).collect();
+    names.sort();
+    // The last task (the run takes the first only): its graph gzipped again, another file.
+    let last = edited.join(names.last().expect("a task"));
+    let bytes = std::fs::read(&last).expect("read");
+    std::fs::write(&last, [bytes.as_slice(), b"\n"].concat()).expect("edited");
+    let out = tmp.path().join("out").display().to_string();
+    let run = |dir: &Path| {
+        let dir = dir.display().to_string();
+        let args =
+            ["eval", "--agent", "planner", "--benchmark", "virtualhome-eai", "--task-dir", &dir, "--limit", "1", "--out", &out, "--json"];
+        let output = xtask(&args);
+        assert_eq!(output.status.code(), Some(0), "{dir}: {}", String::from_utf8_lossy(&output.stderr));
+        let summary: serde_json::Value = serde_json::from_str(stdout(&output).trim()).expect("one JSON object");
+        let records = PathBuf::from(summary["virtualhome-eai"]["records"].as_str().expect("the records' path"));
+        let config: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(records.with_extension("config.json")).expect("the configuration"))
+                .expect("JSON");
+        (records, config)
+    };
+    let (a, b, c) = (run(&first), run(&second), run(&edited));
+    assert_eq!(a.0, b.0, "the same files elsewhere are the same run");
+    assert_eq!(std::fs::read_to_string(&a.0).expect("records").lines().count(), 1, "resumed, not run again");
+    assert_ne!(a.0, c.0, "an edited file is another run");
+    assert!(a.1.get("task_dir").is_none() && a.1["task_files"].is_string(), "{}", a.1);
+    assert_ne!(a.1["task_files"], c.1["task_files"]);
+}
+
 /// `--clock cpu` reads Phase II's time limit on the processor time the process uses: another
 /// configuration (its own record file, the clock named in it), for the A* planner agent and
 /// for `ours` (in its decoding settings); `--clock wall` is the default, whose configurations

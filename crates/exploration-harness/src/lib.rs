@@ -109,7 +109,8 @@
 /// (`cpu-time`): `over-bound`, `out-of-budget`, `unsolvable`, `context-overflow`, `refused`,
 /// `request-failed` (they were `OverBound`, `OutOfBudget`, ...), in the failure (`no plan:
 /// over-bound: no plan within 3 actions ...`) and the detail's `stop`; A* out of its budget says so
-/// (it said "no plan within N steps").
+/// (it said "no plan within N steps"); `eval` names EAI's task files by their content
+/// (`task_files`), not by their folder (`task_dir`, a machine's path).
 pub const HARNESS_VERSION: u32 = 18;
 
 pub mod alfworld;

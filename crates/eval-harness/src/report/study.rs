@@ -13,8 +13,9 @@ use super::load::{Record, RecordSet};
 use crate::records::RecordError;
 
 /// Configuration keys that name the benchmark (and which of its tasks: `tasks` is the task
-/// list's count and digest) rather than the condition; a key stands for the keys under it too.
-const BENCHMARK_KEYS: [&str; 4] = ["benchmark", "subset", "task_dir", "tasks"];
+/// list's count and digest, `task_files` EAI's files' digest, `task_dir` their folder in records
+/// before version 18) rather than the condition; a key stands for the keys under it too.
+const BENCHMARK_KEYS: [&str; 5] = ["benchmark", "subset", "task_dir", "task_files", "tasks"];
 
 /// The column a record set belongs to: its benchmark, or the subset of it the run took
 /// (`alfworld-seen-12`; `eval --subset default` gives each benchmark its own, so the subset
