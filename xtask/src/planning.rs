@@ -115,10 +115,7 @@ pub fn plan(args: PlanArgs) -> anyhow::Result<ExitCode> {
         return crate::phase2::plan_one(&files, &args.lm, &args.decode, limit, args.out.as_deref(), args.json);
     };
     let model = TransitionModel::new(input::ground(&files)?);
-    if algorithm == Algorithm::AStar
-        && args.heuristic == HeuristicName::Lmcut
-        && model.task().actions.iter().any(|a| !a.conditional.is_empty())
-    {
+    if algorithm == Algorithm::AStar && args.heuristic == HeuristicName::Lmcut && model.task().has_conditional_effects() {
         eprintln!(
             "note: this task has conditional effects, where `lmcut` charges each apart and may overestimate: \
              the plan may not be optimal, nor an over-bound a proof (`--heuristic lmcut-admissible` is admissible, and mostly weaker)"

@@ -232,6 +232,12 @@ impl Task {
         self.actions.iter().all(|a| a.cost == 1)
     }
 
+    /// Whether some action has a conditional effect (where LM-cut charged apart may
+    /// overestimate: `heuristics::LmCut`).
+    pub fn has_conditional_effects(&self) -> bool {
+        self.actions.iter().any(|a| !a.conditional.is_empty())
+    }
+
     /// `(pred a b)`.
     pub fn atom_name(&self, atom: &Atom) -> String {
         let mut out = format!("({}", self.predicates[atom.predicate.index()].name);

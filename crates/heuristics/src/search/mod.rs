@@ -247,8 +247,7 @@ pub fn bounded_plan(model: &TransitionModel, config: &SearchConfig) -> Result<Ve
     let config = SearchConfig { algorithm: Algorithm::AStar, ..config.clone() };
     let stopwatch = Stopwatch::start(config.clock);
     let first = search(model, &mut crate::LmCut::new(model), &config, None);
-    let conditional = || model.task().actions.iter().any(|a| !a.conditional.is_empty());
-    let result = if first.status == SearchStatus::OverBound && conditional() {
+    let result = if first.status == SearchStatus::OverBound && model.task().has_conditional_effects() {
         // A budget used up still lets the initial state's value prove the bound (A* prunes it
         // before it asks the budget).
         let mut left = config.clone();
